@@ -66,7 +66,7 @@ def solve_contact_state(
             "beta0": lub.temp_visc_coeff_per_K, "t0": t0}
 
     delta_t = np.zeros_like(R)
-    for it in range(1, scn.solver.max_iterations + 1):
+    for iterations in range(1, scn.solver.max_iterations + 1):  # noqa: B007 - reported below
         T = t0 + delta_t
         if dry:
             h_min, la = np.zeros_like(R), np.ones_like(R)
@@ -105,6 +105,7 @@ def solve_contact_state(
         film_ratio=np.where(loaded, h_min / sigma, np.inf),
         asperity_ratio=np.where(loaded, la, 0.0),
         flash_temperature=delta_t, temperature=t0 + delta_t,
-        density=lubrication.density(np.where(loaded, p_mean, 0.0), t0 + delta_t, lub.rho0_kg_m3, t0),
-        iterations=it,
+        density=lubrication.density(
+            np.where(loaded, p_mean, 0.0), t0 + delta_t, lub.rho0_kg_m3, t0),
+        iterations=iterations,
     )

@@ -7,7 +7,8 @@ mesh-position quantity in the package uses this coordinate.
 
 A non-standard centre distance a changes the working pressure angle,
 ``cos(alpha_w) = a0 cos(alpha) / a`` (the base circles do not change; Litvin & Fuentes, Gear
-Geometry and Applied Theory, 2nd ed., ch. 10; ISO 21771:2007), and with it the length of the path of contact
+Geometry and Applied Theory, 2nd ed., ch. 10; ISO 21771:2007), and with it the length of the
+path of contact
 ``g_alpha = sqrt(ra1^2 - rb1^2) + sqrt(ra2^2 - rb2^2) - a sin(alpha_w)`` (thesis 2.1 with alpha
 replaced by alpha_w, as ISO 21771 writes it). The contact ratio is ``g_alpha / p_b``.
 """

@@ -39,11 +39,12 @@ def film_deficiency(v_s: np.ndarray, T: np.ndarray, lub: Lubricant) -> np.ndarra
     """Oil-film deficiency coefficient psi: the fraction of the surface left unprotected.
 
     ``psi = 1 - exp[ -(X / (v_s t0)) exp(-Ea / (R_g T)) ]`` (Stolarski, Tribol. Trans. 33 (1990)
-    21-24; Kingsbury's adsorption model): the time a point spends sliding one molecule diameter,
-    ``X / v_s``, over the residence time ``t0 exp(Ea / (R_g T))`` of an adsorbed molecule. The thesis
-    prints ``1 - exp(-Ea/(R_g T)) exp(-X/(v_s t0))``, which equals 1 to machine precision at any
-    gear speed and falls with temperature; see ``docs/reproduction.md``. At the pitch point
-    (``v_s = 0``) psi is 1, where the sliding distance, and so the wear, is zero.
+    21-24; Kingsbury's adsorption model): the time a point spends sliding one molecule
+    diameter, ``X / v_s``, over the residence time ``t0 exp(Ea / (R_g T))`` of an adsorbed
+    molecule. The thesis prints ``1 - exp(-Ea/(R_g T)) exp(-X/(v_s t0))``, which equals 1 to
+    machine precision at any gear speed and falls with temperature; see
+    ``docs/reproduction.md``. At the pitch point (``v_s = 0``) psi is 1, where the sliding
+    distance, and so the wear, is zero.
     """
     v_s = np.asarray(v_s, dtype=float)
     rate = np.exp(-lub.adsorption_heat_J_mol / (R_GAS * np.asarray(T, dtype=float)))
