@@ -88,7 +88,7 @@ def test_pinion_must_be_the_smaller_wheel():
 
 @given(st.floats(max_value=0.0, allow_nan=False))
 def test_non_positive_speed_always_refused(n1):
-    with pytest.raises(ValueError, match="operating.n1_rpm"):
+    with pytest.raises(ValueError, match=r"operating\.n1_rpm"):
         Operating(n1_rpm=n1)
 
 
