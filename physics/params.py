@@ -109,18 +109,20 @@ class Material:
 
     Case-carburised gear steel (20CrMnTi / 18CrNiMo7-6 class):
     - E = 206 GPa, nu = 0.3: ISO 6336-1:2019, 6.5 (steel/steel reference values).
-    - Surface hardness 7.0 GPa: 60 HRC ~ HV 700 (ISO 18265 conversion), HV in kgf/mm^2 x 9.807 MPa.
-    - k = 46 W/(m K), rho = 7850 kg/m^3, c = 470 J/(kg K): low-alloy steel near 50 C
-      (Incropera et al., Fundamentals of Heat and Mass Transfer, 7th ed., Table A.1, AISI 4130/1042
-      class), giving a diffusivity 1.25e-5 m^2/s.
+    - Surface hardness 7.0 GPa: case-carburised flanks of 58-62 HRC are HV 650-750 (ASTM E140
+      conversion); HV 700 x 9.807 MPa.
+    - k = 46 W/(m K), rho = 7830 kg/m^3, c = 465 J/(kg K): low-alloy gear steel, as tabulated in
+      the FEUP gear group's material library (GEARpie) and within the AISI 4130-4340 range of
+      Incropera et al., Fundamentals of Heat and Mass Transfer, Table A.1; diffusivity 1.26e-5
+      m^2/s.
     """
 
     youngs_modulus_GPa: float = 206.0
     poisson: float = 0.3
     hardness_GPa: float = 7.0
     thermal_conductivity_W_mK: float = 46.0
-    density_kg_m3: float = 7850.0
-    specific_heat_J_kgK: float = 470.0
+    density_kg_m3: float = 7830.0
+    specific_heat_J_kgK: float = 465.0
 
     def __post_init__(self) -> None:
         o = "material"
@@ -152,10 +154,10 @@ class Lubricant:
 
     Defaults are the thesis baseline (eta0 0.35 Pa s, alpha 2.5e-8 m^2/N, Lambda_lim 0.091, and
     X, t0, Ea of 2.6). ``temp_visc_coeff_per_K`` is the viscosity-temperature coefficient beta0 =
-    -d ln(eta)/dT at the bulk temperature, which sets the Roelands temperature index S0; 0.03 /K is
-    typical of a mineral gear oil near 40 C (Hamrock, Schmid & Jacobson, Fundamentals of Machine
-    Elements / Fluid Film Lubrication, Table 4.x: beta0 0.027-0.045 /K). The density at ambient
-    pressure is that of a mineral oil, 870 kg/m^3.
+    -d ln(eta)/dT at the bulk temperature, which sets the Roelands temperature index S0. The
+    thesis states neither it nor the density: we take 0.03 /K, the low end of mineral and PAO gear
+    oils near 40 C (0.03-0.06 /K; the Walther fits in ``conf/lubricant`` give 0.044-0.052), and
+    870 kg/m^3, a mineral oil at ambient pressure.
     """
 
     name: str = "thesis baseline"
@@ -186,8 +188,9 @@ class Tribology:
     """Surface and wear constants (thesis Table 1 and 2.5-2.7).
 
     ``sigma_um`` is the composite RMS roughness; ``dry_friction_coeff`` the boundary (asperity)
-    friction coefficient f_c of 2.5, not stated by the thesis: 0.1 for boundary-lubricated
-    steel on steel (Bhushan, Introduction to Tribology, 2nd ed., Table 5.x). ``regime = "dry"``
+    friction coefficient f_c of 2.5, not stated by the thesis: 0.1, the middle of the 0.05-0.15
+    of boundary-lubricated steel on steel (Stachowiak & Batchelor, Engineering Tribology, 4th
+    ed., ch. 8). ``regime = "dry"``
     selects the classical Archard law on the whole Hertz pressure with ``dry_wear_coeff``
     (2.7.5, Table 5).
     """
