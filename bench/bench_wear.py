@@ -1,0 +1,73 @@
+"""Wear-model benchmark: ``python bench/bench_wear.py``.
+
+Prints wall times (best of several runs) for
+- the baseline quasi-static 1e6-cycle wear run (issue target: <= 1 s),
+- all of tables 02-06 as ``python -m physics.reproduce`` computes them (target: <= 10 s),
+- the reference: the same contact-state and wear-rate evaluation done point by point in a Python
+  loop (one mesh position per call), measured in the same run, and the speed-up ratio.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+from hydra import compose, initialize_config_dir
+
+from physics.params import Scenario
+from physics.reproduce import reproduce
+from physics.wear import simulate_wear, wear_rate
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def best_of(fn, repeat: int) -> float:
+    times = []
+    for _ in range(repeat):
+        t = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t)
+    return min(times)
+
+
+def point_by_point(scn: Scenario) -> np.ndarray:
+    """Reference: the wear rate at each mesh position from its own call (no vectorisation)."""
+    res = simulate_wear(scn, 0.0)
+    geom, s = res.geometry, res.s
+    zero = np.zeros(1)
+    force = np.full(1, scn.operating.torque_Nm / geom.rb2)
+    k = np.full(1, 4.0e8)
+
+    def stiffness(x):
+        return np.broadcast_to(k, np.shape(x))
+
+    return np.array([wear_rate(scn, geom, s[i:i + 1], zero, zero, force, stiffness).pinion[0]
+                     for i in range(len(s))])
+
+
+def main() -> None:
+    scn = Scenario()
+    t_run = best_of(lambda: simulate_wear(scn, 1e6), 5)
+    vec = simulate_wear(scn, 0.0)
+    t_vec = best_of(lambda: simulate_wear(scn, 0.0), 5)
+    t_ref = best_of(lambda: point_by_point(scn), 2)
+    with tempfile.TemporaryDirectory() as tmp, initialize_config_dir(
+        str(ROOT / "conf"), version_base="1.3"
+    ):
+        full = compose("reproduce", overrides=[f"out_dir={tmp}"])
+        t_tables = best_of(lambda: reproduce(full), 2)
+    print(f"grid points                         : {scn.solver.n_points}")
+    print(f"baseline 1e6-cycle wear run         : {t_run * 1e3:8.1f} ms   (target <= 1000 ms)")
+    print(f"tables 02-06 + wear profile         : {t_tables:8.2f} s    (target <= 10 s)")
+    print(f"one wear-rate pass, vectorised      : {t_vec * 1e3:8.2f} ms")
+    print(f"one wear-rate pass, point by point  : {t_ref * 1e3:8.1f} ms   (reference)")
+    print(f"speed-up of the vectorised pass     : {t_ref / t_vec:8.0f} x")
+    same = np.allclose(point_by_point(dataclasses.replace(scn)), vec.last_rate.pinion, rtol=1e-6)
+    print(f"reference agrees with vectorised    : {same}")
+
+
+if __name__ == "__main__":
+    main()
