@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields
+from pathlib import Path
 from typing import Any
 
 R_GAS = 8.314462618  # J/(mol K), CODATA 2018 molar gas constant
@@ -292,12 +293,40 @@ def _build(cls: type, values: dict[str, Any], where: str) -> Any:
     return cls(**coerced)
 
 
+CASES_FILE = Path(__file__).resolve().parent.parent / "conf" / "cases.yaml"
+_CASE_FIELDS = {
+    "operating": ("n1_rpm", "torque_Nm"),
+    "lubricant": ("eta0_Pa_s", "alpha_m2_per_N", "limiting_shear_coeff"),
+}
+
+
+def operating_cases() -> dict[int, dict[str, float]]:
+    """The five operating cases of thesis Table 11, from ``conf/cases.yaml``."""
+    import yaml
+
+    with open(CASES_FILE) as fh:
+        return {int(k): dict(v) for k, v in yaml.safe_load(fh).items()}
+
+
+def case_values(case: Any) -> dict[str, float]:
+    """Values of operating case ``case`` (1-5, thesis Table 11); a clear error otherwise."""
+    cases = operating_cases()
+    try:
+        key = int(case)
+    except (TypeError, ValueError):
+        key = None
+    if key not in cases or isinstance(case, bool) or str(case).strip() != str(key):
+        raise ValueError(f"case = {case!r} is not an operating case; valid cases: "
+                         f"{sorted(cases)} (thesis Table 11)")
+    return cases[key]
+
+
 def scenario_from_config(cfg: Any) -> Scenario:
     """Build a :class:`Scenario` from a mapping (a Hydra/OmegaConf config or a plain dict).
 
     Only the groups present are read (``gear``, ``material``, ``lubricant``, ``tribology``,
-    ``operating``, ``solver``); a ``case`` group, if present, overrides ``operating`` and the
-    lubricant fields it names (Table 11).
+    ``operating``, ``solver``); a ``case`` key (1-5), if set, overrides the operating point and
+    the lubricant values that Table 11 lists.
     """
     try:
         from omegaconf import OmegaConf
@@ -307,15 +336,10 @@ def scenario_from_config(cfg: Any) -> Scenario:
     except ImportError:  # pragma: no cover - omegaconf is a dependency
         pass
     cfg = dict(cfg)
+    case = case_values(cfg["case"]) if cfg.get("case") is not None else {}
     parts: dict[str, Any] = {}
     for key, cls in _PARTS.items():
         values = dict(cfg.get(key) or {})
-        if key == "operating" and cfg.get("case"):
-            case = cfg["case"]
-            values.update({k: case[k] for k in ("n1_rpm", "torque_Nm") if k in case})
-        if key == "lubricant" and cfg.get("case"):
-            case = cfg["case"]
-            values.update({k: case[k] for k in ("eta0_Pa_s", "alpha_m2_per_N",
-                                                "limiting_shear_coeff") if k in case})
+        values.update({k: case[k] for k in _CASE_FIELDS.get(key, ()) if k in case})
         parts[key] = _build(cls, values, key)
     return Scenario(**parts)

@@ -35,17 +35,22 @@ def test_default_yaml_equals_dataclass_defaults(group):
     assert built == DEFAULT_GROUPS[group]()
 
 
-@pytest.mark.parametrize("case", [1, 2, 3, 4, 5])
-def test_case_configs_build(case):
-    cfg = {"case": OmegaConf.load(CONF / "case" / f"{case}.yaml")}
-    scn = scenario_from_config(cfg)
+@pytest.mark.parametrize("case", [1, 2, 3, 4, 5, "2"])
+def test_cases_build(case):
+    scn = scenario_from_config({"case": case})
     assert scn.operating.n1_rpm in (1800.0, 2000.0, 2200.0)
     assert 280 < scn.operating.torque_Nm < 320
 
 
 def test_case_3_is_the_baseline_operating_point():
-    scn = scenario_from_config({"case": OmegaConf.load(CONF / "case" / "3.yaml")})
+    scn = scenario_from_config({"case": 3})
     assert scn.operating == Operating() and scn.lubricant == Lubricant()
+
+
+@pytest.mark.parametrize("bad", [0, 6, "three", 2.5, True])
+def test_unknown_case_lists_the_valid_ones(bad):
+    with pytest.raises(ValueError, match=r"not an operating case; valid cases: \[1, 2, 3, 4, 5\]"):
+        scenario_from_config({"case": bad})
 
 
 def test_published_lubricants_keep_the_thesis_ordering():
