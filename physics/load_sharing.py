@@ -12,9 +12,8 @@ which pair has worn more. If that gives a negative load the more-worn pair has l
 other carries all of ``F``. (Flodin & Andersson, Wear 207 (1997); Bajpai, Kahraman & Anderson,
 ASME J. Mech. Des. 126 (2004).)
 
-The single-pair stiffness comes from :func:`iso6336_single_pair_stiffness` (a constant along the
-path) until the potential-energy mesh stiffness replaces it behind the same ``stiffness`` argument
-of :func:`pair_loads`.
+The pair stiffness along the path comes from the potential-energy model of the worn teeth
+(:class:`physics.stiffness.MeshStiffness`), passed in as the ``stiffness`` function.
 """
 
 from __future__ import annotations
@@ -24,24 +23,9 @@ from collections.abc import Callable
 import numpy as np
 
 from physics.geometry import MeshGeometry
-from physics.params import GearPair
 
 #: ``stiffness(s) -> k [N/m]``: stiffness of the tooth pair in contact at roll coordinate s.
 PairStiffness = Callable[[np.ndarray], np.ndarray]
-
-
-def iso6336_single_pair_stiffness(gear: GearPair) -> float:
-    """Single-pair stiffness ``c' b`` [N/m] of ISO 6336-1:2019 method B (clause 9).
-
-    ``q' = C1 + C2/z1 + C3/z2`` (unshifted spur teeth) with C1 = 0.04723, C2 = 0.15551,
-    C3 = 0.25791 mm um/N; ``c'_th = 1/q'``; ``c' = c'_th C_M C_R C_B`` with C_M = 0.8 (solid
-    discs), C_R = 1 and ``C_B = [1 + 0.5 (1.2 - h_fP/m)] [1 - 0.02 (20 deg - alpha)]``.
-    """
-    q = 0.04723 + 0.15551 / gear.z1 + 0.25791 / gear.z2  # mm um / N
-    h_fp = gear.ha_star + gear.c_star
-    c_b = (1 + 0.5 * (1.2 - h_fp)) * (1 - 0.02 * (20.0 - gear.pressure_angle_deg))
-    c_prime = (1 / q) * 0.8 * 1.0 * c_b  # N/(mm um)
-    return c_prime * 1e9 * gear.face_width  # N/(mm um) = 1e9 N/m^2, times face width [m]
 
 
 def pair_loads(

@@ -27,12 +27,16 @@ import numpy as np
 from physics import kinematics
 from physics.contact_state import ContactState, solve_contact_state
 from physics.geometry import MeshGeometry, mesh_geometry
-from physics.load_sharing import PairStiffness, iso6336_single_pair_stiffness, pair_loads
+from physics.load_sharing import PairStiffness, pair_loads
 from physics.params import R_GAS, Lubricant, Scenario
+from physics.stiffness import MeshStiffness
 
 #: ``force(wear1, wear2) -> F [N]`` on the grid: the total normal mesh force per mesh position for
 #: the current worn profiles (the dynamic model supplies one; the default is quasi-static).
 MeshForce = Callable[[np.ndarray, np.ndarray], np.ndarray]
+#: ``stiffness(s_grid, wear1, wear2) -> k(s)``: the pair stiffness along the path for the current
+#: worn profiles (default: :meth:`physics.stiffness.MeshStiffness.pair_function`).
+StiffnessModel = Callable[[np.ndarray, np.ndarray, np.ndarray], PairStiffness]
 
 
 def film_deficiency(v_s: np.ndarray, T: np.ndarray, lub: Lubricant) -> np.ndarray:
@@ -126,7 +130,7 @@ def simulate_wear(
     scn: Scenario,
     cycles: float,
     force: MeshForce | None = None,
-    stiffness: PairStiffness | None = None,
+    stiffness: StiffnessModel | None = None,
     snapshots: Sequence[float] = (),
 ) -> WearResult:
     """Integrate flank wear over ``cycles`` pinion cycles (thesis 2.6).
@@ -136,7 +140,8 @@ def simulate_wear(
     scn : the scenario; validated on construction.
     cycles : pinion load cycles, >= 0.
     force : mesh force per mesh position for the current profiles; quasi-static by default.
-    stiffness : pair stiffness along the path; ISO 6336 constant by default.
+    stiffness : pair stiffness along the path for the current wear; by default the potential-
+        energy stiffness of the worn teeth, recomputed at every profile update.
     snapshots : cycle counts at which the wear profiles are also recorded (block ends land on
         them exactly).
     """
@@ -154,10 +159,7 @@ def simulate_wear(
             return np.full_like(s, f_static)
 
     if stiffness is None:
-        k_iso = iso6336_single_pair_stiffness(scn.gear)
-
-        def stiffness(x: np.ndarray) -> np.ndarray:
-            return np.full_like(np.asarray(x, dtype=float), k_iso)
+        stiffness = MeshStiffness(scn.gear, scn.material).pair_function
 
     step = scn.solver.update_um * 1e-6
     w1, w2 = np.zeros_like(s), np.zeros_like(s)
@@ -166,7 +168,7 @@ def simulate_wear(
     while True:
         while pending and pending[0] <= done:
             taken[pending.pop(0)] = (w1.copy(), w2.copy())
-        rate = wear_rate(scn, geom, s, w1, w2, force(w1, w2), stiffness)
+        rate = wear_rate(scn, geom, s, w1, w2, force(w1, w2), stiffness(s, w1, w2))
         if done >= cycles:
             break
         peak = max(rate.pinion.max(), rate.gear.max())
