@@ -24,8 +24,12 @@ import pandas as pd
 from omegaconf import DictConfig, OmegaConf
 
 from physics.files import save_figure, write_csv
+from physics.geometry import MeshGeometry
+from physics.load_sharing import pair_loads
 from physics.params import Lubricant, Scenario, scenario_from_config
-from physics.wear import WearResult, simulate_wear
+from physics.stiffness import MeshStiffness
+from physics.tooth_fem import FEResult, fe_pair_stiffness
+from physics.wear import WearResult, quasi_static_force, simulate_wear
 
 log = logging.getLogger(__name__)
 CONF_DIR = Path(__file__).resolve().parent.parent / "conf"
@@ -108,6 +112,111 @@ def table_center_distance(scn: Scenario, cycles: float, offsets_pct: list[float]
     ])
 
 
+def table07_positions(geom: MeshGeometry) -> dict[str, np.ndarray]:
+    """Roll coordinates of the pairs in contact at the three mesh positions of Table 7.
+
+    Over one mesh period the pair entering at the start of contact shares the load with the pair
+    one base pitch ahead for ``(eps - 1) p_b`` of roll, then carries it alone. "First" and
+    "second double-tooth zone" are taken a quarter and three quarters into the double-contact
+    interval (the entering pair near the pinion root, then the leaving pair near the pinion
+    tip); "single-tooth zone" is the middle of the single-contact interval.
+    """
+    d = (geom.contact_ratio - 1) * geom.base_pitch
+    first, second = geom.s_start + 0.25 * d, geom.s_start + 0.75 * d
+    return {
+        "first double-tooth zone": np.array([first, first + geom.base_pitch]),
+        "single-tooth zone": np.array([0.5 * sum(geom.single_zone)]),
+        "second double-tooth zone": np.array([second, second + geom.base_pitch]),
+    }
+
+
+def _fem_at_positions(scn: Scenario, plane: str, refine: float) -> tuple[dict, FEResult]:
+    ms = MeshStiffness(scn.gear, scn.material)
+    positions = table07_positions(ms.geometry)
+    s = np.concatenate(list(positions.values()))
+    force = quasi_static_force(scn, ms.geometry)
+    share = pair_loads(ms.geometry, s, force, np.zeros_like, ms.pair_function())
+    fe = fe_pair_stiffness(scn.gear, scn.material, ms.geometry, s, share, plane, refine)
+    return positions, fe
+
+
+def table_tvms_fem(scn: Scenario, refine: float, plane: str = "strain") -> pd.DataFrame:
+    """Table 7: mesh stiffness by the energy method and by FE at three mesh positions."""
+    ms = MeshStiffness(scn.gear, scn.material, plane=plane)
+    positions, fe = _fem_at_positions(scn, plane, refine)
+    rows, i = [], 0
+    for label, s in positions.items():
+        k_pe = float(ms.pair(s).sum())
+        k_fe = float(fe.pair_stiffness[i:i + len(s)].sum())
+        i += len(s)
+        rows.append({"meshing_position": label, "energy_method_1e8_N_per_m": k_pe / 1e8,
+                     "fem_1e8_N_per_m": k_fe / 1e8,
+                     "relative_error_pct": abs(k_pe - k_fe) / k_fe * 100})
+    return pd.DataFrame(rows)
+
+
+def table_fem_convergence(scn: Scenario, refines: list[float]) -> pd.DataFrame:
+    """FE mesh stiffness at the Table 7 positions for successively finer meshes, both planes."""
+    rows = []
+    for plane in ("strain", "stress"):
+        for refine in refines:
+            positions, fe = _fem_at_positions(scn, plane, refine)
+            i = 0
+            for label, s in positions.items():
+                rows.append({"plane": plane, "refine": refine, "elements_pinion": fe.elements[0],
+                             "elements_gear": fe.elements[1], "meshing_position": label,
+                             "fem_1e8_N_per_m": float(fe.pair_stiffness[i:i + len(s)].sum()) / 1e8})
+                i += len(s)
+    return pd.DataFrame(rows)
+
+
+def table_wear_stiffness(scn: Scenario, cycles: list[float], n_positions: int
+                         ) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """Table 8 and ``tvms.csv``: worn profiles from the wear model and their mesh stiffness."""
+    ms = MeshStiffness(scn.gear, scn.material)
+    res = simulate_wear(scn, max(cycles), snapshots=cycles)
+    single = table07_positions(ms.geometry)["single-tooth zone"]
+    rows, curves = [], []
+    for n in cycles:
+        w1, w2 = res.snapshots[float(n)]
+        k_single = float(ms.pair(single, res.s, w1, w2).sum())
+        rows.append({"wear_cycles": n, "pinion_root_wear_mm": w1[0] * 1e3,
+                     "single_tooth_stiffness_1e8_N_per_m": k_single / 1e8})
+        cyc = ms.mesh_cycle(n_positions, res.s, w1, w2)
+        curves.append(pd.DataFrame({
+            "cycles": n, "roll_mm": cyc["roll"] * 1e3, "k_total_N_per_m": cyc["k_total"],
+            "k_pair1_N_per_m": cyc["k_pair1"], "k_pair2_N_per_m": cyc["k_pair2"]}))
+    table = pd.DataFrame(rows)
+    healthy = table.single_tooth_stiffness_1e8_N_per_m.iloc[0]
+    table["reduction_pct"] = (1 - table.single_tooth_stiffness_1e8_N_per_m / healthy) * 100
+    return table, pd.concat(curves, ignore_index=True)
+
+
+def plot_tvms(tvms: pd.DataFrame, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (ax, ax2) = plt.subplots(2, 1, figsize=(7, 6), sharex=True,
+                                  gridspec_kw={"height_ratios": [2, 1]})
+    healthy = tvms[tvms.cycles == tvms.cycles.min()]
+    for n, df in tvms.groupby("cycles"):
+        ax.plot(df.roll_mm, df.k_total_N_per_m / 1e8, label=f"{n:.3g} cycles")
+        ax2.plot(df.roll_mm, (df.k_total_N_per_m.to_numpy()
+                              / healthy.k_total_N_per_m.to_numpy() - 1) * 100)
+    ax.plot(healthy.roll_mm, healthy.k_pair1_N_per_m / 1e8, "k:", lw=0.8, label="pair 1 (healthy)")
+    ax.plot(healthy.roll_mm, healthy.k_pair2_N_per_m / 1e8, "k--", lw=0.8,
+            label="pair 2 (healthy)")
+    ax.set_ylabel("mesh stiffness [1e8 N/m]")
+    ax.set_title("Time-varying mesh stiffness over one mesh period (potential energy method)")
+    ax.legend(fontsize=8)
+    ax2.set_ylabel("change vs healthy [%]")
+    ax2.set_xlabel("roll coordinate of pair 1 [mm] (start of contact = pinion root)")
+    save_figure(fig, path)
+    plt.close(fig)
+
+
 def wear_profile_frame(res: WearResult) -> pd.DataFrame:
     """Both flanks' wear against roll coordinate and flank radius (``wear_profile.csv``)."""
     r1, r2 = res.geometry.flank_radii(res.s)
@@ -163,11 +272,17 @@ def reproduce(cfg: DictConfig) -> dict[str, pd.DataFrame]:
         "table06_center_distance": table_center_distance(
             scn, cycles, list(cfg.center_distance_offsets_pct)),
     }
+    stiff = cfg.stiffness
+    tables["table07_tvms_energy_vs_fem"] = table_tvms_fem(scn, float(stiff.fem_refine))
+    tables["fem_convergence"] = table_fem_convergence(scn, [float(r) for r in stiff.fem_refines])
+    tables["table08_wear_vs_stiffness"], tables["tvms"] = table_wear_stiffness(
+        scn, [float(c) for c in stiff.wear_cycles], int(stiff.positions))
     base = simulate_wear(scn, cycles)
     tables["wear_profile"] = wear_profile_frame(base)
     for name, df in tables.items():
         write_csv(df, out / f"{name}.csv")
     plot_wear_profile(base, out / "wear_profile.png")
+    plot_tvms(tables["tvms"], out / "tvms.png")
     log.info("wrote %d tables and wear_profile.png to %s", len(tables), out)
     return tables
 

@@ -33,6 +33,7 @@ wear, so a whole mesh cycle costs a few interpolations (no quadrature per mesh p
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -50,8 +51,15 @@ SAINSOT = {
     "P": (-50.952e-5, 185.50e-3, 0.0538e-4, 53.300e-3, 0.2895, 0.9236),
     "Q": (-6.2042e-5, 9.0889e-3, -4.0964e-4, 7.8297e-3, -0.1472, 0.6904),
 }
-#: range of h_f = r_f / r_bore over which Sainsot et al. fitted the polynomials
+#: ranges of h_f = r_f / r_bore and theta_f [rad] over which Sainsot et al. fitted the
+#: polynomials; outside them the polynomials are extrapolated with a warning (the thesis pinion,
+#: z = 18, has theta_f = 0.167 rad; the FE check of Table 7 covers it).
 SAINSOT_HF_RANGE = (1.4, 7.0)
+SAINSOT_THETA_RANGE = (0.01, 0.12)
+
+
+class SainsotRangeWarning(UserWarning):
+    """The gear-body formula is used outside the range it was fitted on."""
 
 
 def sainsot_coefficients(h_f: float, theta_f: float) -> dict[str, float]:
@@ -154,15 +162,15 @@ class MeshStiffness:
         self.E = material.E / (1 - nu**2) if plane == "strain" else material.E
         self.G = material.E / (2 * (1 + nu))
         self.k_hertz = math.pi * material.E * gear.face_width / (4 * (1 - nu**2))
-        for form, name in zip(self.forms, ("bore_radius1_mm", "bore_radius2_mm"), strict=True):
-            h_f = form.rf / form.bore
-            if not SAINSOT_HF_RANGE[0] <= h_f <= SAINSOT_HF_RANGE[1]:
-                raise ValueError(
-                    f"gear.{name} = {form.bore * 1e3:g} gives r_f/r_bore = {h_f:.2f}, outside "
-                    f"the range {SAINSOT_HF_RANGE} of the Sainsot gear-body formula; choose a "
-                    f"bore radius in [{form.rf / SAINSOT_HF_RANGE[1] * 1e3:.2f}, "
-                    f"{form.rf / SAINSOT_HF_RANGE[0] * 1e3:.2f}] mm"
-                )
+        for form, name in zip(self.forms, ("pinion", "gear"), strict=True):
+            h_f, th = form.rf / form.bore, form.theta_f
+            if not (SAINSOT_HF_RANGE[0] <= h_f <= SAINSOT_HF_RANGE[1]
+                    and SAINSOT_THETA_RANGE[0] <= th <= SAINSOT_THETA_RANGE[1]):
+                warnings.warn(
+                    f"{name}: r_f/r_bore = {h_f:.2f} and theta_f = {th:.3f} rad; the Sainsot "
+                    f"gear-body polynomials were fitted for r_f/r_bore in {SAINSOT_HF_RANGE} and "
+                    f"theta_f in {SAINSOT_THETA_RANGE} and are extrapolated here",
+                    SainsotRangeWarning, stacklevel=2)
         self._healthy = tuple(_cumulative(f, np.zeros_like(f.x), gear.face_width)
                               for f in self.forms)
 

@@ -88,6 +88,16 @@ def generate_tooth(gear: GearPair, wheel: int, n_fillet: int = 400, n_involute: 
     rb, ra = r * math.cos(alpha), r + gear.ha_star * m
     rf = r - (gear.ha_star + gear.c_star) * m
     x_c, y_c, rho = _rack(gear)
+    # The straight flank of the rack ends (tangent to the tip round) at depth y_c - rho sin(alpha)
+    # below the pitch line; if that lies deeper than the interference point r sin^2(alpha) the
+    # flank would cut away the involute near the base circle (undercut).
+    depth = -(y_c - rho * math.sin(alpha))
+    if depth > r * math.sin(alpha) ** 2 + 1e-12:
+        raise ValueError(
+            f"the generated tooth of wheel {wheel} (z = {z}) is undercut: the cutter's straight "
+            f"flank reaches {depth * 1e3:.3f} mm below the pitch line, deeper than r sin^2(alpha) "
+            f"= {r * math.sin(alpha) ** 2 * 1e3:.3f} mm; use more teeth or a larger pressure angle"
+        )
 
     # Fillet: the tip round touches the tooth at C + rho (C - I)/|C - I|, I = (r phi, 0) the
     # pitch point in the rack frame; the round's active arc runs from its bottom (root circle)
@@ -112,11 +122,6 @@ def generate_tooth(gear: GearPair, wheel: int, n_fillet: int = 400, n_involute: 
 
     xy = np.concatenate([fillet, inv_xy])
     normals = np.concatenate([n_fil, n_inv])
-    if np.any(np.diff(xy[:, 1]) <= 0):
-        raise ValueError(
-            f"the generated tooth of wheel {wheel} (z = {z}) is undercut: its profile folds back "
-            "on itself; use more teeth or a larger pressure angle"
-        )
     return ToothForm(z, m, r, rb, ra, rf, bore, xy[:, 1], xy[:, 0], normals[:, 0],
                      np.hypot(xy[:, 0], xy[:, 1]), len(fillet))
 

@@ -10,15 +10,17 @@ import pandas as pd
 import pytest
 
 REF = Path(__file__).resolve().parents[2] / "shared" / "reference" / "thesis_tables"
+FAST = ["solver.n_points=101", "stiffness.fem_refine=1", "stiffness.fem_refines=[1]",
+        "stiffness.positions=50"]
 TABLES = ["table02_speed", "table03_torque", "table04_roughness", "table05_lubricant",
-          "table06_center_distance"]
+          "table06_center_distance", "table07_tvms_energy_vs_fem", "table08_wear_vs_stiffness"]
 
 
 @pytest.fixture(scope="module")
 def out(tmp_path_factory):
     out = tmp_path_factory.mktemp("repro")
     subprocess.run(
-        [sys.executable, "-m", "physics.reproduce", f"out_dir={out}", "solver.n_points=101",
+        [sys.executable, "-m", "physics.reproduce", f"out_dir={out}", *FAST,
          f"hydra.run.dir={out / 'hydra'}"],
         check=True, cwd=Path(__file__).resolve().parents[1],
     )
@@ -48,8 +50,8 @@ def test_wear_profile_outputs(out):
 
 def test_overrides_reach_the_physics(tmp_path):
     subprocess.run(
-        [sys.executable, "-m", "physics.reproduce", f"out_dir={tmp_path}",
-         "solver.n_points=101", "gear.module_mm=3", "gear.bore_radius1_mm=12",
+        [sys.executable, "-m", "physics.reproduce", f"out_dir={tmp_path}", *FAST,
+         "gear.module_mm=3", "gear.bore_radius1_mm=12",
          "gear.bore_radius2_mm=20", f"hydra.run.dir={tmp_path / 'hydra'}"],
         check=True, cwd=Path(__file__).resolve().parents[1],
     )
