@@ -1,11 +1,13 @@
 """The mixed-EHL contact state along the path of contact (thesis 2.1-2.5, coupled).
 
-For given pair loads and flank curvatures this module combines Hertz (``physics.contact``),
-kinematics, the Masjedi-Khonsari film and asperity share (``physics.lubrication``) and the flash
-temperature (``physics.thermal``), and iterates the contact temperature: the inlet viscosity that
-sets the film is evaluated at ``T = T0 + Delta T`` (thesis 2.5, "both viscosity and density are
-updated using this temperature"), the film sets the asperity share and the heat, the heat sets
-``Delta T``. The fixed point is found by damped iteration, vectorised over positions.
+For given pair loads, flank curvatures and velocities this module combines Hertz
+(``physics.contact``), the Masjedi-Khonsari film and asperity share (``physics.lubrication``) and
+the flash temperature (``physics.thermal``). The film forms in the inlet, at the bulk temperature:
+the regressions are isothermal fits, and the flash temperature exists only inside the band. Inside
+the band the viscosity and density follow the contact temperature ``T = T0 + Delta T`` (thesis
+2.5): the film's shear stress, and with it the heat and ``Delta T``, depend on ``eta(p, T)``. That
+fixed point is found by damped iteration, vectorised over positions. (The thesis evaluates the
+inlet viscosity at the flash temperature too; see ``docs/reproduction.md``.)
 """
 
 from __future__ import annotations
@@ -45,9 +47,14 @@ class ContactState:
 
 
 def solve_contact_state(
-    scn: Scenario, load: np.ndarray, R1: np.ndarray, R2: np.ndarray
+    scn: Scenario, load: np.ndarray, R1: np.ndarray, R2: np.ndarray,
+    v1: np.ndarray, v2: np.ndarray,
 ) -> ContactState:
-    """Consistent contact state for pair loads ``load`` [N] and flank radii ``R1, R2`` [m]."""
+    """Consistent contact state for pair loads ``load`` [N].
+
+    ``R1, R2`` are the flank radii of curvature [m] (worn: thesis 2.6), ``v1, v2`` the rolling
+    velocities of the flanks [m/s] (set by the unworn kinematics, ``omega r_b tan(alpha) + s``).
+    """
     g, mat, lub, tri, op = scn.gear, scn.material, scn.lubricant, scn.tribology, scn.operating
     load = np.asarray(load, dtype=float)
     loaded = load > 0
@@ -57,7 +64,6 @@ def solve_contact_state(
     b = contact.hertz_half_width(w, R, e_star)
     p_max = contact.hertz_max_pressure(w, b)
     p_mean = contact.hertz_mean_pressure(w, b)
-    v1, v2 = kinematics.surface_velocities(R1, R2, op.omega1, g.z1, g.z2)
     v_s, v_e = kinematics.sliding_velocity(v1, v2), kinematics.entraining_velocity(v1, v2)
     t0 = op.bulk_temperature_K
     sigma = tri.sigma_um * 1e-6
@@ -65,37 +71,30 @@ def solve_contact_state(
     visc = {"eta0": lub.eta0_Pa_s, "alpha": lub.alpha_m2_per_N,
             "beta0": lub.temp_visc_coeff_per_K, "t0": t0}
 
-    delta_t = np.zeros_like(R)
-    for iterations in range(1, scn.solver.max_iterations + 1):  # noqa: B007 - reported below
-        T = t0 + delta_t
+    if dry:
+        h_min, la = np.zeros_like(R), np.ones_like(R)
+    else:  # isothermal inlet at the bulk temperature (the regressions are isothermal fits)
+        grp = lubrication.dimensionless_groups(
+            w, R, v_e, lub.eta0_Pa_s, lub.alpha_m2_per_N, 2 * e_star, mat.hardness, sigma)
+        h_min = R * lubrication.min_film_thickness(grp["W"], grp["U"], grp["G"], grp["sigma_bar"])
+        la = lubrication.asperity_load_ratio_pct(
+            grp["W"], grp["U"], grp["G"], grp["V"], grp["sigma_bar"]) / 100
+    p_h = (1 - la) * p_mean
+
+    def rise(delta_t: np.ndarray) -> np.ndarray:
+        """Flash temperature produced by the heat of the contact at temperature T0 + delta_t."""
         if dry:
-            h_min, la = np.zeros_like(R), np.ones_like(R)
             tau = np.zeros_like(R)
         else:
-            eta_inlet = lubrication.viscosity(0.0, T, **visc)
-            grp = lubrication.dimensionless_groups(
-                w, R, v_e, eta_inlet, lub.alpha_m2_per_N, 2 * e_star, mat.hardness, sigma)
-            h_min = R * lubrication.min_film_thickness(
-                grp["W"], grp["U"], grp["G"], grp["sigma_bar"])
-            la = lubrication.asperity_load_ratio_pct(
-                grp["W"], grp["U"], grp["G"], grp["V"], grp["sigma_bar"]) / 100
-            p_h = (1 - la) * p_mean
-            tau = np.minimum(lubrication.viscosity(p_h, T, **visc) * v_s / h_min,
-                             lub.limiting_shear_coeff * p_h)
+            eta = lubrication.viscosity(p_h, t0 + delta_t, **visc)
+            tau = np.minimum(eta * v_s / h_min, lub.limiting_shear_coeff * p_h)
         q = thermal.heat_flux(v_s, la * p_mean, tau, tri.dry_friction_coeff)
-        new = thermal.flash_temperature(
-            q, b, v1, v2, mat.thermal_conductivity_W_mK, mat.diffusivity)
-        new = np.where(loaded, new, 0.0)
-        change = np.max(np.abs(new - delta_t), initial=0.0)
-        delta_t = 0.5 * (delta_t + new)
-        if change < scn.solver.temperature_tol_K:
-            delta_t = new
-            break
-    else:
-        raise RuntimeError(
-            f"contact temperature did not converge in {scn.solver.max_iterations} iterations "
-            f"(last change {change:.3g} K); raise solver.max_iterations")
+        dt = thermal.flash_temperature(q, b, v1, v2, mat.thermal_conductivity_W_mK,
+                                       mat.diffusivity)
+        return np.where(loaded, dt, 0.0)
 
+    delta_t, iterations = _fixed_point(rise, np.zeros_like(R), scn.solver.temperature_tol_K,
+                                       scn.solver.max_iterations)
     zero = np.zeros_like(R)
     return ContactState(
         load_per_width=np.where(loaded, w, 0.0), R=R, half_width=np.where(loaded, b, 0.0),
@@ -109,3 +108,35 @@ def solve_contact_state(
             np.where(loaded, p_mean, 0.0), t0 + delta_t, lub.rho0_kg_m3, t0),
         iterations=iterations,
     )
+
+
+def _fixed_point(f, lo: np.ndarray, tol: float, max_iter: int) -> tuple[np.ndarray, int]:
+    """Solve ``x = f(x)`` elementwise for a non-increasing ``f`` with ``f(lo) >= lo``.
+
+    More temperature thins the film's shear stress and so the heat: ``f`` falls with ``x`` and
+    ``g(x) = f(x) - x`` changes sign in ``[lo, f(lo)]``. Regula falsi with the Illinois
+    modification keeps that bracket (bisection's safety) and converges superlinearly; it runs
+    vectorised over positions until every residual is below ``tol``.
+    """
+    a = lo
+    ga = f(a) - a  # >= 0
+    b = a + ga
+    gb = f(b) - b  # <= 0
+    last = np.zeros(a.shape, dtype=np.int8)  # +1: b was replaced last step, -1: a was
+    for iterations in range(1, max_iter + 1):
+        done = (np.abs(ga) < tol) | (np.abs(gb) < tol) | (b - a < tol)
+        if np.all(done):
+            break
+        span = gb - ga
+        c = np.where(span < 0, b - gb * (b - a) / np.where(span < 0, span, -1.0), a)
+        gc = f(c) - c
+        to_b = gc <= 0  # the root lies in [a, c]
+        ga, gb = (np.where(to_b, np.where(last == 1, 0.5 * ga, ga), gc),
+                  np.where(to_b, gc, np.where(last == -1, 0.5 * gb, gb)))
+        a, b = np.where(to_b, a, c), np.where(to_b, c, b)
+        last = np.where(to_b, 1, -1).astype(np.int8)
+    else:
+        raise RuntimeError(
+            f"contact temperature did not converge in {max_iter} iterations (largest bracket "
+            f"{np.max(b - a):.3g} K); raise solver.max_iterations")
+    return np.where(np.abs(ga) <= np.abs(gb), a, b), iterations

@@ -10,7 +10,9 @@ A non-standard centre distance a changes the working pressure angle,
 Geometry and Applied Theory, 2nd ed., ch. 10; ISO 21771:2007), and with it the length of the
 path of contact
 ``g_alpha = sqrt(ra1^2 - rb1^2) + sqrt(ra2^2 - rb2^2) - a sin(alpha_w)`` (thesis 2.1 with alpha
-replaced by alpha_w, as ISO 21771 writes it). The contact ratio is ``g_alpha / p_b``.
+replaced by alpha_w, as ISO 21771 writes it). The contact ratio is ``g_alpha / p_b``. Only the
+drive flanks are modelled: a centre distance below the standard one (thesis 2.7.6) presumes teeth
+thinned enough to keep backlash; the model does not check the coast flanks.
 """
 
 from __future__ import annotations
@@ -135,7 +137,7 @@ def mesh_geometry(gear: GearPair) -> MeshGeometry:
     a = gear.center_distance
     a_min = max(ra1 + rf2, ra2 + rf1)  # zero tip clearance
     a_max = ra1 + ra2 - 1e-9  # tip circles just touch: no path of contact
-    if not a_min <= a < a_max:
+    if not a_min - 1e-12 <= a < a_max:
         raise ValueError(
             f"gear.center_distance_mm = {a * 1e3:g} must lie in [{a_min * 1e3:.3f}, "
             f"{a_max * 1e3:.3f}) mm: below, a tip digs into the mating root (negative clearance); "

@@ -41,8 +41,10 @@ def pair_loads(
     ----------
     geom : geometry of the pair (zones and partner positions).
     s : roll coordinates [m].
-    force : total normal mesh force [N] at each ``s`` (quasi-static ``T2/rb2``, or the dynamic
-        mesh force per mesh position).
+    force : total normal mesh force [N] at the instant the pair under consideration is at ``s``
+        (quasi-static ``T2/rb2``, or the dynamic mesh force per mesh position). The pair at ``s``
+        and its partner share that instant's force; a force that is periodic in the base pitch
+        (steady mesh-rate dynamics) gives the same instant from either pair's side.
     gap : ``gap(s)`` = pinion wear + gear wear [m] at the contact point of the pair at ``s``.
     stiffness : ``stiffness(s)`` [N/m] of the pair at ``s``.
     """

@@ -22,7 +22,8 @@ R_GAS = 8.314462618  # J/(mol K), CODATA 2018 molar gas constant
 
 def _check_range(owner: str, name: str, value: float, lo: float, hi: float, hint: str = "") -> None:
     """Raise ``ValueError`` unless ``lo < value < hi`` (open interval, finite)."""
-    if not (isinstance(value, int | float) and math.isfinite(value) and lo < value < hi):
+    ok = isinstance(value, int | float) and not isinstance(value, bool)
+    if not (ok and math.isfinite(value) and lo < value < hi):
         rule = f"must lie in ({lo:g}, {hi:g})"
         raise ValueError(f"{owner}.{name} = {value!r} {rule}" + (f"; {hint}" if hint else ""))
 

@@ -100,7 +100,7 @@ def _outline(form: ToothForm, contacts: np.ndarray, h_contact: float, h_tooth: f
     seg = np.linalg.norm(np.diff(closed, axis=0), axis=1)
     h_seg = 0.5 * (h + np.roll(h, -1))
     level = np.concatenate([[0.0], np.cumsum(seg / h_seg)])
-    n = max(int(round(level[-1])), 3 * z)
+    n = max(int(np.rint(level[-1])), 3 * z)
     targets = np.linspace(0.0, level[-1], n, endpoint=False)
     arc = np.concatenate([[0.0], np.cumsum(seg)])
     t_arc = np.interp(targets, level, arc)

@@ -74,14 +74,17 @@ def wear_rate(
 ) -> WearRate:
     """Wear depth per pinion cycle on both flanks for the current worn profiles (module doc)."""
     R1, R2 = geom.curvature_radii(s)
-    R1, R2 = R1 - wear1, R2 - wear2  # thesis 2.6: R_new = R_old - h_w
+    # rolling velocities follow the (unchanged) base-circle kinematics; the worn flank's radius
+    # of curvature is the involute's minus the wear depth (thesis 2.6: R_new = R_old - h_w)
+    v1, v2 = kinematics.surface_velocities(R1, R2, scn.operating.omega1, scn.gear.z1,
+                                           scn.gear.z2)
     total = wear1 + wear2
 
     def gap(x: np.ndarray) -> np.ndarray:
         return np.interp(x, s, total)
 
     load = pair_loads(geom, s, force, gap, stiffness)
-    state = solve_contact_state(scn, load, R1, R2)
+    state = solve_contact_state(scn, load, R1 - wear1, R2 - wear2, v1, v2)
     L1, L2 = kinematics.sliding_distances(state.half_width, state.v1, state.v2)
     tri = scn.tribology
     if tri.regime == "dry":
@@ -104,6 +107,7 @@ class WearResult:
     gear: np.ndarray
     cycles: float
     blocks: int  # profile updates performed
+    first_rate: WearRate  # rate and contact state of the unworn profile
     last_rate: WearRate  # rate and contact state of the final profile
     snapshots: dict[float, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
 
@@ -145,8 +149,8 @@ def simulate_wear(
     snapshots : cycle counts at which the wear profiles are also recorded (block ends land on
         them exactly).
     """
-    if not (np.isfinite(cycles) and cycles >= 0):
-        raise ValueError(f"cycles = {cycles!r} must be finite and >= 0")
+    if not (isinstance(cycles, int | float) and np.isfinite(cycles) and cycles >= 0):
+        raise ValueError(f"cycles = {cycles!r} must be a finite number >= 0 (pinion cycles)")
     marks = sorted({float(c) for c in snapshots})
     if marks and (marks[0] < 0 or marks[-1] > cycles):
         raise ValueError(f"snapshots {marks} must lie in [0, cycles = {cycles:g}]")
@@ -165,10 +169,12 @@ def simulate_wear(
     w1, w2 = np.zeros_like(s), np.zeros_like(s)
     done, blocks, taken = 0.0, 0, {}
     pending = list(marks)
+    first = None
     while True:
         while pending and pending[0] <= done:
             taken[pending.pop(0)] = (w1.copy(), w2.copy())
         rate = wear_rate(scn, geom, s, w1, w2, force(w1, w2), stiffness(s, w1, w2))
+        first = first or rate
         if done >= cycles:
             break
         peak = max(rate.pinion.max(), rate.gear.max())
@@ -178,4 +184,4 @@ def simulate_wear(
         w1, w2 = w1 + rate.pinion * block, w2 + rate.gear * block
         done = cycles if cycles - (done + block) <= 1e-9 * cycles else done + block
         blocks += 1
-    return WearResult(geom, s, w1, w2, float(cycles), blocks, rate, taken)
+    return WearResult(geom, s, w1, w2, float(cycles), blocks, first, rate, taken)

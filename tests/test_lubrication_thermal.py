@@ -72,18 +72,31 @@ def test_asperity_share_rises_with_roughness_and_vanishes_for_smooth_surfaces():
     assert shares[1] < shares[2] < shares[3]
 
 
-def test_flash_temperature_hand_calculation():
-    q, b, v1, v2, k, kappa = 2.9e8, 5.2e-5, 0.28, 1.96, 46.0, 1.25e-5
-    pe1, pe2 = v1 * b / (2 * kappa), v2 * b / (2 * kappa)
-    expected = 2 * b * q / (math.sqrt(math.pi) * k * (math.sqrt(pe1) + math.sqrt(pe2)))
-    got = thermal.flash_temperature(q, b, v1, v2, k, kappa)
-    assert got == pytest.approx(expected)
-    assert 100 < got < 160  # the pinion-root rise of the baseline
+@pytest.mark.parametrize("pe", [200.0, 1000.0])
+def test_band_source_tends_to_the_high_peclet_form(pe):
+    assert thermal.band_source_max_rise(pe) == pytest.approx(2 / math.sqrt(math.pi * pe),
+                                                             rel=5e-3)
+
+
+@pytest.mark.parametrize("pe", [0.3, 1.0, 4.0])
+def test_band_source_against_direct_integration_of_jaeger_kernel(pe):
+    """theta(xi) = (1/pi) int_{-1}^{1} exp(-Pe (xi - x)) K0(Pe |xi - x|) dx, maximised."""
+    from scipy.integrate import quad
+    from scipy.optimize import minimize_scalar
+    from scipy.special import k0
+
+    def theta(xi):
+        f = lambda x: math.exp(-pe * (xi - x)) * k0(pe * abs(xi - x))  # noqa: E731
+        return quad(f, -1, xi, limit=200)[0] + quad(f, xi, 1, limit=200)[0]
+
+    best = minimize_scalar(lambda xi: -theta(xi), bounds=(-1, 1), method="bounded")
+    assert thermal.band_source_max_rise(pe) == pytest.approx(-best.fun / math.pi,
+                                                             rel=2e-3)
 
 
 def test_flash_temperature_is_blok_partition_of_two_single_body_rises():
     q, b, v1, v2, k, kappa = 1e8, 1e-4, 1.0, 3.0, 46.0, 1.25e-5
-    single = [2 * q * b / (k * math.sqrt(math.pi * thermal.peclet(v, b, kappa)))
+    single = [q * b / k * thermal.band_source_max_rise(thermal.peclet(v, b, kappa))
               for v in (v1, v2)]
     combined = 1 / (1 / single[0] + 1 / single[1])
     assert thermal.flash_temperature(q, b, v1, v2, k, kappa) == pytest.approx(combined)

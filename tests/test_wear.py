@@ -208,7 +208,7 @@ def test_wear_physical_over_operating_range(n1, torque, sigma):
         assert np.all(np.isfinite(h)) and np.all(h >= 0)
     assert np.argmax(res.pinion) == 0
     pitch = np.argmin(np.abs(res.s))
-    assert res.pinion[pitch] < 0.5 * res.pinion.mean()  # little sliding, little wear
+    assert res.pinion[pitch] < 0.2 * res.pinion[0]  # the root wears far more than the pitch
 
 
 def test_bad_cycles_refused(baseline):
