@@ -123,7 +123,7 @@ def _fixed_point(f, lo: np.ndarray, tol: float, max_iter: int) -> tuple[np.ndarr
     b = a + ga
     gb = f(b) - b  # <= 0
     last = np.zeros(a.shape, dtype=np.int8)  # +1: b was replaced last step, -1: a was
-    for iterations in range(1, max_iter + 1):
+    for iterations in range(1, max_iter + 1):  # noqa: B007 - returned
         done = (np.abs(ga) < tol) | (np.abs(gb) < tol) | (b - a < tol)
         if np.all(done):
             break

@@ -28,6 +28,7 @@ intended high-Peclet form is this one with ``K_i sqrt(Pe_i)`` in the denominator
 from __future__ import annotations
 
 from functools import lru_cache
+from itertools import pairwise
 
 import numpy as np
 from scipy.integrate import quad
@@ -48,7 +49,7 @@ def _f_table() -> tuple[np.ndarray, np.ndarray]:
     values = {}
     for sign in (1.0, -1.0):
         pieces = [quad(integrand, a, b, args=(sign,), limit=200)[0]
-                  for a, b in zip(pos[:-1], pos[1:], strict=True)]
+                  for a, b in pairwise(pos)]
         values[sign] = np.concatenate([[0.0], np.cumsum(pieces)])
     knots = np.concatenate([-pos[:0:-1], pos])
     table = np.concatenate([-values[-1.0][:0:-1], values[1.0]])
