@@ -4,7 +4,10 @@ A Hydra app (config ``conf/reproduce.yaml``). It writes, into ``out_dir`` (defau
 folder), CSV files named and shaped like ``shared/reference/thesis_tables``:
 
 - ``table02_speed.csv`` ... ``table06_center_distance.csv`` (thesis 2.7.2-2.7.6, 1e6 cycles),
-- ``wear_profile.csv`` and ``wear_profile.png`` (baseline wear of both flanks, 2.7).
+- ``table07_tvms_energy_vs_fem.csv``, ``fem_convergence.csv``, ``table08_wear_vs_stiffness.csv``,
+  ``tvms.csv`` and ``tvms.png`` (mesh stiffness, thesis 3.1-3.2),
+- ``wear_profile.csv`` and ``wear_profile.png`` (baseline wear of both flanks, 2.7), and
+  ``contact_state.csv`` (the unworn contact along the path: load, Hertz, film, temperature).
 
 Film thickness, film ratio, asperity load ratio and Hertz pressure are reported at the pitch
 point of the unworn pair (single-tooth zone); average wear is the mean pinion wear depth over the
@@ -39,19 +42,19 @@ def _with(scn: Scenario, part: str, **changes) -> Scenario:
     return dataclasses.replace(scn, **{part: dataclasses.replace(getattr(scn, part), **changes)})
 
 
-def pitch_state(scn: Scenario) -> dict[str, float]:
+def pitch_state(res: WearResult) -> dict[str, float]:
     """Contact state of the unworn pair at the pitch point."""
-    res = simulate_wear(scn, 0.0)
-    st = res.last_rate.state
+    st = res.first_rate.state
     return {n: float(np.interp(0.0, res.s, getattr(st, n)))
-          for n in ("h_min", "film_ratio", "asperity_ratio", "p_max", "flash_temperature")}
+            for n in ("h_min", "film_ratio", "asperity_ratio", "p_max", "flash_temperature")}
 
 
 def table_speed(scn: Scenario, cycles: float, speeds: list[float]) -> pd.DataFrame:
     rows = []
     for n1 in speeds:
         s = _with(scn, "operating", n1_rpm=float(n1))
-        ps, res = pitch_state(s), simulate_wear(s, cycles)
+        res = simulate_wear(s, cycles)
+        ps = pitch_state(res)
         rows.append({"n1_rpm": n1, "min_film_thickness_nm": ps["h_min"] * 1e9,
                      "asperity_load_ratio_pct": ps["asperity_ratio"] * 100,
                      "avg_wear_um": res.mean_depth() * 1e6})
@@ -62,7 +65,8 @@ def table_torque(scn: Scenario, cycles: float, torques: list[float]) -> pd.DataF
     rows = []
     for t in torques:
         s = _with(scn, "operating", torque_Nm=float(t))
-        ps, res = pitch_state(s), simulate_wear(s, cycles)
+        res = simulate_wear(s, cycles)
+        ps = pitch_state(res)
         rows.append({"torque_Nm": t, "max_hertz_pressure_MPa": ps["p_max"] * 1e-6,
                      "asperity_load_ratio_pct": ps["asperity_ratio"] * 100,
                      "avg_wear_um": res.mean_depth() * 1e6})
@@ -73,7 +77,8 @@ def table_roughness(scn: Scenario, cycles: float, sigmas: list[float]) -> pd.Dat
     rows = []
     for sig in sigmas:
         s = _with(scn, "tribology", sigma_um=float(sig))
-        ps, res = pitch_state(s), simulate_wear(s, cycles)
+        res = simulate_wear(s, cycles)
+        ps = pitch_state(res)
         rows.append({"sigma_um": sig, "film_thickness_ratio": ps["film_ratio"],
                      "asperity_load_ratio_pct": ps["asperity_ratio"] * 100,
                      "avg_wear_um": res.mean_depth() * 1e6})
@@ -97,6 +102,9 @@ def table_lubricant(
 
 
 def table_center_distance(scn: Scenario, cycles: float, offsets_pct: list[float]) -> pd.DataFrame:
+    if 0.0 not in [float(o) for o in offsets_pct]:
+        raise ValueError(f"center_distance_offsets_pct = {offsets_pct} must contain 0: the "
+                         "total wear is reported relative to the standard centre distance")
     a0 = scn.gear.standard_center_distance_mm
     results = []
     for off in offsets_pct:
@@ -217,6 +225,21 @@ def plot_tvms(tvms: pd.DataFrame, path: Path) -> None:
     plt.close(fig)
 
 
+def contact_state_frame(res: WearResult) -> pd.DataFrame:
+    """Contact state of the unworn pair along the path of contact (``contact_state.csv``)."""
+    st, rate = res.first_rate.state, res.first_rate
+    return pd.DataFrame({
+        "roll_mm": res.s * 1e3, "zone": np.where(res.double, "double", "single"),
+        "pair_load_N": rate.load, "half_width_um": st.half_width * 1e6,
+        "p_max_MPa": st.p_max * 1e-6, "sliding_velocity_m_s": st.v_s,
+        "entraining_velocity_m_s": st.v_e, "h_min_nm": st.h_min * 1e9,
+        "film_ratio": st.film_ratio, "asperity_load_ratio_pct": st.asperity_ratio * 100,
+        "flash_temperature_K": st.flash_temperature, "lubricant_density_kg_m3": st.density,
+        "film_deficiency": rate.psi, "pinion_wear_rate_m_per_cycle": rate.pinion,
+        "gear_wear_rate_m_per_cycle": rate.gear,
+    })
+
+
 def wear_profile_frame(res: WearResult) -> pd.DataFrame:
     """Both flanks' wear against roll coordinate and flank radius (``wear_profile.csv``)."""
     r1, r2 = res.geometry.flank_radii(res.s)
@@ -261,7 +284,7 @@ def _lubricant_from_group(name: str) -> Lubricant:
 def reproduce(cfg: DictConfig) -> dict[str, pd.DataFrame]:
     """Compute every table of this module and write it into ``cfg.out_dir``."""
     scn = scenario_from_config(cfg)
-    lubs = {_lubricant_from_group(n).name: _lubricant_from_group(n) for n in cfg.lubricants}
+    lubs = {lub.name: lub for lub in map(_lubricant_from_group, cfg.lubricants)}
     out = Path(cfg.out_dir)
     cycles = float(cfg.cycles)
     tables = {
@@ -279,6 +302,7 @@ def reproduce(cfg: DictConfig) -> dict[str, pd.DataFrame]:
         scn, [float(c) for c in stiff.wear_cycles], int(stiff.positions))
     base = simulate_wear(scn, cycles)
     tables["wear_profile"] = wear_profile_frame(base)
+    tables["contact_state"] = contact_state_frame(base)
     for name, df in tables.items():
         write_csv(df, out / f"{name}.csv")
     plot_wear_profile(base, out / "wear_profile.png")

@@ -173,7 +173,12 @@ def simulate_wear(
     while True:
         while pending and pending[0] <= done:
             taken[pending.pop(0)] = (w1.copy(), w2.copy())
-        rate = wear_rate(scn, geom, s, w1, w2, force(w1, w2), stiffness(s, w1, w2))
+        f = np.asarray(force(w1, w2), dtype=float)
+        if f.shape != s.shape or not np.all(np.isfinite(f)) or np.any(f < 0):
+            raise ValueError(
+                f"mesh force has shape {f.shape} (grid {s.shape}) or non-finite/negative values; "
+                "give one force per grid point, finite and >= 0 [N]")
+        rate = wear_rate(scn, geom, s, w1, w2, f, stiffness(s, w1, w2))
         first = first or rate
         if done >= cycles:
             break

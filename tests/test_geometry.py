@@ -99,7 +99,7 @@ def test_geometry_identities_over_the_design_space(z1, dz, alpha, m, rel_a):
         reject()  # outside the model's scope: refused, tested below
     assert 1 < geom.contact_ratio < 2
     assert geom.contact_ratio == pytest.approx(contact_ratio_by_tip_pressure_angles(g), rel=1e-9)
-    assert geom.s_start < 0 < geom.s_end or geom.s_start < geom.s_end
+    assert geom.s_start < 0 < geom.s_end  # the pitch point lies on the path of contact
     R1, R2 = geom.curvature_radii(np.linspace(geom.s_start, geom.s_end, 7))
     assert np.all(R1 > 0) and np.all(R2 > 0)
 
@@ -117,3 +117,8 @@ def test_contact_ratio_above_two_refused():
 def test_centre_distance_without_clearance_refused():
     with pytest.raises(ValueError, match=r"center_distance_mm = 44\.4 must lie in"):
         mesh_geometry(GearPair(center_distance_mm=44.4))
+
+
+def test_tip_interference_refused():
+    with pytest.raises(ValueError, match="involute interference"):
+        mesh_geometry(GearPair(center_distance_mm=44.55))

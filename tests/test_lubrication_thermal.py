@@ -113,3 +113,14 @@ def test_flash_temperature_linear_in_heat_and_falls_with_speed(q, scale):
 
 def test_heat_flux_vanishes_without_sliding():
     assert thermal.heat_flux(np.zeros(3), 1e8, 1e7, 0.1).tolist() == [0.0, 0.0, 0.0]
+
+
+def test_fixed_point_solver_hits_the_root_of_a_decreasing_map():
+    from physics.contact_state import _fixed_point
+
+    scale = np.array([0.01, 1.0, 10.0, 100.0, 1e6])
+    x, iterations = _fixed_point(lambda x: 100 * np.exp(-x / scale), np.zeros(5), 1e-9, 100)
+    assert np.allclose(x, 100 * np.exp(-x / scale), atol=1e-8)
+    assert iterations < 60
+    with pytest.raises(RuntimeError, match="did not converge in 2 iterations"):
+        _fixed_point(lambda x: 100 * np.exp(-x / scale), np.zeros(5), 1e-9, 2)

@@ -100,3 +100,19 @@ def test_non_positive_speed_always_refused(n1):
 def test_frozen():
     with pytest.raises(dataclasses.FrozenInstanceError):
         Operating().n1_rpm = 1.0  # type: ignore[misc]
+
+
+@pytest.mark.parametrize(
+    ("make", "message"),
+    [
+        (lambda: Tribology(regime="wet"), r"tribology\.regime = 'wet' must be 'mixed' or 'dry'"),
+        (lambda: WearSolver(n_points=10), r"solver\.n_points = 10 must be a whole number"),
+        (lambda: WearSolver(max_iterations=0), r"solver\.max_iterations = 0"),
+        (lambda: Operating(torque_Nm=True), r"operating\.torque_Nm = True must lie in"),
+        (lambda: GearPair(center_distance_mm=60.0), r"center_distance_mm = 60.0 must lie in"),
+        (lambda: GearPair(z1=18.5), r"gear\.z1 = 18\.5 must be a whole number"),
+    ],
+)
+def test_more_bad_values(make, message):
+    with pytest.raises(ValueError, match=message):
+        make()

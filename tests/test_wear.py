@@ -172,7 +172,9 @@ def test_profile_converges_under_update_refinement(baseline):
 def test_updates_whenever_wear_changes_by_the_threshold(baseline):
     dry = _with(baseline, "tribology", regime="dry")
     res = simulate_wear(dry, 1.5e7)
-    assert res.blocks >= math.ceil(max(res.pinion.max(), res.gear.max()) / 1e-6)
+    peak = max(res.pinion.max(), res.gear.max())
+    # each block adds at most 1 um at the fastest point; the rate only grows with wear here
+    assert math.ceil(peak / 1e-6) <= res.blocks <= math.ceil(peak / 1e-6) + 2
 
 
 def test_film_deficiency_limits():
@@ -185,17 +187,23 @@ def test_film_deficiency_limits():
     assert film_deficiency(1.0, 350.0, lub) == pytest.approx(1 - math.exp(-x), rel=1e-12)
 
 
-def test_dynamic_force_enters_per_position(baseline):
-    """The mesh force is an input per mesh position: doubling it on the root half doubles load."""
+def test_mesh_force_is_shared_per_instant(baseline):
+    """A force per mesh position: each pair carries its share of the force at its own instant."""
     res = simulate_wear(baseline, 0.0)
-    f0 = res.last_rate.load[res.s > res.geometry.single_zone[1]]
+    s, f0 = res.s, 11824.19747195
+    shares = res.first_rate.load / f0
 
     def force(w1, w2):
-        return np.where(res.s < 0, 2.0, 1.0) * 11824.19747195
+        return f0 * (1.0 + 0.3 * np.sin(2 * np.pi * s / res.geometry.base_pitch))
 
-    res2 = simulate_wear(baseline, 1e5, force=force)
-    assert res2.pinion[0] > simulate_wear(baseline, 1e5).pinion[0]
-    assert np.allclose(res2.last_rate.load[res.s > res.geometry.single_zone[1]], f0, rtol=1e-3)
+    dyn = simulate_wear(baseline, 1e5, force=force)
+    assert np.allclose(dyn.first_rate.load, shares * force(None, None), rtol=1e-9)
+    assert not np.allclose(dyn.pinion, simulate_wear(baseline, 1e5).pinion, rtol=1e-3, atol=0)
+
+
+def test_bad_mesh_force_shape(baseline):
+    with pytest.raises(ValueError, match=r"mesh force has shape \(3,\).*one force per grid point"):
+        simulate_wear(baseline, 1e5, force=lambda w1, w2: np.ones(3))
 
 
 @settings(max_examples=25, deadline=None)
@@ -212,7 +220,8 @@ def test_wear_physical_over_operating_range(n1, torque, sigma):
 
 
 def test_bad_cycles_refused(baseline):
-    with pytest.raises(ValueError, match="cycles = -1"):
-        simulate_wear(baseline, -1)
+    for bad in (-1, float("nan"), float("inf"), "1e6"):
+        with pytest.raises(ValueError, match="cycles = .* must be a finite number"):
+            simulate_wear(baseline, bad)
     with pytest.raises(ValueError, match="snapshots"):
         simulate_wear(baseline, 10.0, snapshots=[20.0])
