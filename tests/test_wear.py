@@ -221,7 +221,7 @@ def test_wear_physical_over_operating_range(n1, torque, sigma):
 
 def test_bad_cycles_refused(baseline):
     for bad in (-1, float("nan"), float("inf"), "1e6"):
-        with pytest.raises(ValueError, match="cycles = .* must be a finite number"):
+        with pytest.raises(ValueError, match=r"cycles = .* must be a finite number"):
             simulate_wear(baseline, bad)
     with pytest.raises(ValueError, match="snapshots"):
         simulate_wear(baseline, 10.0, snapshots=[20.0])
