@@ -259,6 +259,68 @@ class WearSolver:
 
 
 @dataclass(frozen=True)
+class Dynamics:
+    """Torsional gear-pair model of thesis 3.3: damping, backlash, errors, inertias, sampling.
+
+    None of these are stated by the thesis; each is chosen from standard data:
+
+    - ``damping_ratio`` 0.07 of critical mesh damping ``c = 2 zeta sqrt(k_mean m_e)``: inside the
+      0.03-0.17 that Kasuba & Evans (ASME J. Mech. Des. 103 (1981) 398-409) report for spur gear
+      meshes, and the value used by Kahraman & Singh (J. Sound Vib. 142 (1990) 49-75).
+    - ``half_backlash_um`` 47.5: half the minimum normal backlash ``(2/3)(0.06 + 0.0005 a +
+      0.03 m)`` mm of ISO/TR 10064-2 for a = 45 mm, m = 2 mm.
+    - ``eccentricity1_um`` 7.5: half the radial runout 15 um of an ISO 1328-2 grade 6 pinion
+      (d = 36 mm, m = 2); it acts on the line of action as ``e sin(alpha_w)`` at shaft rate.
+    - ``profile_error_um`` 3.0: half the profile form tolerance of ISO 1328-1 grade 6 (6 um), the
+      amplitude of the mesh-rate (short-period) error.
+    - ``inertia*_kg_m2``: null computes solid steel discs of the face width between the bore and
+      the pitch circle.
+    - ``sample_rate_hz`` 40960: the thesis's test rig (4.3).
+    - ``step_factor``: RK4 step as a fraction of the period of the highest natural frequency
+      over 2 pi (``omega_max dt``); RK4 is unstable above 2.78.
+    """
+
+    damping_ratio: float = 0.07
+    half_backlash_um: float = 47.5
+    eccentricity1_um: float = 7.5
+    profile_error_um: float = 3.0
+    inertia1_kg_m2: float | None = None
+    inertia2_kg_m2: float | None = None
+    sample_rate_hz: float = 40960.0
+    duration_s: float = 0.1
+    transient_s: float = 0.02
+    step_factor: float = 0.25
+    phase_bins: int = 512
+
+    def __post_init__(self) -> None:
+        o = "dynamics"
+        if not (isinstance(self.damping_ratio, int | float) and 0 <= self.damping_ratio < 1):
+            raise ValueError(f"{o}.damping_ratio = {self.damping_ratio!r} must lie in [0, 1) "
+                             "(fraction of critical damping; 0.03-0.17 for gear meshes)")
+        if not (isinstance(self.half_backlash_um, int | float) and self.half_backlash_um >= 0
+                and math.isfinite(self.half_backlash_um)):
+            raise ValueError(f"{o}.half_backlash_um = {self.half_backlash_um!r} must be >= 0 "
+                             "(half the normal backlash, um)")
+        for name in ("eccentricity1_um", "profile_error_um"):
+            v = getattr(self, name)
+            if not (isinstance(v, int | float) and 0 <= v < 1000):
+                raise ValueError(f"{o}.{name} = {v!r} must lie in [0, 1000) um")
+        for name in ("inertia1_kg_m2", "inertia2_kg_m2"):
+            if getattr(self, name) is not None:
+                _check_range(o, name, getattr(self, name), 0.0, 1e3)
+        _check_range(o, "sample_rate_hz", self.sample_rate_hz, 100.0, 1e7)
+        _check_range(o, "duration_s", self.duration_s, 0.0, 100.0)
+        if not (isinstance(self.transient_s, int | float) and 0 <= self.transient_s < 100):
+            raise ValueError(f"{o}.transient_s = {self.transient_s!r} must lie in [0, 100) s")
+        if not (isinstance(self.step_factor, int | float) and 0 < self.step_factor < 2.78):
+            raise ValueError(
+                f"{o}.step_factor = {self.step_factor!r} must lie in (0, 2.78): omega_max dt above "
+                "2.78 makes fourth-order Runge-Kutta unstable; 0.25 keeps it accurate")
+        if not isinstance(self.phase_bins, int) or self.phase_bins < 16:
+            raise ValueError(f"{o}.phase_bins = {self.phase_bins!r} must be a whole number >= 16")
+
+
+@dataclass(frozen=True)
 class Scenario:
     """Everything one wear simulation needs."""
 
@@ -268,11 +330,12 @@ class Scenario:
     tribology: Tribology = Tribology()
     operating: Operating = Operating()
     solver: WearSolver = WearSolver()
+    dynamics: Dynamics = Dynamics()
 
 
 _PARTS = {
     "gear": GearPair, "material": Material, "lubricant": Lubricant,
-    "tribology": Tribology, "operating": Operating, "solver": WearSolver,
+    "tribology": Tribology, "operating": Operating, "solver": WearSolver, "dynamics": Dynamics,
 }
 
 

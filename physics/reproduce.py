@@ -6,6 +6,10 @@ folder), CSV files named and shaped like ``shared/reference/thesis_tables``:
 - ``table02_speed.csv`` ... ``table06_center_distance.csv`` (thesis 2.7.2-2.7.6, 1e6 cycles),
 - ``table07_tvms_energy_vs_fem.csv``, ``fem_convergence.csv``, ``table08_wear_vs_stiffness.csv``,
   ``tvms.csv`` and ``tvms.png`` (mesh stiffness, thesis 3.1-3.2),
+- ``table09_dynamics_vs_wear.csv``, ``table10_dynamic_vs_quasistatic.csv``, ``dte.csv`` and
+  ``dte_spectrum.png`` (torsional dynamics and the dynamic-load coupling, 3.3-3.5),
+- ``wear_evolution.csv``, ``wear_evolution.png`` and ``table12_evolution_fits_case{1..5}.csv``
+  (pinion root wear against cycles for the cases of Table 11, and the candidate laws, 4.1),
 - ``wear_profile.csv`` and ``wear_profile.png`` (baseline wear of both flanks, 2.7), and
   ``contact_state.csv`` (the unworn contact along the path: load, Hertz, film, temperature).
 
@@ -26,6 +30,8 @@ import numpy as np
 import pandas as pd
 from omegaconf import DictConfig, OmegaConf
 
+from physics.dynamics import build_model, simulate
+from physics.evolution import fit_evolution_models, root_wear_evolution, simulate_dynamic_wear
 from physics.files import save_figure, write_csv
 from physics.geometry import MeshGeometry
 from physics.load_sharing import pair_loads
@@ -225,6 +231,114 @@ def plot_tvms(tvms: pd.DataFrame, path: Path) -> None:
     plt.close(fig)
 
 
+def dynamic_states(scn: Scenario, cycles: list[float]) -> tuple[WearResult, dict]:
+    """Dynamically coupled wear of ``scn`` and the response of each listed wear state."""
+    ms = MeshStiffness(scn.gear, scn.material)
+    res = simulate_dynamic_wear(scn, max(cycles), snapshots=cycles)
+    states = {}
+    for n in cycles:
+        w1, w2 = res.snapshots[float(n)]
+        model = build_model(scn, ms, res.s, w1, w2) if n > 0 else build_model(scn, ms)
+        states[n] = (model, simulate(model, scn.dynamics))
+    return res, states
+
+
+def table_dynamics_vs_wear(states: dict) -> pd.DataFrame:
+    """Table 9: combined error amplitude, maximum DTE and dynamic mesh force per wear state."""
+    rows = []
+    for n, (model, resp) in states.items():
+        e = model.combined_error(resp.time)
+        rows.append({"wear_cycles": n, "combined_error_amplitude_um": (e.max() - e.min()) / 2e-6,
+                     "max_dte_um": float(resp.dte.max()) * 1e6,
+                     "max_dynamic_mesh_force_N": float(resp.force.max())})
+    return pd.DataFrame(rows)
+
+
+def table_dynamic_vs_quasistatic(scn: Scenario, dynamic: WearResult) -> pd.DataFrame:
+    """Table 10: pinion and gear wear under quasi-static and dynamic load at the same cycles."""
+    static = simulate_wear(scn, dynamic.cycles)
+    rows = [("max pinion wear", lambda r: r.pinion.max() * 1e3),
+            ("average pinion wear", lambda r: r.mean_depth("pinion") * 1e3),
+            ("total pinion wear", lambda r: r.worn_area("pinion") * 1e6),
+            ("total gear wear", lambda r: r.worn_area("gear") * 1e6)]
+    out = []
+    for label, f in rows:
+        qs, dy = f(static), f(dynamic)
+        out.append({"quantity": label, "quasi_static_mm": qs, "dynamic_mm": dy,
+                    "increase_pct": (dy / qs - 1) * 100})
+    return pd.DataFrame(out)
+
+
+def dte_frame(states: dict, cycles: list[float]) -> pd.DataFrame:
+    """DTE and dynamic mesh force records (``dte.csv``) of the listed wear states."""
+    parts = []
+    for n in cycles:
+        _, resp = states[n]
+        parts.append(pd.DataFrame({"cycles": n, "time_s": resp.time - resp.time[0],
+                                   "dte_m": resp.dte[0], "force_N": resp.force[0]}))
+    return pd.concat(parts, ignore_index=True)
+
+
+def evolution_tables(cases: list[int], cycles: np.ndarray, fit_until: float
+                     ) -> tuple[pd.DataFrame, dict[int, pd.DataFrame]]:
+    """Pinion root wear against cycles for each case, and the candidate-law fits (Table 12)."""
+    curves, fits = [], {}
+    for case in cases:
+        scn = scenario_from_config({"case": case})
+        root, _ = root_wear_evolution(scn, cycles, dynamic=True)
+        curves.append(pd.DataFrame({"case": case, "cycles": cycles, "root_wear_mm": root * 1e3}))
+        fits[case] = pd.DataFrame([
+            {"model": r["model"], "rmse_mm": r["rmse"], "r2": r["r2"],
+             "max_relative_error_pct": r["max_relative_error_pct"]}
+            for r in fit_evolution_models(cycles, root * 1e3, fit_until)])
+    return pd.concat(curves, ignore_index=True), fits
+
+
+def plot_dte_spectrum(dte: pd.DataFrame, mesh_hz: float, fs: float, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (ax, ax2) = plt.subplots(2, 1, figsize=(7, 6))
+    for n, df in dte.groupby("cycles"):
+        x = df.dte_m.to_numpy()
+        spec = np.abs(np.fft.rfft((x - x.mean()) * np.hanning(len(x)))) * 4 / len(x)
+        f = np.fft.rfftfreq(len(x), 1 / fs)
+        ax.semilogy(f, spec * 1e6, lw=0.8, label=f"{n:.3g} cycles")
+        ax2.plot(df.time_s * 1e3, x * 1e6, lw=0.8, label=f"{n:.3g} cycles")
+    for h in range(1, 6):
+        ax.axvline(h * mesh_hz, color="k", ls=":", lw=0.6)
+    ax.set_xlim(0, 8 * mesh_hz)
+    ax.set_xlabel("frequency [Hz] (dotted: mesh harmonics)")
+    ax.set_ylabel("DTE amplitude [um]")
+    ax.legend(fontsize=8)
+    ax2.set_xlim(0, 10 * 1e3 / mesh_hz)
+    ax2.set_xlabel("time [ms]")
+    ax2.set_ylabel("DTE [um]")
+    fig.suptitle("Dynamic transmission error, healthy and worn")
+    fig.tight_layout()
+    save_figure(fig, path)
+    plt.close(fig)
+
+
+def plot_wear_evolution(curves: pd.DataFrame, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for case, df in curves.groupby("case"):
+        ax.plot(df.cycles, df.root_wear_mm * 1e3, label=f"case {case}")
+    ax.set_xlabel("pinion cycles")
+    ax.set_ylabel("pinion root wear [um]")
+    ax.set_title("Pinion root wear under dynamic load (thesis Table 11 cases)")
+    ax.legend()
+    save_figure(fig, path)
+    plt.close(fig)
+
+
 def contact_state_frame(res: WearResult) -> pd.DataFrame:
     """Contact state of the unworn pair along the path of contact (``contact_state.csv``)."""
     st, rate = res.first_rate.state, res.first_rate
@@ -300,6 +414,17 @@ def reproduce(cfg: DictConfig) -> dict[str, pd.DataFrame]:
     tables["fem_convergence"] = table_fem_convergence(scn, [float(r) for r in stiff.fem_refines])
     tables["table08_wear_vs_stiffness"], tables["tvms"] = table_wear_stiffness(
         scn, [float(c) for c in stiff.wear_cycles], int(stiff.positions))
+    dyn_cfg = cfg.evolution
+    t9 = [float(c) for c in dyn_cfg.table9_cycles]
+    dynamic, states = dynamic_states(scn, t9)
+    tables["table09_dynamics_vs_wear"] = table_dynamics_vs_wear(states)
+    tables["table10_dynamic_vs_quasistatic"] = table_dynamic_vs_quasistatic(scn, dynamic)
+    tables["dte"] = dte_frame(states, [t9[0], t9[-1]])
+    grid = np.linspace(0.0, float(dyn_cfg.cycles_max), int(dyn_cfg.points))
+    tables["wear_evolution"], fits = evolution_tables(
+        [int(c) for c in dyn_cfg.cases], grid, float(dyn_cfg.fit_until))
+    for case, df in fits.items():
+        tables[f"table12_evolution_fits_case{case}"] = df
     base = simulate_wear(scn, cycles)
     tables["wear_profile"] = wear_profile_frame(base)
     tables["contact_state"] = contact_state_frame(base)
@@ -307,6 +432,10 @@ def reproduce(cfg: DictConfig) -> dict[str, pd.DataFrame]:
         write_csv(df, out / f"{name}.csv")
     plot_wear_profile(base, out / "wear_profile.png")
     plot_tvms(tables["tvms"], out / "tvms.png")
+    model = next(iter(states.values()))[0]
+    plot_dte_spectrum(tables["dte"], model.mesh_frequency_hz, scn.dynamics.sample_rate_hz,
+                      out / "dte_spectrum.png")
+    plot_wear_evolution(tables["wear_evolution"], out / "wear_evolution.png")
     log.info("wrote %d tables and wear_profile.png to %s", len(tables), out)
     return tables
 

@@ -31,9 +31,9 @@ from physics.load_sharing import PairStiffness, pair_loads
 from physics.params import R_GAS, Lubricant, Scenario
 from physics.stiffness import MeshStiffness
 
-#: ``force(wear1, wear2) -> F [N]`` on the grid: the total normal mesh force per mesh position for
-#: the current worn profiles (the dynamic model supplies one; the default is quasi-static).
-MeshForce = Callable[[np.ndarray, np.ndarray], np.ndarray]
+#: ``force(s, wear1, wear2) -> F [N]`` on the grid s: the total normal mesh force per mesh
+#: position for the current worn profiles (the dynamic model supplies one; default quasi-static).
+MeshForce = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 #: ``stiffness(s_grid, wear1, wear2) -> k(s)``: the pair stiffness along the path for the current
 #: worn profiles (default: :meth:`physics.stiffness.MeshStiffness.pair_function`).
 StiffnessModel = Callable[[np.ndarray, np.ndarray, np.ndarray], PairStiffness]
@@ -159,7 +159,7 @@ def simulate_wear(
     if force is None:
         f_static = quasi_static_force(scn, geom)
 
-        def force(_w1: np.ndarray, _w2: np.ndarray) -> np.ndarray:
+        def force(s: np.ndarray, _w1: np.ndarray, _w2: np.ndarray) -> np.ndarray:
             return np.full_like(s, f_static)
 
     if stiffness is None:
@@ -173,7 +173,7 @@ def simulate_wear(
     while True:
         while pending and pending[0] <= done:
             taken[pending.pop(0)] = (w1.copy(), w2.copy())
-        f = np.asarray(force(w1, w2), dtype=float)
+        f = np.asarray(force(s, w1, w2), dtype=float)
         if f.shape != s.shape or not np.all(np.isfinite(f)) or np.any(f < 0):
             raise ValueError(
                 f"mesh force has shape {f.shape} (grid {s.shape}) or non-finite/negative values; "

@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 from omegaconf import OmegaConf
 
 from physics.params import (
+    Dynamics,
     GearPair,
     Lubricant,
     Material,
@@ -25,6 +26,7 @@ CONF = Path(__file__).resolve().parent.parent / "conf"
 DEFAULT_GROUPS = {
     "gear/thesis": GearPair, "material/steel": Material, "lubricant/thesis": Lubricant,
     "tribology/thesis": Tribology, "operating/baseline": Operating, "solver/default": WearSolver,
+    "dynamics/default": Dynamics,
 }
 
 

@@ -193,17 +193,17 @@ def test_mesh_force_is_shared_per_instant(baseline):
     s, f0 = res.s, 11824.19747195
     shares = res.first_rate.load / f0
 
-    def force(w1, w2):
-        return f0 * (1.0 + 0.3 * np.sin(2 * np.pi * s / res.geometry.base_pitch))
+    def force(x, w1, w2):
+        return f0 * (1.0 + 0.3 * np.sin(2 * np.pi * x / res.geometry.base_pitch))
 
     dyn = simulate_wear(baseline, 1e5, force=force)
-    assert np.allclose(dyn.first_rate.load, shares * force(None, None), rtol=1e-9)
+    assert np.allclose(dyn.first_rate.load, shares * force(s, None, None), rtol=1e-9)
     assert not np.allclose(dyn.pinion, simulate_wear(baseline, 1e5).pinion, rtol=1e-3, atol=0)
 
 
 def test_bad_mesh_force_shape(baseline):
     with pytest.raises(ValueError, match=r"mesh force has shape \(3,\).*one force per grid point"):
-        simulate_wear(baseline, 1e5, force=lambda w1, w2: np.ones(3))
+        simulate_wear(baseline, 1e5, force=lambda s, w1, w2: np.ones(3))
 
 
 @settings(max_examples=25, deadline=None)

@@ -1,0 +1,369 @@
+"""Torsional vibration of the gear pair with backlash and worn teeth (thesis 3.3-3.5).
+
+Two inertias on their base circles (thesis 3.3)
+
+    J1 theta1'' + r_b1 F = T1,        J2 theta2'' - r_b2 F = -T2,
+    F = c x' + sum_i k_i(t) f(x - g_i(t)),    x = r_b1 theta1 - r_b2 theta2 - e(t)
+
+reduce, with the equivalent mass ``m_e = J1 J2 / (J1 r_b2^2 + J2 r_b1^2)`` and the static mesh
+force ``W0 = T2 / r_b2``, to
+
+    m_e x'' + c x' + sum_i k_i(t) f(x - g_i(t)) = W0 - m_e e''(t).
+
+``f`` is the backlash dead zone of half-width ``Delta_n`` (thesis 3.3). The pairs in contact are
+``i = A`` (the pair that entered at the start of contact, at roll ``s_start + tau``) and ``i = B``
+(one base pitch ahead, while it is still on the path), with ``tau = r_b1 omega1 t mod p_b``. Their
+stiffnesses ``k_i`` are the potential-energy stiffnesses of the worn teeth
+(:mod:`physics.stiffness`) and ``g_i`` their wear gaps (pinion plus gear wear at the contact
+point): the wear-induced error of the thesis enters pair by pair, so load sharing and contact loss
+follow from the same equation. ``e(t)`` holds the long-period (pinion eccentricity on the line of
+action, shaft rate) and short-period (profile, mesh rate) errors. The thesis's "combined error" is
+``e(t) + sum k_i g_i / sum k_i``.
+
+Integration is the fixed-step classical Runge-Kutta of the thesis, compiled with numba and run in
+parallel over a batch of scenarios; the step is ``step_factor / omega_max`` with ``omega_max`` the
+highest natural frequency ``sqrt(k_max / m_e)``, rounded down to divide the output sample period.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+
+from physics.geometry import MeshGeometry
+from physics.params import Dynamics, Scenario
+from physics.stiffness import MeshStiffness
+
+
+@dataclass(frozen=True)
+class PairModel:
+    """One scenario of the reduced torsional model, ready to integrate (SI units)."""
+
+    geometry: MeshGeometry
+    mass: float  # m_e [kg]
+    damping: float  # c [N s/m]
+    static_force: float  # W0 [N]
+    half_backlash: float  # Delta_n [m]
+    long_error: float  # amplitude of the shaft-rate error on the line of action [m]
+    short_error: float  # amplitude of the mesh-rate error [m]
+    omega1: float  # pinion speed [rad/s]
+    omega_mesh: float  # mesh frequency [rad/s]
+    roll_speed: float  # r_b1 omega1 [m/s]
+    k_a: np.ndarray  # stiffness of pair A over one mesh period (uniform phase grid) [N/m]
+    k_b: np.ndarray  # stiffness of pair B (0 out of contact) [N/m]
+    g_a: np.ndarray  # wear gap of pair A [m]
+    g_b: np.ndarray  # wear gap of pair B [m]
+    inertias: tuple[float, float]  # J1, J2 [kg m^2]
+
+    @property
+    def omega_max(self) -> float:
+        """Highest natural frequency of the linearised mesh, ``sqrt(k_max / m_e)`` [rad/s]."""
+        return math.sqrt(float(np.max(self.k_a + self.k_b)) / self.mass)
+
+    @property
+    def mesh_frequency_hz(self) -> float:
+        return self.omega_mesh / (2 * math.pi)
+
+    def combined_error(self, t: np.ndarray) -> np.ndarray:
+        """Thesis 3.3's combined error at times t: manufacturing plus wear-induced [m]."""
+        tau = self.phase_index(t)
+        k_a, k_b = self.k_a[tau], self.k_b[tau]
+        wear = (k_a * self.g_a[tau] + k_b * self.g_b[tau]) / (k_a + k_b)
+        return (self.long_error * np.sin(self.omega1 * t)
+                + self.short_error * np.sin(self.omega_mesh * t) + wear)
+
+    def phase_index(self, t: np.ndarray) -> np.ndarray:
+        n = len(self.k_a)
+        frac = np.mod(self.roll_speed * np.asarray(t), self.geometry.base_pitch) / (
+            self.geometry.base_pitch)
+        return np.minimum((frac * n).astype(int), n - 1)
+
+
+def blank_inertia(radius: float, bore: float, width: float, density: float) -> float:
+    """Polar moment of a solid steel disc between bore and radius [kg m^2]."""
+    return 0.5 * math.pi * density * width * (radius**4 - bore**4)
+
+
+def build_model(scn: Scenario, stiffness: MeshStiffness | None = None,
+                s_grid: np.ndarray | None = None, wear1: np.ndarray | None = None,
+                wear2: np.ndarray | None = None, n_phase: int = 1024) -> PairModel:
+    """The reduced model of ``scn`` for the teeth worn by ``wear1, wear2`` on ``s_grid``."""
+    dyn, g, op = scn.dynamics, scn.gear, scn.operating
+    if op.n1_rpm > 10000:
+        raise ValueError(f"operating.n1_rpm = {op.n1_rpm:g} is outside the dynamic model's scope "
+                         "(<= 10000 r/min: rigid shafts and bearings, no centrifugal effects)")
+    ms = stiffness or MeshStiffness(g, scn.material)
+    geom = ms.geometry
+    w0 = op.torque_Nm / geom.rb2
+    p_max = 2 * w0 / g.face_width / (math.pi * _pitch_half_width(scn, geom, w0))
+    if p_max > 3.5e9:
+        raise ValueError(
+            f"operating.torque_Nm = {op.torque_Nm:g} gives a single-pair pitch-point Hertz "
+            f"pressure of {p_max / 1e9:.2f} GPa, beyond the model's scope (<= 3.5 GPa, elastic "
+            "contact of case-hardened steel); lower the torque or widen the face")
+    tau = geom.base_pitch * np.arange(n_phase) / n_phase
+    s_a = geom.s_start + tau
+    s_b = s_a + geom.base_pitch
+    on_b = s_b <= geom.s_end
+    k_of = ms.pair_function(s_grid, wear1, wear2)
+    k_a = k_of(s_a)
+    k_b = np.where(on_b, k_of(np.minimum(s_b, geom.s_end)), 0.0)
+    if wear1 is None and wear2 is None:
+        g_a = g_b = np.zeros(n_phase)
+    else:
+        s_grid = np.asarray(s_grid, dtype=float)
+        total = (np.zeros_like(s_grid) if wear1 is None else wear1) + (
+            np.zeros_like(s_grid) if wear2 is None else wear2)
+        g_a = np.interp(s_a, s_grid, total)
+        g_b = np.where(on_b, np.interp(np.minimum(s_b, geom.s_end), s_grid, total), 0.0)
+    rho, width = scn.material.density_kg_m3, g.face_width
+    j1 = dyn.inertia1_kg_m2 or blank_inertia(geom.r1, g.bore_radius1_mm * 1e-3, width, rho)
+    j2 = dyn.inertia2_kg_m2 or blank_inertia(geom.r2, g.bore_radius2_mm * 1e-3, width, rho)
+    mass = j1 * j2 / (j1 * geom.rb2**2 + j2 * geom.rb1**2)
+    k_mean = float(np.mean(k_a + k_b))
+    omega1 = op.omega1
+    return PairModel(
+        geometry=geom, mass=mass, damping=2 * dyn.damping_ratio * math.sqrt(k_mean * mass),
+        static_force=w0, half_backlash=dyn.half_backlash_um * 1e-6,
+        long_error=dyn.eccentricity1_um * 1e-6 * math.sin(geom.alpha_w),
+        short_error=dyn.profile_error_um * 1e-6, omega1=omega1, omega_mesh=omega1 * g.z1,
+        roll_speed=geom.rb1 * omega1, k_a=k_a, k_b=k_b, g_a=g_a, g_b=g_b, inertias=(j1, j2),
+    )
+
+
+def _pitch_half_width(scn: Scenario, geom: MeshGeometry, force: float) -> float:
+    from physics.contact import equivalent_radius, hertz_half_width, reduced_modulus
+
+    R1, R2 = geom.curvature_radii(np.array([0.0]))
+    e_star = reduced_modulus(scn.material, scn.material)
+    return float(hertz_half_width(force / scn.gear.face_width, equivalent_radius(R1, R2),
+                                  e_star)[0])
+
+
+@dataclass(frozen=True)
+class Response:
+    """Steady response of a batch of scenarios, sampled at ``sample_rate_hz`` after the transient.
+
+    Arrays are ``(scenario, sample)``; ``force_by_phase`` is the mean dynamic mesh force over the
+    record in each of ``phase_bins`` bins of the mesh period (phase 0 = a pair enters contact).
+    """
+
+    time: np.ndarray  # [s] since the start of the integration (transient included)
+    dte: np.ndarray  # x [m]
+    force: np.ndarray  # F_d = c x' + sum k f(x - g) [N]
+    load_a: np.ndarray  # load of pair A [N] (damping shared by stiffness)
+    load_b: np.ndarray  # load of pair B [N]
+    force_by_phase: np.ndarray  # [N]
+    time_step: float  # RK4 step [s]
+
+
+def time_step(models: Sequence[PairModel], dyn: Dynamics) -> tuple[float, int]:
+    """RK4 step and sub-steps per output sample: ``dt <= step_factor / omega_max``."""
+    dt_max = dyn.step_factor / max(m.omega_max for m in models)
+    n_sub = max(1, math.ceil(1.0 / (dyn.sample_rate_hz * dt_max)))
+    return 1.0 / (dyn.sample_rate_hz * n_sub), n_sub
+
+
+def simulate(models: Sequence[PairModel] | PairModel, dyn: Dynamics) -> Response:
+    """Integrate a batch of scenarios (parallel over scenarios) and sample their response."""
+    if isinstance(models, PairModel):
+        models = [models]
+    if not models:
+        raise ValueError("simulate needs at least one scenario")
+    n_phase = {len(m.k_a) for m in models}
+    if len(n_phase) != 1:
+        raise ValueError("all scenarios of a batch need the same number of phase points")
+    dt, n_sub = time_step(models, dyn)
+    n_transient = int(round(dyn.transient_s / dt))
+    n_out = int(round(dyn.duration_s * dyn.sample_rate_hz))
+    par = np.array([[m.mass, m.damping, m.static_force, m.half_backlash, m.long_error,
+                     m.short_error, m.omega1, m.omega_mesh, m.roll_speed,
+                     m.geometry.base_pitch] for m in models])
+    tables = np.stack([np.stack([m.k_a, m.k_b, m.g_a, m.g_b]) for m in models])
+    x0 = np.array([m.half_backlash + m.static_force / (m.k_a[0] + m.k_b[0]) for m in models])
+    out = _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, dyn.phase_bins)
+    dte, force, load_a, load_b, phase_sum, phase_count = out
+    with np.errstate(invalid="ignore"):
+        by_phase = phase_sum / phase_count
+    if np.any(phase_count == 0):
+        raise ValueError(f"dynamics.duration_s = {dyn.duration_s:g} is too short to visit every "
+                         f"one of {dyn.phase_bins} phase bins; lengthen it or use fewer bins")
+    time = n_transient * dt + (np.arange(n_out) + 1) * n_sub * dt
+    return Response(time, dte, force, load_a, load_b, by_phase, dt)
+
+
+@numba.njit(cache=True, fastmath=True, inline="always")
+def _dead_zone(u: float, half: float) -> float:
+    if u > half:
+        return u - half
+    if u < -half:
+        return u + half
+    return 0.0
+
+
+@numba.njit(cache=True, fastmath=True)
+def _mesh(par, tab, pos, x):
+    """Stiffnesses and elastic forces of the pairs in contact at table position ``pos``.
+
+    ``pos`` in [0, n) is the mesh phase in table cells; the tables are interpolated linearly and
+    periodically.
+    """
+    n = tab.shape[1]
+    i0 = int(pos)
+    if i0 >= n:
+        i0 = n - 1
+    frac = pos - i0
+    i1 = i0 + 1 if i0 + 1 < n else 0
+    k_a = tab[0, i0] + (tab[0, i1] - tab[0, i0]) * frac
+    k_b = tab[1, i0] + (tab[1, i1] - tab[1, i0]) * frac
+    g_a = tab[2, i0] + (tab[2, i1] - tab[2, i0]) * frac
+    g_b = tab[3, i0] + (tab[3, i1] - tab[3, i0]) * frac
+    f_a = k_a * _dead_zone(x - g_a, par[3])
+    f_b = k_b * _dead_zone(x - g_b, par[3])
+    return k_a, k_b, f_a, f_b
+
+
+@numba.njit(cache=True, fastmath=True)
+def _accel(par, tab, pos, x, v, e_dd):
+    """x'' of the reduced model at mesh phase ``pos``, given the error's e'' there."""
+    _, _, f_a, f_b = _mesh(par, tab, pos, x)
+    return (par[2] - par[0] * e_dd - par[1] * v - f_a - f_b) / par[0]
+
+
+@numba.njit(cache=True, fastmath=True, inline="always")
+def _wrap(pos, n):
+    return pos - n if pos >= n else pos
+
+
+@numba.njit(cache=True, parallel=True, fastmath=True)
+def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins):
+    n = par.shape[0]
+    dte = np.empty((n, n_out))
+    force = np.empty((n, n_out))
+    load_a = np.empty((n, n_out))
+    load_b = np.empty((n, n_out))
+    phase_sum = np.zeros((n, n_bins))
+    phase_count = np.zeros((n, n_bins))
+    n_phase = tables.shape[2]
+    for j in numba.prange(n):
+        p, tab = par[j], tables[j]
+        x, v = x0[j], 0.0
+        n_tab = float(n_phase)
+        inc = p[8] * dt / p[9] * n_tab  # mesh phase advance per step, in table cells
+        pos = 0.0
+        # e''(t) = -E_l w1^2 sin(w1 t) - E_s wm^2 sin(wm t): sines advanced by exact rotations
+        a_l, a_s = p[4] * p[6] ** 2, p[5] * p[7] ** 2
+        cl, sl = math.cos(0.5 * p[6] * dt), math.sin(0.5 * p[6] * dt)
+        cs, ss = math.cos(0.5 * p[7] * dt), math.sin(0.5 * p[7] * dt)
+        s1, c1, s2, c2 = 0.0, 1.0, 0.0, 1.0  # sin, cos of w1 t and wm t
+        total = n_transient + n_out * n_sub
+        for step in range(total + 1):
+            # the mesh at (t, x) serves both the record of the state reached and stage 1 of RK4
+            k_a, k_b, f_a, f_b = _mesh(p, tab, pos, x)
+            if step > n_transient:
+                f = p[1] * v + f_a + f_b
+                b = int(pos / n_phase * n_bins)
+                if b >= n_bins:
+                    b = n_bins - 1
+                phase_sum[j, b] += f
+                phase_count[j, b] += 1.0
+                k = step - n_transient
+                if k % n_sub == 0:
+                    i = k // n_sub - 1
+                    share = k_a / (k_a + k_b)
+                    dte[j, i] = x
+                    force[j, i] = f
+                    load_a[j, i] = f_a + p[1] * v * share
+                    load_b[j, i] = f_b + p[1] * v * (1.0 - share)
+            if step == total:
+                break
+            s1h, c1h = s1 * cl + c1 * sl, c1 * cl - s1 * sl  # at t + dt/2
+            s2h, c2h = s2 * cs + c2 * ss, c2 * cs - s2 * ss
+            s1n, c1n = s1h * cl + c1h * sl, c1h * cl - s1h * sl  # at t + dt
+            s2n, c2n = s2h * cs + c2h * ss, c2h * cs - s2h * ss
+            e0 = -(a_l * s1 + a_s * s2)
+            eh = -(a_l * s1h + a_s * s2h)
+            e1 = -(a_l * s1n + a_s * s2n)
+            a1 = (p[2] - p[0] * e0 - p[1] * v - f_a - f_b) / p[0]
+            pos_h = _wrap(pos + 0.5 * inc, n_tab)
+            pos_1 = _wrap(pos + inc, n_tab)
+            a2 = _accel(p, tab, pos_h, x + 0.5 * dt * v, v + 0.5 * dt * a1, eh)
+            a3 = _accel(p, tab, pos_h, x + 0.5 * dt * (v + 0.5 * dt * a1), v + 0.5 * dt * a2, eh)
+            a4 = _accel(p, tab, pos_1, x + dt * (v + 0.5 * dt * a2), v + dt * a3, e1)
+            x += dt * (v + dt * (a1 + a2 + a3) / 6.0)
+            v += dt * (a1 + 2.0 * a2 + 2.0 * a3 + a4) / 6.0
+            pos = pos_1
+            s1, c1, s2, c2 = s1n, c1n, s2n, c2n
+            if step % 4096 == 0:  # keep the rotations on the unit circle
+                r1, r2 = math.hypot(s1, c1), math.hypot(s2, c2)
+                s1, c1, s2, c2 = s1 / r1, c1 / r1, s2 / r2, c2 / r2
+    return dte, force, load_a, load_b, phase_sum, phase_count
+
+
+def force_per_position(model: PairModel, response_force_by_phase: np.ndarray,
+                       s: np.ndarray) -> np.ndarray:
+    """Mean dynamic mesh force at the instant a pair is at roll coordinate ``s`` [N].
+
+    A pair at ``s`` is at phase ``(s - s_start) mod p_b`` of the mesh period (as pair A in the
+    first base pitch of its path, as pair B after it); the force is periodic in that phase.
+    """
+    geom = model.geometry
+    n_bins = len(response_force_by_phase)
+    frac = np.mod(np.asarray(s) - geom.s_start, geom.base_pitch) / geom.base_pitch
+    centres = (np.arange(n_bins) + 0.5) / n_bins
+    return np.interp(frac, centres, response_force_by_phase, period=1.0)
+
+
+def simulate_two_dof(model: PairModel, t_eval: np.ndarray, rtol: float = 1e-9,
+                     atol: float = 1e-13) -> tuple[np.ndarray, np.ndarray]:
+    """Reference: the unreduced two-inertia equations of thesis 3.3 by ``solve_ivp`` (DOP853).
+
+    States ``theta1, theta2`` and their rates, with ``T1 = W0 r_b1`` and ``T2 = W0 r_b2``;
+    returns the DTE ``x = r_b1 theta1 - r_b2 theta2 - e(t)`` and the mesh force at ``t_eval``.
+    Slow (pure Python right-hand side); it exists to check the reduced, compiled integrator.
+    """
+    from scipy.integrate import solve_ivp
+
+    geom, m = model.geometry, model
+    j1, j2 = m.inertias
+    rb1, rb2, n = geom.rb1, geom.rb2, len(m.k_a)
+    cells = np.arange(n + 1)
+    tables = [np.append(a, a[0]) for a in (m.k_a, m.k_b, m.g_a, m.g_b)]
+
+    def error(t):
+        return (m.long_error * np.sin(m.omega1 * t), m.long_error * m.omega1
+                * np.cos(m.omega1 * t)), (m.short_error * np.sin(m.omega_mesh * t),
+                                          m.short_error * m.omega_mesh * np.cos(m.omega_mesh * t))
+
+    def mesh_force(t, th1, th2, w1, w2):
+        (el, eld), (es, esd) = error(t)
+        x = rb1 * th1 - rb2 * th2 - el - es
+        v = rb1 * w1 - rb2 * w2 - eld - esd
+        pos = np.mod(m.roll_speed * t, geom.base_pitch) / geom.base_pitch * n
+        k_a, k_b, g_a, g_b = (np.interp(pos, cells, tab) for tab in tables)
+        dz = m.half_backlash
+
+        def f(u):
+            return np.where(u > dz, u - dz, np.where(u < -dz, u + dz, 0.0))
+
+        return x, m.damping * v + k_a * f(x - g_a) + k_b * f(x - g_b)
+
+    def rhs(t, y):
+        th1, th2, w1, w2 = y
+        _, force = mesh_force(t, th1, th2, w1, w2)
+        return [w1, w2, (m.static_force * rb1 - rb1 * force) / j1,
+                (-m.static_force * rb2 + rb2 * force) / j2]
+
+    x0 = m.half_backlash + m.static_force / (m.k_a[0] + m.k_b[0])
+    (_, el_dot), (_, es_dot) = error(0.0)
+    w1_0 = (el_dot + es_dot) / rb1  # x'(0) = 0, as in the reduced integrator
+    sol = solve_ivp(rhs, (0.0, float(t_eval[-1])), [x0 / rb1, 0.0, w1_0, 0.0],
+                    method="DOP853", t_eval=t_eval, rtol=rtol, atol=atol)
+    if not sol.success:
+        raise RuntimeError(f"solve_ivp failed: {sol.message}")
+    x, force = mesh_force(sol.t, *sol.y)
+    return x, force
