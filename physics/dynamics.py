@@ -178,8 +178,8 @@ def simulate(models: Sequence[PairModel] | PairModel, dyn: Dynamics) -> Response
     if len(n_phase) != 1:
         raise ValueError("all scenarios of a batch need the same number of phase points")
     dt, n_sub = time_step(models, dyn)
-    n_transient = int(round(dyn.transient_s / dt))
-    n_out = int(round(dyn.duration_s * dyn.sample_rate_hz))
+    n_transient = round(dyn.transient_s / dt)
+    n_out = round(dyn.duration_s * dyn.sample_rate_hz)
     par = np.array([[m.mass, m.damping, m.static_force, m.half_backlash, m.long_error,
                      m.short_error, m.omega1, m.omega_mesh, m.roll_speed,
                      m.geometry.base_pitch] for m in models])
