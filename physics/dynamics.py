@@ -10,7 +10,10 @@ force ``W0 = T2 / r_b2``, to
 
     m_e x'' + c x' + sum_i k_i(t) f(x - g_i(t)) = W0 - m_e e''(t).
 
-``f`` is the backlash dead zone of half-width ``Delta_n`` (thesis 3.3). The pairs in contact are
+``f`` is the backlash dead zone of half-width ``Delta_n`` (thesis 3.3). The damping acts through
+the contacts, shared by stiffness, and a contact transmits no tension: where the thesis writes
+``c x'`` for the whole mesh, a pair out of contact here carries neither spring nor damper force,
+so the mesh force never turns negative while the flanks are apart. The pairs in contact are
 ``i = A`` (the pair that entered at the start of contact, at roll ``s_start + tau``) and ``i = B``
 (one base pitch ahead, while it is still on the path), with ``tau = r_b1 omega1 t mod p_b``. Their
 stiffnesses ``k_i`` are the potential-energy stiffnesses of the worn teeth
@@ -154,8 +157,8 @@ class Response:
 
     time: np.ndarray  # [s] since the start of the integration (transient included)
     dte: np.ndarray  # x [m]
-    force: np.ndarray  # F_d = c x' + sum k f(x - g) [N]
-    load_a: np.ndarray  # load of pair A [N] (damping shared by stiffness)
+    force: np.ndarray  # F_d = sum over pairs in contact of k f(x - g) + c_i x' [N]
+    load_a: np.ndarray  # load of pair A [N] (its elastic force and its share of damping)
     load_b: np.ndarray  # load of pair B [N]
     force_by_phase: np.ndarray  # [N]
     time_step: float  # RK4 step [s]
@@ -197,20 +200,25 @@ def simulate(models: Sequence[PairModel] | PairModel, dyn: Dynamics) -> Response
 
 
 @numba.njit(cache=True, fastmath=True, inline="always")
-def _dead_zone(u: float, half: float) -> float:
+def _contact(k, u, half, c_v):
+    """Force of one pair: stiffness times the dead-zone deflection plus its share of damping.
+
+    The damping acts through the contact: nothing while the flanks are apart, and a contact
+    never pulls (drive flank >= 0, coast flank <= 0).
+    """
     if u > half:
-        return u - half
+        return max(k * (u - half) + c_v, 0.0)
     if u < -half:
-        return u + half
+        return min(k * (u + half) + c_v, 0.0)
     return 0.0
 
 
 @numba.njit(cache=True, fastmath=True)
-def _mesh(par, tab, pos, x):
-    """Stiffnesses and elastic forces of the pairs in contact at table position ``pos``.
+def _mesh(par, tab, pos, x, v):
+    """Stiffnesses and forces of the pairs in contact at table position ``pos``.
 
     ``pos`` in [0, n) is the mesh phase in table cells; the tables are interpolated linearly and
-    periodically.
+    periodically. The mesh damping ``c`` is shared between the pairs by stiffness.
     """
     n = tab.shape[1]
     i0 = int(pos)
@@ -222,16 +230,17 @@ def _mesh(par, tab, pos, x):
     k_b = tab[1, i0] + (tab[1, i1] - tab[1, i0]) * frac
     g_a = tab[2, i0] + (tab[2, i1] - tab[2, i0]) * frac
     g_b = tab[3, i0] + (tab[3, i1] - tab[3, i0]) * frac
-    f_a = k_a * _dead_zone(x - g_a, par[3])
-    f_b = k_b * _dead_zone(x - g_b, par[3])
+    c_v = par[1] * v / (k_a + k_b)
+    f_a = _contact(k_a, x - g_a, par[3], k_a * c_v)
+    f_b = _contact(k_b, x - g_b, par[3], k_b * c_v)
     return k_a, k_b, f_a, f_b
 
 
 @numba.njit(cache=True, fastmath=True)
 def _accel(par, tab, pos, x, v, e_dd):
     """x'' of the reduced model at mesh phase ``pos``, given the error's e'' there."""
-    _, _, f_a, f_b = _mesh(par, tab, pos, x)
-    return (par[2] - par[0] * e_dd - par[1] * v - f_a - f_b) / par[0]
+    _, _, f_a, f_b = _mesh(par, tab, pos, x, v)
+    return (par[2] - par[0] * e_dd - f_a - f_b) / par[0]
 
 
 @numba.njit(cache=True, fastmath=True, inline="always")
@@ -263,9 +272,9 @@ def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins):
         total = n_transient + n_out * n_sub
         for step in range(total + 1):
             # the mesh at (t, x) serves both the record of the state reached and stage 1 of RK4
-            k_a, k_b, f_a, f_b = _mesh(p, tab, pos, x)
+            _, _, f_a, f_b = _mesh(p, tab, pos, x, v)
             if step > n_transient:
-                f = p[1] * v + f_a + f_b
+                f = f_a + f_b
                 b = int(pos / n_phase * n_bins)
                 if b >= n_bins:
                     b = n_bins - 1
@@ -274,11 +283,10 @@ def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins):
                 k = step - n_transient
                 if k % n_sub == 0:
                     i = k // n_sub - 1
-                    share = k_a / (k_a + k_b)
                     dte[j, i] = x
                     force[j, i] = f
-                    load_a[j, i] = f_a + p[1] * v * share
-                    load_b[j, i] = f_b + p[1] * v * (1.0 - share)
+                    load_a[j, i] = f_a
+                    load_b[j, i] = f_b
             if step == total:
                 break
             s1h, c1h = s1 * cl + c1 * sl, c1 * cl - s1 * sl  # at t + dt/2
@@ -288,7 +296,7 @@ def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins):
             e0 = -(a_l * s1 + a_s * s2)
             eh = -(a_l * s1h + a_s * s2h)
             e1 = -(a_l * s1n + a_s * s2n)
-            a1 = (p[2] - p[0] * e0 - p[1] * v - f_a - f_b) / p[0]
+            a1 = (p[2] - p[0] * e0 - f_a - f_b) / p[0]
             pos_h = _wrap(pos + 0.5 * inc, n_tab)
             pos_1 = _wrap(pos + inc, n_tab)
             a2 = _accel(p, tab, pos_h, x + 0.5 * dt * v, v + 0.5 * dt * a1, eh)
@@ -345,12 +353,14 @@ def simulate_two_dof(model: PairModel, t_eval: np.ndarray, rtol: float = 1e-9,
         v = rb1 * w1 - rb2 * w2 - eld - esd
         pos = np.mod(m.roll_speed * t, geom.base_pitch) / geom.base_pitch * n
         k_a, k_b, g_a, g_b = (np.interp(pos, cells, tab) for tab in tables)
-        dz = m.half_backlash
+        dz, k_sum = m.half_backlash, k_a + k_b
 
-        def f(u):
-            return np.where(u > dz, u - dz, np.where(u < -dz, u + dz, 0.0))
+        def pair(k, u):
+            c_v = m.damping * v * k / k_sum
+            return np.where(u > dz, np.maximum(k * (u - dz) + c_v, 0.0),
+                            np.where(u < -dz, np.minimum(k * (u + dz) + c_v, 0.0), 0.0))
 
-        return x, m.damping * v + k_a * f(x - g_a) + k_b * f(x - g_b)
+        return x, pair(k_a, x - g_a) + pair(k_b, x - g_b)
 
     def rhs(t, y):
         th1, th2, w1, w2 = y

@@ -75,8 +75,9 @@ def test_contact_loss_enters_the_dead_zone(ms):
     resp = simulate(model, dyn)
     apart = resp.dte[0] < model.half_backlash
     assert apart.mean() > 0.05
-    # while apart only the (viscous) damping force remains: far below the static load
-    assert np.all(np.abs(resp.force[0][apart]) < 0.15 * model.static_force)
+    # while apart the teeth transmit nothing, and the mesh force never pulls
+    assert np.all(resp.force[0][apart] == 0.0)
+    assert resp.force.min() >= 0.0
     assert resp.force.max() > 2 * model.static_force  # and the impacts that follow are hard
 
 
