@@ -10,6 +10,9 @@ folder), CSV files named and shaped like ``shared/reference/thesis_tables``:
   ``dte_spectrum.png`` (torsional dynamics and the dynamic-load coupling, 3.3-3.5),
 - ``wear_evolution.csv``, ``wear_evolution.png`` and ``table12_evolution_fits_case{1..5}.csv``
   (pinion root wear against cycles for the cases of Table 11, and the candidate laws, 4.1),
+- ``table14_dte_features_case3.csv``, ``feature_trends.png`` and ``estimator_accuracy.csv``
+  (vibration features against wear, and the empirical-inverse estimator of 4.4 fitted to them and
+  with the thesis's own coefficients on the thesis's own data),
 - ``wear_profile.csv`` and ``wear_profile.png`` (baseline wear of both flanks, 2.7), and
   ``contact_state.csv`` (the unworn contact along the path: load, Hertz, film, temperature).
 
@@ -31,7 +34,9 @@ import pandas as pd
 from omegaconf import DictConfig, OmegaConf
 
 from physics.dynamics import build_model, simulate
+from physics.empirical_inverse import EmpiricalInverse, accuracy
 from physics.evolution import fit_evolution_models, root_wear_evolution, simulate_dynamic_wear
+from physics.features import features
 from physics.files import save_figure, write_csv
 from physics.geometry import MeshGeometry
 from physics.load_sharing import pair_loads
@@ -339,6 +344,63 @@ def plot_wear_evolution(curves: pd.DataFrame, path: Path) -> None:
     plt.close(fig)
 
 
+def table_dte_features(res: WearResult, states: dict, cycles: list[float]) -> pd.DataFrame:
+    """Table 14: DTE features of the wear states (thesis 4.2)."""
+    rows = []
+    for n in cycles:
+        _, resp = states[n]
+        f = {k: float(v[0]) for k, v in features(resp.dte).items()}
+        rows.append({"cycles_1e6": n / 1e6, "wear_mm": res.snapshots[n][0][0] * 1e3,
+                     "rms_1e-5_m": f["rms"] / 1e-5, "peak_to_peak_1e-5_m": f["peak_to_peak"] / 1e-5,
+                     "kurtosis": f["kurtosis"], "crest": f["crest"], "margin": f["margin"],
+                     "impulse": f["impulse"]})
+    return pd.DataFrame(rows)
+
+
+def table_estimator_accuracy(table14: pd.DataFrame, thesis_data: Path | None) -> pd.DataFrame:
+    """Accuracy of the empirical-inverse estimator (thesis 4.4) in its two modes."""
+    rows = []
+    p2p, kurt = table14["peak_to_peak_1e-5_m"] * 1e-5, table14["kurtosis"]
+    wear, cycles = table14["wear_mm"], table14["cycles_1e6"] * 1e6
+    try:
+        fitted = EmpiricalInverse.fit(cycles, p2p, kurt, wear)
+        rows.append({"estimator": "fitted to this model (in sample)", "data": "table14 (ours)",
+                     **accuracy(fitted.predict(p2p, kurt), wear)})
+    except ValueError as err:
+        log.warning("estimator fitted to our Table 14: %s", err)
+    if thesis_data is not None and thesis_data.is_file():
+        d = pd.read_csv(thesis_data)
+        est = EmpiricalInverse.from_config("thesis")
+        rows.append({"estimator": "thesis coefficients", "data": "thesis Table 14",
+                     **accuracy(est.predict(d["peak_to_peak_1e-5_m"] * 1e-5, d["kurtosis"]),
+                                d["wear_mm"])})
+    else:
+        log.warning("thesis Table 14 not found at %s: its estimator check is skipped",
+                    thesis_data)
+    return pd.DataFrame(rows)
+
+
+def plot_feature_trends(table14: pd.DataFrame, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 4))
+    cols = ["rms_1e-5_m", "peak_to_peak_1e-5_m", "kurtosis", "crest", "margin", "impulse"]
+    for c in cols:
+        v = table14[c].to_numpy()
+        span = np.ptp(v)
+        ax.plot(table14.wear_mm * 1e3, (v - v.min()) / span if span > 0 else 0 * v, "o-",
+                label=f"{c.replace('_1e-5_m', '')} (span {span:.3g})")
+    ax.set_xlabel("pinion root wear [um]")
+    ax.set_ylabel("feature, min-max normalised")
+    ax.set_title("DTE features against wear (case 3)")
+    ax.legend(fontsize=7)
+    save_figure(fig, path)
+    plt.close(fig)
+
+
 def contact_state_frame(res: WearResult) -> pd.DataFrame:
     """Contact state of the unworn pair along the path of contact (``contact_state.csv``)."""
     st, rate = res.first_rate.state, res.first_rate
@@ -416,8 +478,14 @@ def reproduce(cfg: DictConfig) -> dict[str, pd.DataFrame]:
         scn, [float(c) for c in stiff.wear_cycles], int(stiff.positions))
     dyn_cfg = cfg.evolution
     t9 = [float(c) for c in dyn_cfg.table9_cycles]
-    dynamic, states = dynamic_states(scn, t9)
-    tables["table09_dynamics_vs_wear"] = table_dynamics_vs_wear(states)
+    t14 = [float(c) for c in dyn_cfg.table14_cycles]
+    dynamic, states = dynamic_states(scn, sorted(set(t9) | set(t14)))
+    tables["table14_dte_features_case3"] = table_dte_features(dynamic, states, t14)
+    ref = cfg.thesis_tables or CONF_DIR.parent.parent / "shared" / "reference" / "thesis_tables"
+    thesis14 = Path(ref) / "table14_dte_features_case3.csv"
+    tables["estimator_accuracy"] = table_estimator_accuracy(
+        tables["table14_dte_features_case3"], thesis14)
+    tables["table09_dynamics_vs_wear"] = table_dynamics_vs_wear({n: states[n] for n in t9})
     tables["table10_dynamic_vs_quasistatic"] = table_dynamic_vs_quasistatic(scn, dynamic)
     tables["dte"] = dte_frame(states, [t9[0], t9[-1]])
     grid = np.linspace(0.0, float(dyn_cfg.cycles_max), int(dyn_cfg.points))
@@ -436,6 +504,7 @@ def reproduce(cfg: DictConfig) -> dict[str, pd.DataFrame]:
     plot_dte_spectrum(tables["dte"], model.mesh_frequency_hz, scn.dynamics.sample_rate_hz,
                       out / "dte_spectrum.png")
     plot_wear_evolution(tables["wear_evolution"], out / "wear_evolution.png")
+    plot_feature_trends(tables["table14_dte_features_case3"], out / "feature_trends.png")
     log.info("wrote %d tables and wear_profile.png to %s", len(tables), out)
     return tables
 
