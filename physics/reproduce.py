@@ -284,12 +284,17 @@ def dte_frame(states: dict, cycles: list[float]) -> pd.DataFrame:
     return pd.concat(parts, ignore_index=True)
 
 
-def evolution_tables(cases: list[int], cycles: np.ndarray, fit_until: float
+def evolution_tables(cfg: DictConfig, cases: list[int], cycles: np.ndarray, fit_until: float
                      ) -> tuple[pd.DataFrame, dict[int, pd.DataFrame]]:
-    """Pinion root wear against cycles for each case, and the candidate-law fits (Table 12)."""
+    """Pinion root wear against cycles for each case, and the candidate-law fits (Table 12).
+
+    Each case is the configured scenario (gear, material, lubricant, tribology, ...) with the
+    operating point and lubricant values of Table 11.
+    """
     curves, fits = [], {}
+    base = OmegaConf.to_container(cfg, resolve=False)
     for case in cases:
-        scn = scenario_from_config({"case": case})
+        scn = scenario_from_config({**base, "case": case})
         root, _ = root_wear_evolution(scn, cycles, dynamic=True)
         curves.append(pd.DataFrame({"case": case, "cycles": cycles, "root_wear_mm": root * 1e3}))
         fits[case] = pd.DataFrame([
@@ -490,7 +495,7 @@ def reproduce(cfg: DictConfig) -> dict[str, pd.DataFrame]:
     tables["dte"] = dte_frame(states, [t9[0], t9[-1]])
     grid = np.linspace(0.0, float(dyn_cfg.cycles_max), int(dyn_cfg.points))
     tables["wear_evolution"], fits = evolution_tables(
-        [int(c) for c in dyn_cfg.cases], grid, float(dyn_cfg.fit_until))
+        cfg, [int(c) for c in dyn_cfg.cases], grid, float(dyn_cfg.fit_until))
     for case, df in fits.items():
         tables[f"table12_evolution_fits_case{case}"] = df
     base = simulate_wear(scn, cycles)
