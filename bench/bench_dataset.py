@@ -1,0 +1,76 @@
+"""Dataset and estimator benchmark: ``python bench/bench_dataset.py``.
+
+Prints:
+- wall time and peak memory (this process and its workers) of the default dataset of
+  ``conf/generate.yaml`` (5 cases x 8 replicates x 32 wear states; issue target: <= 2 min and
+  <= 2 GB on this 2-core machine), written to a temporary folder, with 2 worker processes and,
+  as the reference measured in the same run, one chunk of it with one process;
+- the analytic empirical-inverse estimator's throughput in rows per second, vectorised over a
+  batch against one call per row (the surrogate is compared with these figures).
+"""
+
+from __future__ import annotations
+
+import resource
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from hydra import compose, initialize_config_dir
+
+from physics.empirical_inverse import EmpiricalInverse
+from physics.generate import generate
+
+CONF = str(Path(__file__).resolve().parents[1] / "conf")
+
+
+def peak_mb() -> float:
+    """Largest resident set of this process and of its largest finished child [MB]."""
+    own = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    children = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    return max(own, children) / 1024
+
+
+def timed_generation(out: Path, *overrides: str) -> tuple[float, Path | None]:
+    with initialize_config_dir(config_dir=CONF, version_base="1.3"):
+        cfg = compose("generate", overrides=[f"out_dir={out}", "progress=false", *overrides])
+    t = time.perf_counter()
+    path = generate(cfg)
+    return time.perf_counter() - t, path
+
+
+def main() -> None:
+    with tempfile.TemporaryDirectory() as tmp:
+        t_full, path = timed_generation(Path(tmp) / "full")
+        df = pd.read_parquet(path)
+        t_one, _ = timed_generation(Path(tmp) / "one", "chunk=0", "jobs=1")
+    print(f"default dataset: {len(df)} rows ({df.case.nunique()} cases, "
+          f"{df.groupby('case').replicate.nunique().min()} replicates, "
+          f"{df.groupby(['case', 'replicate']).size().min()} wear states) "
+          f"in {t_full:.1f} s with 2 processes (target <= 120 s); peak memory {peak_mb():.0f} MB "
+          f"(target <= 2048 MB)")
+    print(f"reference, 1 process: one chunk of 5 in {t_one:.1f} s -> {5 * t_one:.1f} s for all; "
+          f"speed-up of the parallel run {5 * t_one / t_full:.2f}x")
+
+    est = EmpiricalInverse.from_config("thesis")
+    rng = np.random.default_rng(0)
+    cycles = rng.uniform(0, est.cycles_max, 200_000)
+    n = cycles / est.cycles_unit
+    p2p, kurt = np.polyval(est.p2p_cubic, n), np.polyval(est.kurtosis_cubic, n)
+    est.predict(p2p[:10], kurt[:10])
+    t = time.perf_counter()
+    est.predict(p2p, kurt)
+    batch = p2p.size / (time.perf_counter() - t)
+    t = time.perf_counter()
+    for i in range(500):
+        est.predict(p2p[i], kurt[i])
+    single = 500 / (time.perf_counter() - t)
+    print(f"empirical-inverse estimator: {batch:,.0f} rows/s in a batch of {p2p.size:,}; "
+          f"{single:,.0f} rows/s one row per call ({1e6 / single:.0f} us latency); "
+          f"batch/single {batch / single:.0f}x")
+
+
+if __name__ == "__main__":
+    main()
