@@ -152,22 +152,27 @@ def _fit_law(cycles: np.ndarray, wear: np.ndarray) -> np.ndarray:
                      theta[1] / scale_n])
 
 
-def accuracy(estimate: Estimate, wear_true: np.ndarray) -> dict[str, float]:
-    """RMSE, R^2, maximum and mean relative error (rows with nonzero true wear) of an estimate.
+def wear_errors(predicted: np.ndarray, true: np.ndarray) -> dict[str, float]:
+    """RMSE, R^2, maximum and mean relative error (over rows with nonzero true wear) [%].
 
-    Accuracy is ``100 - mean relative error`` in percent, the thesis's figure of merit (4.4).
+    The thesis's figure of merit (4.4), "accuracy", is ``100 - mean relative error``.
     """
-    wear_true = np.asarray(wear_true, float)
-    err = estimate.wear - wear_true
-    ss_tot = float(np.sum((wear_true - wear_true.mean()) ** 2))
-    nz = wear_true != 0
-    rel = np.abs(err[nz]) / np.abs(wear_true[nz]) * 100
+    predicted, true = np.asarray(predicted, float), np.asarray(true, float)
+    err = predicted - true
+    ss_tot = float(np.sum((true - true.mean()) ** 2))
+    nz = true != 0
+    rel = np.abs(err[nz]) / np.abs(true[nz]) * 100
     return {
         "rmse": float(np.sqrt(np.mean(err**2))),
         "r2": float(1 - np.sum(err**2) / ss_tot) if ss_tot > 0 else float("nan"),
         "max_relative_error_pct": float(rel.max()) if rel.size else float("nan"),
         "mean_relative_error_pct": float(rel.mean()) if rel.size else float("nan"),
         "accuracy_pct": float(100 - rel.mean()) if rel.size else float("nan"),
-        "inconsistent_rows": int(np.sum(~estimate.consistent)),
-        "out_of_range_rows": int(np.sum(~estimate.in_range)),
     }
+
+
+def accuracy(estimate: Estimate, wear_true: np.ndarray) -> dict[str, float]:
+    """:func:`wear_errors` of an estimate, with the counts of flagged rows."""
+    return {**wear_errors(estimate.wear, wear_true),
+            "inconsistent_rows": int(np.sum(~estimate.consistent)),
+            "out_of_range_rows": int(np.sum(~estimate.in_range))}

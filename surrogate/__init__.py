@@ -1,4 +1,10 @@
-"""Torch/Lightning surrogate mapping vibration features to wear depth (thesis 4; issue 6).
+"""Torch/Lightning surrogate mapping vibration features to pinion root wear (thesis 4; issue 6).
 
-Nothing lives here yet: the surrogate is built on the dataset generator, which comes first.
+- :mod:`surrogate.schema`: the feature schema (names, units, scaling, training envelope) a model
+  carries and checks its input against;
+- :mod:`surrogate.data`: the Lightning data module over the physics dataset, split by trajectory;
+- :mod:`surrogate.model`: a deep ensemble of Gaussian MLPs as one Lightning module;
+- :mod:`surrogate.training`: ``train(cfg)``, called by ``train.py``;
+- :mod:`surrogate.inference`: export, safe loading, CPU prediction with intervals and flags;
+- :mod:`surrogate.predict`, :mod:`surrogate.summarise`, :mod:`surrogate.benchmark`: commands.
 """

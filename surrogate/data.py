@@ -1,0 +1,137 @@
+"""Lightning data module over the physics dataset (:mod:`physics.dataset`).
+
+Rows are split by *trajectory* (one replicate of one case, all its wear states), never by rows
+of one trajectory: neighbouring wear states are nearly the same sample. Per case, a seeded
+permutation of the replicates gives ``test_replicates`` for the test set, ``val_replicates`` for
+validation and the rest for training; ``holdout_case`` instead puts a whole case in the test set
+(leave-one-case-out). The input scaling is fitted on the training rows only and travels with the
+model in its :class:`~surrogate.schema.FeatureSchema`.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+from pathlib import Path
+
+import lightning as L
+import numpy as np
+import pandas as pd
+import torch
+from hydra import compose, initialize_config_dir
+from torch.utils.data import DataLoader, TensorDataset
+
+from physics.dataset import units as dataset_units
+from physics.features import FEATURES
+from physics.generate import generate
+from surrogate.schema import FeatureSchema
+
+log = logging.getLogger(__name__)
+CONF = str(Path(__file__).resolve().parents[1] / "conf")
+#: the default inputs: the Table 13 features of the DTE and of the housing acceleration
+DEFAULT_INPUTS = [f"{q}_{f}" for q in ("dte", "acc") for f in FEATURES]
+CONDITIONS = ["n1_rpm", "torque_Nm"]
+
+
+def load_dataset(path: str | Path, generate_overrides: list[str] | None = None) -> pd.DataFrame:
+    """Read the dataset at ``path``, generating it with ``physics.generate`` if it is missing."""
+    path = Path(path)
+    if not path.is_file():
+        log.info("dataset %s missing: generating it (physics.generate)", path)
+        with initialize_config_dir(config_dir=CONF, version_base="1.3"):
+            cfg = compose("generate", overrides=[f"out_dir={path.parent}", f"name={path.stem}",
+                                                 *(generate_overrides or [])])
+        generate(cfg)
+    return pd.read_parquet(path)
+
+
+def dataset_units_of(path: str | Path) -> dict[str, str]:
+    """Column units from the dataset's JSON sidecar (the package's table if it has none)."""
+    side = Path(path).with_suffix(".json")
+    return json.loads(side.read_text())["units"] if side.is_file() else dataset_units()
+
+
+def split_trajectories(df: pd.DataFrame, val_replicates: int, test_replicates: int, seed: int,
+                       holdout_case: int | None = None) -> dict[str, pd.DataFrame]:
+    """Train/val/test rows, split by (case, replicate) trajectory; see the module text."""
+    parts: dict[str, list[pd.DataFrame]] = {"train": [], "val": [], "test": []}
+    for case, rows in df.groupby("case", sort=True):
+        reps = np.sort(rows.replicate.unique())
+        if case == holdout_case:
+            parts["test"].append(rows)
+            continue
+        n_test = 0 if holdout_case is not None else test_replicates
+        if len(reps) < n_test + val_replicates + 1:
+            raise ValueError(
+                f"case {case} has {len(reps)} replicates; a split with {val_replicates} "
+                f"validation and {n_test} test replicate(s) needs at least "
+                f"{n_test + val_replicates + 1}: raise data.replicates in the dataset")
+        perm = np.random.default_rng([seed, int(case)]).permutation(reps)
+        groups = {"test": perm[:n_test], "val": perm[n_test:n_test + val_replicates],
+                  "train": perm[n_test + val_replicates:]}
+        for name, chosen in groups.items():
+            parts[name].append(rows[rows.replicate.isin(chosen)])
+    return {k: pd.concat(v, ignore_index=True) if v else df.iloc[:0] for k, v in parts.items()}
+
+
+class WearDataModule(L.LightningDataModule):
+    """Features -> pinion root wear, from the dataset of the given cases."""
+
+    def __init__(self, dataset: str, cases: list[int], inputs: list[str] | None = None,
+                 conditions: bool = False, target: str = "root_wear_mm",
+                 val_replicates: int = 1, test_replicates: int = 2,
+                 holdout_case: int | None = None, batch_size: int = 64, seed: int = 0,
+                 generate_overrides: list[str] | None = None) -> None:
+        super().__init__()
+        self.dataset = str(dataset)
+        self.cases = [int(c) for c in cases]
+        if holdout_case is not None and int(holdout_case) not in self.cases:
+            raise ValueError(f"data.holdout_case = {holdout_case} must be one of the cases "
+                             f"{self.cases}")
+        self.inputs = list(inputs or DEFAULT_INPUTS) + (CONDITIONS if conditions else [])
+        self.target = target
+        self.val_replicates, self.test_replicates = int(val_replicates), int(test_replicates)
+        self.holdout_case = None if holdout_case is None else int(holdout_case)
+        self.batch_size, self.seed = int(batch_size), int(seed)
+        self.generate_overrides = list(generate_overrides or [])
+        self.schema: FeatureSchema | None = None
+        self.frames: dict[str, pd.DataFrame] = {}
+
+    def prepare_data(self) -> None:
+        load_dataset(self.dataset, self.generate_overrides)
+
+    def setup(self, stage: str | None = None) -> None:
+        if self.schema is not None:
+            return
+        df = load_dataset(self.dataset, self.generate_overrides)
+        unknown = sorted(set(self.cases) - set(df.case.unique().tolist()))
+        if unknown:
+            raise ValueError(f"cases {unknown} are not in {self.dataset} (it holds "
+                             f"{sorted(df.case.unique().tolist())}); regenerate it with them")
+        missing = [c for c in [*self.inputs, self.target] if c not in df.columns]
+        if missing:
+            raise ValueError(f"columns {missing} are not in {self.dataset}; choose from "
+                             f"{list(df.columns)}")
+        df = df[df.case.isin(self.cases)]
+        self.frames = split_trajectories(df, self.val_replicates, self.test_replicates,
+                                         self.seed, self.holdout_case)
+        self.schema = FeatureSchema.fit(self.frames["train"], self.inputs,
+                                        dataset_units_of(self.dataset), self.target)
+
+    def tensors(self, split: str) -> TensorDataset:
+        rows = self.frames[split]
+        x = self.schema.scale(rows[self.inputs].to_numpy(float))
+        y = rows[self.target].to_numpy(float) / self.schema.target_scale
+        return TensorDataset(torch.as_tensor(x, dtype=torch.float32),
+                             torch.as_tensor(y, dtype=torch.float32))
+
+    def train_dataloader(self) -> DataLoader:
+        g = torch.Generator().manual_seed(self.seed)
+        return DataLoader(self.tensors("train"), batch_size=self.batch_size, shuffle=True,
+                          generator=g)
+
+    def val_dataloader(self) -> DataLoader:
+        return DataLoader(self.tensors("val"), batch_size=4096)
+
+    def test_dataloader(self) -> DataLoader:
+        return DataLoader(self.tensors("test"), batch_size=4096)

@@ -1,0 +1,83 @@
+"""CPU inference: export a trained ensemble to a pickle-free file, load it, predict wear.
+
+The exported file (``wear_surrogate.pt``) holds only tensors and plain values: the weights, the
+hyperparameters and the :class:`~surrogate.schema.FeatureSchema`; it is read with
+``torch.load(weights_only=True)``, so loading it runs no code.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import torch
+from omegaconf import OmegaConf
+
+from physics.files import atomic_write
+from surrogate.model import WearRegressor, mixture
+from surrogate.schema import FeatureSchema
+
+FORMAT = "gearwear-wear-surrogate"
+
+
+def export(model: WearRegressor, path: str | Path) -> Path:
+    """Write the model's weights, hyperparameters and schema to ``path`` (atomically)."""
+    hparams = OmegaConf.to_container(OmegaConf.create(dict(model.hparams)))  # plain values only
+    payload = {"format": FORMAT, "hparams": hparams,
+               "state_dict": {k: v.detach().cpu() for k, v in model.state_dict().items()}}
+    return atomic_write(path, lambda p: torch.save(payload, p))
+
+
+class Surrogate:
+    """A loaded ensemble: ``predict(df)`` returns wear with its interval and flags."""
+
+    def __init__(self, model: WearRegressor) -> None:
+        self.model = model.eval()
+        self.schema = FeatureSchema.from_dict(model.hparams["schema"])
+
+    @classmethod
+    def load(cls, path: str | Path) -> Surrogate:
+        path = Path(path)
+        if not path.is_file():
+            raise ValueError(f"checkpoint {path} does not exist; train one with "
+                             "`python train.py` (it writes wear_surrogate.pt in its run folder)")
+        try:
+            payload = torch.load(path, map_location="cpu", weights_only=True)
+        except Exception as err:
+            raise ValueError(f"{path} is not a safe wear-surrogate file ({err}); pass the "
+                             "wear_surrogate.pt a training run exported") from None
+        if not isinstance(payload, dict) or payload.get("format") != FORMAT:
+            raise ValueError(f"{path} is not a {FORMAT} file; pass the wear_surrogate.pt a "
+                             "training run exported")
+        FeatureSchema.from_dict(payload["hparams"]["schema"])  # version check before building
+        model = WearRegressor(**payload["hparams"])
+        model.load_state_dict(payload["state_dict"])
+        return cls(model)
+
+    def predict_array(self, x: np.ndarray, batch: int = 65536) -> tuple[np.ndarray, np.ndarray]:
+        """Mean and standard deviation of wear for an unscaled input matrix (no checks)."""
+        xs = torch.as_tensor(self.schema.scale(x), dtype=torch.float32)
+        means, stds = [], []
+        with torch.inference_mode():
+            for lo in range(0, len(xs), batch):
+                m, v = mixture(self.model(xs[lo:lo + batch]))
+                means.append(m)
+                stds.append(v.clamp_min(0).sqrt())
+        s = self.schema.target_scale
+        return torch.cat(means).numpy() * s, torch.cat(stds).numpy() * s
+
+    def predict(self, df: pd.DataFrame) -> pd.DataFrame:
+        """Wear for every row of ``df`` (checked against the schema; see FeatureSchema.check).
+
+        Columns: ``<target>`` (clipped at 0: wear depth is not negative), ``<target>_std``,
+        ``<target>_lower`` / ``_upper`` (the interval of the trained level) and
+        ``out_of_range`` (an input outside the training envelope: extrapolation).
+        """
+        x = self.schema.check(df)
+        mean, std = self.predict_array(x)
+        half = self.model.z * std
+        t = self.schema.target
+        return pd.DataFrame({t: np.maximum(mean, 0.0), f"{t}_std": std,
+                             f"{t}_lower": np.maximum(mean - half, 0.0), f"{t}_upper": mean + half,
+                             "out_of_range": ~self.schema.in_envelope(x)}, index=df.index)

@@ -1,0 +1,107 @@
+"""``train(cfg)``: fit the wear surrogate, test it, export it, and return the optimised metric."""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+import warnings
+from pathlib import Path
+
+import lightning as L
+import matplotlib
+import numpy as np
+import pandas as pd
+import torch
+from hydra.utils import instantiate
+from omegaconf import DictConfig, OmegaConf
+
+from physics.empirical_inverse import wear_errors
+from physics.files import atomic_write
+from surrogate.inference import Surrogate, export
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+
+log = logging.getLogger(__name__)
+# lightning 2.6 calls a torch pytree API that torch 2.13 deprecates; harmless, and once per step
+warnings.filterwarnings("ignore", message=r".*LeafSpec.*is deprecated")
+
+
+def train(cfg: DictConfig) -> float:
+    """Train on ``cfg``; write checkpoint, exported model, metrics, predictions and parity plot
+    to ``cfg.paths.output_dir``; return ``cfg.optimized_metric``."""
+    out = Path(cfg.paths.output_dir)
+    L.seed_everything(cfg.seed, workers=True)
+    if cfg.get("threads"):
+        torch.set_num_threads(int(cfg.threads))
+    dm = instantiate(cfg.data)
+    dm.prepare_data()
+    dm.setup()
+    model = instantiate(cfg.model, n_inputs=len(dm.inputs), schema=dm.schema.to_dict(),
+                        _convert_="all")
+    callbacks = [instantiate(c) for c in (cfg.get("callbacks") or {}).values()]
+    loggers = [instantiate(c) for c in (cfg.get("logger") or {}).values()]
+    trainer = instantiate(cfg.trainer, callbacks=callbacks, logger=loggers or False)
+    log.info("training on %d rows (%d trajectories), validating on %d, testing on %d",
+             len(dm.frames["train"]), dm.frames["train"].groupby(["case", "replicate"]).ngroups,
+             len(dm.frames["val"]), len(dm.frames["test"]))
+    trainer.fit(model, dm)
+    has_best = any(getattr(c, "best_model_path", "") for c in trainer.callbacks)
+    ckpt = "best" if has_best and not trainer.fast_dev_run else None
+    if ckpt:  # restore the best weights before export
+        best = next(c.best_model_path for c in trainer.callbacks if hasattr(c, "best_model_path"))
+        model.load_state_dict(torch.load(best, map_location="cpu", weights_only=False)
+                              ["state_dict"])
+    val = {k: float(v) for k, v in trainer.validate(model, dm, verbose=False)[0].items()}
+    test = ({k: float(v) for k, v in trainer.test(model, dm, verbose=False)[0].items()}
+            if len(dm.frames["test"]) else {})
+    path = export(model, out / "wear_surrogate.pt")
+    surrogate = Surrogate.load(path)
+    metrics = {**val, **test, "epochs": trainer.current_epoch,
+               "train_rows": len(dm.frames["train"])}
+    if len(dm.frames["test"]):
+        metrics.update(report_test(surrogate, dm.frames["test"], out))
+    text = json.dumps(metrics, indent=2, sort_keys=True)
+    atomic_write(out / "metrics.json", lambda p: p.write_text(text + "\n"))
+    atomic_write(out / "config.yaml", lambda p: p.write_text(OmegaConf.to_yaml(cfg)))
+    log.info("model: %s; metrics: %s", path, text)
+    value = metrics.get(cfg.optimized_metric)
+    if value is None:
+        raise ValueError(f"optimized_metric = {cfg.optimized_metric!r} is not among the logged "
+                         f"metrics {sorted(metrics)}")
+    return float(value) if math.isfinite(value) else float("inf")
+
+
+def report_test(surrogate: Surrogate, test: pd.DataFrame, out: Path) -> dict[str, float]:
+    """Held-out errors in physical units, interval coverage, and the parity plot."""
+    t = surrogate.schema.target
+    pred = surrogate.predict(test[list(surrogate.schema.inputs)])
+    rows = pd.concat([test[["case", "replicate", "cycles", t]].reset_index(drop=True),
+                      pred.add_prefix("pred_").reset_index(drop=True)], axis=1)
+    atomic_write(out / "test_predictions.csv", lambda p: rows.to_csv(p, index=False))
+    errors = wear_errors(rows[f"pred_{t}"], rows[t])
+    inside = (rows[t] >= rows[f"pred_{t}_lower"]) & (rows[t] <= rows[f"pred_{t}_upper"])
+    fig = parity_figure(rows[t].to_numpy(), rows[f"pred_{t}"].to_numpy(),
+                        rows[f"pred_{t}_std"].to_numpy() * surrogate.model.z,
+                        f"held-out trajectories: MRE {errors['mean_relative_error_pct']:.2f} %, "
+                        f"R2 {errors['r2']:.4f}, coverage {inside.mean():.2f}", t)
+    atomic_write(out / "parity.png", lambda p: fig.savefig(p, dpi=120, format="png"))
+    plt.close(fig)
+    return {**{f"test_{k}": v for k, v in errors.items()},
+            "test_interval_coverage": float(inside.mean()),
+            "test_out_of_range_rows": int(rows.pred_out_of_range.sum())}
+
+
+def parity_figure(true: np.ndarray, pred: np.ndarray, half: np.ndarray | None, title: str,
+                  label: str, ax=None):
+    """Predicted against true wear with the identity line (and intervals if given)."""
+    fig = None
+    if ax is None:
+        fig, ax = plt.subplots(figsize=(5, 5))
+    ax.errorbar(true, pred, yerr=half, fmt="o", ms=3, alpha=0.6, elinewidth=0.6)
+    lim = [0, max(float(np.max(true)), float(np.max(pred))) * 1.05]
+    ax.plot(lim, lim, "k--", lw=1)
+    ax.set(xlim=lim, ylim=lim, xlabel=f"true {label}", ylabel=f"predicted {label}", title=title)
+    ax.title.set_fontsize(8)
+    return fig if fig is not None else ax.figure
