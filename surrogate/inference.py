@@ -70,14 +70,15 @@ class Surrogate:
     def predict(self, df: pd.DataFrame) -> pd.DataFrame:
         """Wear for every row of ``df`` (checked against the schema; see FeatureSchema.check).
 
-        Columns: ``<target>`` (clipped at 0: wear depth is not negative), ``<target>_std``,
-        ``<target>_lower`` / ``_upper`` (the interval of the trained level) and
+        Columns: ``<target>_pred`` (clipped at 0: wear depth is not negative), ``<target>_std``,
+        ``<target>_lower`` / ``_upper`` (the interval of the trained level, clipped at 0) and
         ``out_of_range`` (an input outside the training envelope: extrapolation).
         """
         x = self.schema.check(df)
         mean, std = self.predict_array(x)
         half = self.model.z * std
         t = self.schema.target
-        return pd.DataFrame({t: np.maximum(mean, 0.0), f"{t}_std": std,
-                             f"{t}_lower": np.maximum(mean - half, 0.0), f"{t}_upper": mean + half,
+        return pd.DataFrame({f"{t}_pred": np.maximum(mean, 0.0), f"{t}_std": std,
+                             f"{t}_lower": np.maximum(mean - half, 0.0),
+                             f"{t}_upper": np.maximum(mean + half, 0.0),
                              "out_of_range": ~self.schema.in_envelope(x)}, index=df.index)

@@ -78,19 +78,19 @@ def report_test(surrogate: Surrogate, test: pd.DataFrame, out: Path) -> dict[str
     t = surrogate.schema.target
     pred = surrogate.predict(test[list(surrogate.schema.inputs)])
     rows = pd.concat([test[["case", "replicate", "cycles", t]].reset_index(drop=True),
-                      pred.add_prefix("pred_").reset_index(drop=True)], axis=1)
+                      pred.reset_index(drop=True)], axis=1)
     atomic_write(out / "test_predictions.csv", lambda p: rows.to_csv(p, index=False))
-    errors = wear_errors(rows[f"pred_{t}"], rows[t])
-    inside = (rows[t] >= rows[f"pred_{t}_lower"]) & (rows[t] <= rows[f"pred_{t}_upper"])
-    fig = parity_figure(rows[t].to_numpy(), rows[f"pred_{t}"].to_numpy(),
-                        rows[f"pred_{t}_std"].to_numpy() * surrogate.model.z,
+    errors = wear_errors(rows[f"{t}_pred"], rows[t])
+    inside = (rows[t] >= rows[f"{t}_lower"]) & (rows[t] <= rows[f"{t}_upper"])
+    fig = parity_figure(rows[t].to_numpy(), rows[f"{t}_pred"].to_numpy(),
+                        rows[f"{t}_std"].to_numpy() * surrogate.model.z,
                         f"held-out trajectories: MRE {errors['mean_relative_error_pct']:.2f} %, "
                         f"R2 {errors['r2']:.4f}, coverage {inside.mean():.2f}", t)
     atomic_write(out / "parity.png", lambda p: fig.savefig(p, dpi=120, format="png"))
     plt.close(fig)
     return {**{f"test_{k}": v for k, v in errors.items()},
             "test_interval_coverage": float(inside.mean()),
-            "test_out_of_range_rows": int(rows.pred_out_of_range.sum())}
+            "test_out_of_range_rows": int(rows.out_of_range.sum())}
 
 
 def parity_figure(true: np.ndarray, pred: np.ndarray, half: np.ndarray | None, title: str,
