@@ -8,9 +8,9 @@ features of :mod:`physics.features` are taken of both (columns ``dte_*`` and ``a
 A unit gives one row per cycle count.
 
 Units are grouped in *chunks*, the independent jobs of a Hydra multirun; each chunk is written
-atomically to ``chunks/chunk_<i>.parquet`` under the output folder, with the hash of everything
-that determines it in its file metadata, and a finished chunk with the same hash is not computed
-again (a killed run resumes). :func:`merge` joins the chunks into ``<name>.parquet`` and a JSON
+atomically to ``<name>_chunks/chunk_<i>.parquet`` under the output folder, with the hash of
+everything that determines it in its file metadata, and a finished chunk with the same hash is
+not computed again (a killed run resumes). :func:`merge` joins the chunks into ``<name>.parquet`` and a JSON
 sidecar. Everything is seeded, so the same config gives byte-identical files.
 """
 
@@ -166,8 +166,13 @@ def _write_parquet(df: pd.DataFrame, path: Path, meta: dict[str, str]) -> None:
     atomic_write(path, lambda p: pq.write_table(table, p, compression="zstd"))
 
 
-def chunk_path(out: Path, chunk: int) -> Path:
-    return out / "chunks" / f"chunk_{chunk:03d}.parquet"
+def chunk_folder(out: Path, name: str) -> Path:
+    """Where the chunks of dataset ``name`` live (one folder per dataset name)."""
+    return out / f"{name}_chunks"
+
+
+def chunk_path(folder: Path, chunk: int) -> Path:
+    return folder / f"chunk_{chunk:03d}.parquet"
 
 
 def chunk_is_done(path: Path, digest: str) -> bool:
@@ -180,10 +185,10 @@ def chunk_is_done(path: Path, digest: str) -> bool:
     return meta.get(b"gearwear_hash", b"").decode() == digest
 
 
-def run_chunk(base: Scenario, spec: DatasetSpec, chunk: int, out: Path, digest: str,
+def run_chunk(base: Scenario, spec: DatasetSpec, chunk: int, folder: Path, digest: str,
               keep_signals: bool = False) -> bool:
-    """Compute and write one chunk unless it is already there; True if it was computed."""
-    path = chunk_path(out, chunk)
+    """Compute and write one chunk into ``folder`` unless it is there; True if computed."""
+    path = chunk_path(folder, chunk)
     if chunk_is_done(path, digest):
         return False
     frames, signals = [], []
@@ -205,18 +210,19 @@ def run_chunk(base: Scenario, spec: DatasetSpec, chunk: int, out: Path, digest: 
 def merge(spec: DatasetSpec, out: Path, name: str, digest: str, sidecar: dict[str, Any],
           keep_signals: bool = False) -> Path:
     """Join the finished chunks into ``<name>.parquet`` (+ ``.json``, and ``_signals.npy``)."""
-    missing = [c for c in range(spec.chunks) if not chunk_is_done(chunk_path(out, c), digest)]
+    folder = chunk_folder(out, name)
+    missing = [c for c in range(spec.chunks) if not chunk_is_done(chunk_path(folder, c), digest)]
     if missing:
         raise ValueError(f"chunks {missing} of this config are not finished in {out}; run them "
                          f"first (chunk=<i>) or run without chunk= to do all")
-    frames = [pq.read_table(chunk_path(out, c)).to_pandas() for c in range(spec.chunks)]
+    frames = [pq.read_table(chunk_path(folder, c)).to_pandas() for c in range(spec.chunks)]
     df = pd.concat(frames, ignore_index=True)
     order = np.lexsort((df.cycles.to_numpy(), df.replicate.to_numpy(), df.case.to_numpy()))
     df = df.iloc[order].reset_index(drop=True)
     target = out / f"{name}.parquet"
     _write_parquet(df, target, {"gearwear_hash": digest})
     if keep_signals:
-        sig = np.concatenate([np.load(chunk_path(out, c).with_suffix(".npy"))
+        sig = np.concatenate([np.load(chunk_path(folder, c).with_suffix(".npy"))
                               for c in range(spec.chunks)])[order]
         atomic_write(out / f"{name}_signals.npy", lambda p: np.save(p.open("wb"), sig))
     text = json.dumps({**sidecar, "schema_version": SCHEMA_VERSION, "hash": digest,

@@ -17,6 +17,7 @@ from tqdm import tqdm
 
 from physics.dataset import (
     base_scenario,
+    chunk_folder,
     chunk_is_done,
     chunk_path,
     config_hash,
@@ -42,7 +43,8 @@ def generate(cfg: DictConfig) -> Path | None:
     chunks = range(spec.chunks) if cfg.chunk is None else [int(cfg.chunk)]
     if cfg.chunk is not None:
         spec.chunk_units(int(cfg.chunk))  # validates the index before any work
-    todo = [c for c in chunks if not chunk_is_done(chunk_path(out, c), digest)]
+    folder = chunk_folder(out, str(cfg.name))
+    todo = [c for c in chunks if not chunk_is_done(chunk_path(folder, c), digest)]
     if len(todo) < len(chunks):
         log.info("%d chunk(s) already done (hash %s): skipped", len(chunks) - len(todo), digest)
     if todo:
@@ -51,7 +53,7 @@ def generate(cfg: DictConfig) -> Path | None:
     with tqdm(total=len(todo), desc="chunks", unit="chunk", disable=not cfg.progress) as bar:
         if jobs == 1:
             for c in todo:
-                run_chunk(base, spec, c, out, digest, cfg.store_signals)
+                run_chunk(base, spec, c, folder, digest, cfg.store_signals)
                 bar.update(1)
         else:
             with ProcessPoolExecutor(jobs, mp_context=get_context("spawn")) as pool:

@@ -11,7 +11,7 @@ import pyarrow.parquet as pq
 import pytest
 from hydra import compose, initialize_config_dir
 
-from physics.dataset import DatasetSpec, chunk_path, units
+from physics.dataset import DatasetSpec, chunk_folder, chunk_path, units
 from physics.generate import generate
 from physics.measurement import add_noise, housing_acceleration
 from physics.params import case_values
@@ -69,9 +69,10 @@ def test_chunked_equals_single_and_rerun_is_byte_identical(tmp_path, single):
 def test_killed_run_resumes_and_keeps_finished_chunks(tmp_path, single):
     out = tmp_path / "resume"
     assert generate(config(out, "data.chunks=2", "chunk=0")) is None  # one job of a multirun
-    done = chunk_path(out, 0)
+    done = chunk_path(chunk_folder(out, "dataset"), 0)
     stamp = done.stat().st_mtime_ns
-    chunk_path(out, 1).write_bytes(b"half-written by a killed job")  # unreadable: redone
+    # a killed job's leftover is unreadable, so it is computed again
+    chunk_path(chunk_folder(out, "dataset"), 1).write_bytes(b"half-written by a killed job")
     path = generate(config(out, "data.chunks=2"))
     assert done.stat().st_mtime_ns == stamp
     pd.testing.assert_frame_equal(pd.read_parquet(path), pd.read_parquet(single))
@@ -81,9 +82,10 @@ def test_killed_run_resumes_and_keeps_finished_chunks(tmp_path, single):
 def test_changed_config_recomputes_finished_chunks(tmp_path):
     out = tmp_path / "hash"
     generate(config(out, "data.chunks=1"))
-    first = pq.read_schema(chunk_path(out, 0)).metadata[b"gearwear_hash"]
+    path = chunk_path(chunk_folder(out, "dataset"), 0)
+    first = pq.read_schema(path).metadata[b"gearwear_hash"]
     generate(config(out, "data.chunks=1", "data.snr_db=20"))
-    assert pq.read_schema(chunk_path(out, 0)).metadata[b"gearwear_hash"] != first
+    assert pq.read_schema(path).metadata[b"gearwear_hash"] != first
 
 
 def test_signals_are_stored_beside_the_table(tmp_path):
@@ -117,7 +119,7 @@ def test_noise_has_the_stated_snr_and_housing_acceleration_is_force_over_mass():
 def test_bad_input_is_refused_before_work(tmp_path, override, message):
     with pytest.raises(ValueError, match=message):
         generate(config(tmp_path, "data.chunks=1", override))
-    assert not (tmp_path / "chunks").exists()
+    assert not chunk_folder(tmp_path, "dataset").exists()
 
 
 def test_spec_rejects_more_chunks_than_units():
