@@ -11,7 +11,8 @@ Units are grouped in *chunks*, the independent jobs of a Hydra multirun; each ch
 atomically to ``<name>_chunks/chunk_<i>.parquet`` under the output folder, with the hash of
 everything that determines it in its file metadata, and a finished chunk with the same hash is
 not computed again (a killed run resumes). :func:`merge` joins the chunks into
-``<name>.parquet`` and a JSON sidecar. Everything is seeded, so the same config gives byte-identical files.
+``<name>.parquet`` and a JSON sidecar. Everything is seeded, so the same config gives
+byte-identical files.
 """
 
 from __future__ import annotations
