@@ -57,15 +57,18 @@ class Surrogate:
 
     def predict_array(self, x: np.ndarray, batch: int = 65536) -> tuple[np.ndarray, np.ndarray]:
         """Mean and standard deviation of wear for an unscaled input matrix (no checks)."""
-        xs = torch.as_tensor(self.schema.scale(x), dtype=torch.float32)
-        means, stds = [], []
+        xs = torch.as_tensor(np.asarray(x, np.float32))
+        shift = torch.as_tensor(self.schema.mean, dtype=torch.float32)
+        inv = 1.0 / torch.as_tensor(self.schema.std, dtype=torch.float32)
+        mean = torch.empty(len(xs))
+        std = torch.empty(len(xs))
         with torch.inference_mode():
             for lo in range(0, len(xs), batch):
-                m, v = mixture(self.model(xs[lo:lo + batch]))
-                means.append(m)
-                stds.append(v.clamp_min(0).sqrt())
+                m, v = mixture(self.model((xs[lo:lo + batch] - shift) * inv))
+                mean[lo:lo + batch] = m
+                std[lo:lo + batch] = v.clamp_min(0).sqrt()
         s = self.schema.target_scale
-        return torch.cat(means).numpy() * s, torch.cat(stds).numpy() * s
+        return mean.numpy() * s, std.numpy() * s
 
     def predict(self, df: pd.DataFrame) -> pd.DataFrame:
         """Wear for every row of ``df`` (checked against the schema; see FeatureSchema.check).
