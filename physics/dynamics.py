@@ -56,11 +56,20 @@ class PairModel:
     omega1: float  # pinion speed [rad/s]
     omega_mesh: float  # mesh frequency [rad/s]
     roll_speed: float  # r_b1 omega1 [m/s]
-    k_a: np.ndarray  # stiffness of pair A over one mesh period (uniform phase grid) [N/m]
+    k_a: np.ndarray  # stiffness of pair A over `periods` mesh periods (uniform grid) [N/m]
     k_b: np.ndarray  # stiffness of pair B (0 out of contact) [N/m]
     g_a: np.ndarray  # wear gap of pair A [m]
     g_b: np.ndarray  # wear gap of pair B [m]
     inertias: tuple[float, float]  # J1, J2 [kg m^2]
+    # --- hooks of the effect library (physics.effects); the defaults are the declared model ---
+    periods: int = 1  # mesh periods the tables span (z1: one pinion revolution, tooth by tooth)
+    lam_a: np.ndarray | None = None  # factor on pair A's force in the equation of motion
+    lam_b: np.ndarray | None = None  # (sliding friction); None: 1
+    gear_error: float = 0.0  # amplitude of the gear's run-out error on the line of action [m]
+    centre_runout: float = 0.0  # amplitude of the centre-distance change it causes [m]
+    omega2: float = 0.0  # gear speed [rad/s]
+    ripple_force: float = 0.0  # amplitude of the torque ripple as mesh force [N]
+    omega_ripple: float = 0.0  # its angular frequency [rad/s]
 
     @property
     def omega_max(self) -> float:
@@ -77,13 +86,21 @@ class PairModel:
         k_a, k_b = self.k_a[tau], self.k_b[tau]
         wear = (k_a * self.g_a[tau] + k_b * self.g_b[tau]) / (k_a + k_b)
         return (self.long_error * np.sin(self.omega1 * t)
-                + self.short_error * np.sin(self.omega_mesh * t) + wear)
+                + self.short_error * np.sin(self.omega_mesh * t)
+                + self.gear_error * np.sin(self.omega2 * t) + wear)
 
     def phase_index(self, t: np.ndarray) -> np.ndarray:
+        """Index into the tables at times ``t`` (they span ``periods`` mesh periods)."""
         n = len(self.k_a)
-        frac = np.mod(self.roll_speed * np.asarray(t), self.geometry.base_pitch) / (
-            self.geometry.base_pitch)
+        span = self.geometry.base_pitch * self.periods
+        frac = np.mod(self.roll_speed * np.asarray(t), span) / span
         return np.minimum((frac * n).astype(int), n - 1)
+
+    def force_factors(self) -> tuple[np.ndarray, np.ndarray]:
+        """The pairs' force factors in the equation of motion (1 without friction)."""
+        ones = np.ones_like(self.k_a)
+        return (ones if self.lam_a is None else self.lam_a,
+                ones if self.lam_b is None else self.lam_b)
 
 
 def blank_inertia(radius: float, bore: float, width: float, density: float) -> float:
@@ -177,16 +194,21 @@ def simulate(models: Sequence[PairModel] | PairModel, dyn: Dynamics) -> Response
         models = [models]
     if not models:
         raise ValueError("simulate needs at least one scenario")
-    n_phase = {len(m.k_a) for m in models}
+    n_phase = {(len(m.k_a), m.periods) for m in models}
     if len(n_phase) != 1:
-        raise ValueError("all scenarios of a batch need the same number of phase points")
+        raise ValueError("all scenarios of a batch need the same phase grid and periods")
     dt, n_sub = time_step(models, dyn)
     n_transient = round(dyn.transient_s / dt)
     n_out = round(dyn.duration_s * dyn.sample_rate_hz)
     par = np.array([[m.mass, m.damping, m.static_force, m.half_backlash, m.long_error,
                      m.short_error, m.omega1, m.omega_mesh, m.roll_speed,
-                     m.geometry.base_pitch] for m in models])
-    tables = np.stack([np.stack([m.k_a, m.k_b, m.g_a, m.g_b]) for m in models])
+                     m.geometry.base_pitch, m.gear_error, m.omega2, m.ripple_force,
+                     m.omega_ripple, len(m.k_a) / m.periods, m.centre_runout,
+                     len(m.k_a) / m.periods / (m.geometry.base_pitch
+                                               * math.sin(m.geometry.alpha_w))]
+                    for m in models])
+    tables = np.stack([np.stack([m.k_a, m.k_b, m.g_a, m.g_b, *m.force_factors()])
+                       for m in models])
     x0 = np.array([m.half_backlash + m.static_force / (m.k_a[0] + m.k_b[0]) for m in models])
     out = _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, dyn.phase_bins)
     dte, force, load_a, load_b, phase_sum, phase_count = out
@@ -213,12 +235,18 @@ def _contact(k, u, half, c_v):
     return 0.0
 
 
+@numba.njit(cache=True, fastmath=True, inline="always")
+def _lerp(tab, row, i0, i1, frac):
+    return tab[row, i0] + (tab[row, i1] - tab[row, i0]) * frac
+
+
 @numba.njit(cache=True, fastmath=True)
-def _mesh(par, tab, pos, x, v):
-    """Stiffnesses and forces of the pairs in contact at table position ``pos``.
+def _mesh(par, tab, pos, x, v, da):
+    """Force factors and forces of the pairs in contact at table position ``pos``.
 
     ``pos`` in [0, n) is the mesh phase in table cells; the tables are interpolated linearly and
-    periodically. The mesh damping ``c`` is shared between the pairs by stiffness.
+    periodically. The mesh damping ``c`` is shared between the pairs by stiffness. ``da`` is the
+    centre-distance change [m] (gear run-out): it moves the ends of the path of contact.
     """
     n = tab.shape[1]
     i0 = int(pos)
@@ -226,21 +254,53 @@ def _mesh(par, tab, pos, x, v):
         i0 = n - 1
     frac = pos - i0
     i1 = i0 + 1 if i0 + 1 < n else 0
-    k_a = tab[0, i0] + (tab[0, i1] - tab[0, i0]) * frac
-    k_b = tab[1, i0] + (tab[1, i1] - tab[1, i0]) * frac
-    g_a = tab[2, i0] + (tab[2, i1] - tab[2, i0]) * frac
-    g_b = tab[3, i0] + (tab[3, i1] - tab[3, i0]) * frac
-    c_v = par[1] * v / (k_a + k_b)
+    k_a, k_b = _lerp(tab, 0, i0, i1, frac), _lerp(tab, 1, i0, i1, frac)
+    g_a, g_b = _lerp(tab, 2, i0, i1, frac), _lerp(tab, 3, i0, i1, frac)
+    l_a, l_b = _lerp(tab, 4, i0, i1, frac), _lerp(tab, 5, i0, i1, frac)
+    k_c, g_c, l_c = 0.0, 0.0, 0.0
+    if da != 0.0:
+        # in the pinion's roll frame the exit (pinion tip) stays put and the entry (gear tip)
+        # moves by d(a sin aw')/da = 1/sin aw' per unit centre distance: pairs enter later
+        # when the centres part, earlier (the next pair ahead of time) when they close
+        n_per = par[14]
+        start = pos - (pos % n_per)
+        u_in = da * par[16]  # entry shift in table cells
+        if u_in > 0.0 and pos - start < u_in:
+            k_a = 0.0
+        elif u_in < 0.0 and pos - start >= n_per + u_in:
+            j = int(start + n_per) % n
+            k_c, g_c, l_c = tab[0, j], tab[2, j], tab[4, j]
+    c_v = par[1] * v / (k_a + k_b + k_c)
     f_a = _contact(k_a, x - g_a, par[3], k_a * c_v)
     f_b = _contact(k_b, x - g_b, par[3], k_b * c_v)
-    return k_a, k_b, f_a, f_b
+    if k_c > 0.0:
+        f_a += _contact(k_c, x - g_c, par[3], k_c * c_v) * l_c / l_a
+    return l_a, l_b, f_a, f_b
 
 
 @numba.njit(cache=True, fastmath=True)
-def _accel(par, tab, pos, x, v, e_dd):
-    """x'' of the reduced model at mesh phase ``pos``, given the error's e'' there."""
-    _, _, f_a, f_b = _mesh(par, tab, pos, x, v)
-    return (par[2] - par[0] * e_dd - f_a - f_b) / par[0]
+def _accel(par, tab, pos, x, v, e_dd, w, da):
+    """x'' of the reduced model at mesh phase ``pos``, given e'', the static force w and the
+    centre-distance change da there.
+
+    Each pair's force enters with its factor (1, or the sliding-friction moment factor).
+    """
+    l_a, l_b, f_a, f_b = _mesh(par, tab, pos, x, v, da)
+    return (w - par[0] * e_dd - l_a * f_a - l_b * f_b) / par[0]
+
+
+@numba.njit(cache=True, fastmath=True, inline="always")
+def _extra(par, t):
+    """The effect library's time terms at t: the gear run-out's e'' on the line of action and
+    its centre-distance change (the eccentricity's other component), and the static force."""
+    e_dd, da = 0.0, 0.0
+    if par[10] != 0.0:
+        e_dd = -par[10] * par[11] ** 2 * math.sin(par[11] * t)
+        da = par[15] * math.cos(par[11] * t)
+    w = par[2]
+    if par[12] != 0.0:
+        w += par[12] * math.sin(par[13] * t)
+    return e_dd, w, da
 
 
 @numba.njit(cache=True, fastmath=True, inline="always")
@@ -262,7 +322,8 @@ def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins):
         p, tab = par[j], tables[j]
         x, v = x0[j], 0.0
         n_tab = float(n_phase)
-        inc = p[8] * dt / p[9] * n_tab  # mesh phase advance per step, in table cells
+        n_per = p[14]  # table cells per mesh period
+        inc = p[8] * dt / p[9] * n_per  # mesh phase advance per step, in table cells
         pos = 0.0
         # e''(t) = -E_l w1^2 sin(w1 t) - E_s wm^2 sin(wm t): sines advanced by exact rotations
         a_l, a_s = p[4] * p[6] ** 2, p[5] * p[7] ** 2
@@ -270,12 +331,13 @@ def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins):
         cs, ss = math.cos(0.5 * p[7] * dt), math.sin(0.5 * p[7] * dt)
         s1, c1, s2, c2 = 0.0, 1.0, 0.0, 1.0  # sin, cos of w1 t and wm t
         total = n_transient + n_out * n_sub
+        da0 = _extra(p, 0.0)[2]
         for step in range(total + 1):
             # the mesh at (t, x) serves both the record of the state reached and stage 1 of RK4
-            _, _, f_a, f_b = _mesh(p, tab, pos, x, v)
+            l_a, l_b, f_a, f_b = _mesh(p, tab, pos, x, v, da0)
             if step > n_transient:
                 f = f_a + f_b
-                b = int(pos / n_phase * n_bins)
+                b = int((pos % n_per) / n_per * n_bins)
                 if b >= n_bins:
                     b = n_bins - 1
                 phase_sum[j, b] += f
@@ -293,18 +355,24 @@ def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins):
             s2h, c2h = s2 * cs + c2 * ss, c2 * cs - s2 * ss
             s1n, c1n = s1h * cl + c1h * sl, c1h * cl - s1h * sl  # at t + dt
             s2n, c2n = s2h * cs + c2h * ss, c2h * cs - s2h * ss
-            e0 = -(a_l * s1 + a_s * s2)
-            eh = -(a_l * s1h + a_s * s2h)
-            e1 = -(a_l * s1n + a_s * s2n)
-            a1 = (p[2] - p[0] * e0 - f_a - f_b) / p[0]
+            t = step * dt
+            x0e, w0, _ = _extra(p, t)
+            xhe, wh, dah = _extra(p, t + 0.5 * dt)
+            x1e, w1, da1 = _extra(p, t + dt)
+            e0 = x0e - (a_l * s1 + a_s * s2)
+            eh = xhe - (a_l * s1h + a_s * s2h)
+            e1 = x1e - (a_l * s1n + a_s * s2n)
+            a1 = (w0 - p[0] * e0 - l_a * f_a - l_b * f_b) / p[0]
             pos_h = _wrap(pos + 0.5 * inc, n_tab)
             pos_1 = _wrap(pos + inc, n_tab)
-            a2 = _accel(p, tab, pos_h, x + 0.5 * dt * v, v + 0.5 * dt * a1, eh)
-            a3 = _accel(p, tab, pos_h, x + 0.5 * dt * (v + 0.5 * dt * a1), v + 0.5 * dt * a2, eh)
-            a4 = _accel(p, tab, pos_1, x + dt * (v + 0.5 * dt * a2), v + dt * a3, e1)
+            a2 = _accel(p, tab, pos_h, x + 0.5 * dt * v, v + 0.5 * dt * a1, eh, wh, dah)
+            a3 = _accel(p, tab, pos_h, x + 0.5 * dt * (v + 0.5 * dt * a1), v + 0.5 * dt * a2,
+                        eh, wh, dah)
+            a4 = _accel(p, tab, pos_1, x + dt * (v + 0.5 * dt * a2), v + dt * a3, e1, w1, da1)
             x += dt * (v + dt * (a1 + a2 + a3) / 6.0)
             v += dt * (a1 + 2.0 * a2 + 2.0 * a3 + a4) / 6.0
             pos = pos_1
+            da0 = da1
             s1, c1, s2, c2 = s1n, c1n, s2n, c2n
             if step % 4096 == 0:  # keep the rotations on the unit circle
                 r1, r2 = math.hypot(s1, c1), math.hypot(s2, c2)
@@ -332,11 +400,16 @@ def simulate_two_dof(model: PairModel, t_eval: np.ndarray, rtol: float = 1e-9,
 
     States ``theta1, theta2`` and their rates, with ``T1 = W0 r_b1`` and ``T2 = W0 r_b2``;
     returns the DTE ``x = r_b1 theta1 - r_b2 theta2 - e(t)`` and the mesh force at ``t_eval``.
-    Slow (pure Python right-hand side); it exists to check the reduced, compiled integrator.
+    Slow (pure Python right-hand side); it exists to check the reduced, compiled integrator,
+    for the declared model (no effect of :mod:`physics.effects`).
     """
     from scipy.integrate import solve_ivp
 
     geom, m = model.geometry, model
+    if (m.periods != 1 or m.lam_a is not None or m.lam_b is not None or m.gear_error
+            or m.ripple_force or m.centre_runout):
+        raise ValueError("simulate_two_dof checks the declared model only; this one carries "
+                         "effects of physics.effects")
     j1, j2 = m.inertias
     rb1, rb2, n = geom.rb1, geom.rb2, len(m.k_a)
     cells = np.arange(n + 1)

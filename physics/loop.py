@@ -1,0 +1,447 @@
+"""Close the loop with measured data: calibrate, find the residual, attribute it, extend, report.
+
+``python -m physics.loop data=BUNDLE`` (Hydra app, ``conf/loop.yaml``) runs the steps below on a
+measured bundle (:mod:`physics.bundle`) and writes ``report.json``, ``report.md`` and figures into
+its run folder.
+
+1. **Records**: each record becomes a scenario (its speed, torque, lubricant and gear overrides)
+   with its worn teeth: the dynamically coupled wear evolution (:mod:`physics.evolution`) is run
+   once per operating point to the records' cycle counts (or, where only the wear depth is known,
+   to the cycle count of that depth). Records are split into train and test by record (the
+   manifest's ``split`` column where given, else seeded), never by windows of one record.
+2. **Calibration** of the declared nuisance parameters on the train records: mesh damping ratio,
+   pinion run-out and profile error amplitudes, and the housing's effective mass ``m_h`` (for
+   acceleration records), by bounded least squares on the signature residuals.
+   Measurement noise is not fitted: its level is read off each record (median of its Welch
+   spectrum, the lines being sparse) and the same white noise is added to the model's record.
+3. **Residual**: the signature of :mod:`physics.order_analysis` (mesh harmonics and shaft
+   sidebands from order analysis, half-octave bands, statistics, synchronous-average kurtosis,
+   all in dB) of measurement minus calibrated model, per entry.
+4. **Attribution**: every effect of :mod:`physics.effects` that can show in the bundle's
+   quantities is added in turn, its parameters fitted on the train records (nuisance kept at the
+   calibration, ``m_h`` refitted); candidates are ranked by held-out error (RMS dB over the test
+   records' signatures) with the Bayesian information criterion on the train records beside it.
+   The **null test**: the best candidate is adopted only if it lowers the held-out error by at
+   least ``min_gain`` (20 %) and its BIC by at least ``min_delta_bic`` (10, "very strong" on
+   Kass & Raftery's scale); otherwise the report says no candidate explains the residual.
+5. **Report**: error before and after on the held-out records, as signature error [dB], as the
+   mean relative error of the Table 13 features [%], and, where the wear is known, as the error of
+   a model-based wear estimate (the wear state whose simulated signature is nearest) [%].
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import logging
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from scipy import optimize
+
+from physics.bundle import Bundle
+from physics.dynamics import PairModel, build_model, simulate
+from physics.effects import EFFECTS, Effect
+from physics.evolution import simulate_dynamic_wear
+from physics.features import FEATURES, features
+from physics.measurement import housing_acceleration
+from physics.order_analysis import (
+    signature,
+    signature_names,
+    signature_segments,
+    white_noise_std,
+)
+from physics.params import Scenario
+from physics.stiffness import MeshStiffness
+
+log = logging.getLogger(__name__)
+
+#: declared nuisance parameters: name, bounds, log-scaled
+NUISANCE = {"damping_ratio": (0.01, 0.3, True), "eccentricity1_um": (0.2, 60.0, True),
+            "profile_error_um": (0.1, 30.0, True), "housing_mass_kg": (0.01, 1e5, True)}
+
+
+@dataclass(frozen=True)
+class LoopSettings:
+    segment_s: float = 0.25  # analysis segment; the model simulates one
+    transient_s: float = 0.05
+    test_fraction: float = 0.3
+    seed: int = 0
+    min_gain: float = 0.2  # adopt an effect only if it cuts the held-out error by this share
+    min_delta_bic: float = 10.0
+    wear_grid: int = 10  # wear states of the model-based wear estimate
+    max_nfev: int = 30
+    floor_db: float = 0.3  # model error floor added to each entry's scatter
+
+
+@dataclass
+class Records:
+    """The bundle's records as model inputs, with their measured signatures."""
+
+    bundle: Bundle
+    scenarios: list[Scenario]
+    models: list[PairModel]  # declared model with worn teeth, default nuisance
+    measured: list[np.ndarray]  # segment-averaged signature of each record [dB]
+    entry_sd: np.ndarray  # scatter of each signature entry between segments [dB]
+    names: list[str]  # the signature's entries
+    noise_std: np.ndarray
+    train: np.ndarray  # indices
+    test: np.ndarray
+    settings: LoopSettings
+    wear_states: list[list[tuple[float, PairModel]]] = field(default_factory=list)
+
+
+def split_records(man: pd.DataFrame, test_fraction: float, seed: int) -> tuple[np.ndarray,
+                                                                                np.ndarray]:
+    """Train/test record indices: the manifest's split where given, else seeded by record."""
+    given = man.split.fillna("").to_numpy()
+    idx = np.arange(len(man))
+    free = idx[given == ""]
+    rng = np.random.default_rng(seed)
+    n_test = max(1, round(test_fraction * len(free))) if len(free) > 1 else 0
+    test_free = rng.choice(free, n_test, replace=False) if n_test else np.array([], int)
+    test = np.sort(np.concatenate([idx[given == "test"], test_free]).astype(int))
+    train = np.setdiff1d(idx, test)
+    if len(train) == 0 or len(test) == 0:
+        raise ValueError(f"the bundle needs at least one train and one test record (it has "
+                         f"{len(man)} records); add records or set the split column")
+    return train, test
+
+
+def record_scenario(base: Scenario, row) -> Scenario:
+    op = dataclasses.replace(base.operating, n1_rpm=float(row.n1_rpm),
+                             torque_Nm=float(row.torque_Nm))
+    lub, tri = base.lubricant, base.tribology
+    if "eta0_Pa_s" in row._fields and not pd.isna(row.eta0_Pa_s):
+        lub = dataclasses.replace(lub, eta0_Pa_s=float(row.eta0_Pa_s))
+    if "sigma_um" in row._fields and not pd.isna(row.sigma_um):
+        tri = dataclasses.replace(tri, sigma_um=float(row.sigma_um))
+    return dataclasses.replace(base, operating=op, lubricant=lub, tribology=tri)
+
+
+def worn_models(scn: Scenario, ms: MeshStiffness, cycles: list[float]
+                ) -> tuple[dict[float, PairModel], dict[float, float]]:
+    """Declared models and pinion root wear [mm] at each cycle count of one operating point."""
+    grid = sorted({0.0, *[float(c) for c in cycles]})
+    models, root = {0.0: build_model(scn, ms)}, {0.0: 0.0}
+    if grid[-1] > 0:
+        res = simulate_dynamic_wear(scn, grid[-1], snapshots=grid[1:])
+        for c in grid[1:]:
+            w1, w2 = res.snapshots[c]
+            models[c] = build_model(scn, ms, res.s, w1, w2)
+            root[c] = float(w1[0]) * 1e3
+    return models, root
+
+
+def prepare(bundle: Bundle, base: Scenario, settings: LoopSettings) -> Records:
+    """Scenarios, worn models, measured signatures, noise levels and the split of a bundle."""
+    man = bundle.manifest
+    scenarios = [record_scenario(base, row) for row in man.itertuples(index=False)]
+    ms = MeshStiffness(base.gear, base.material)
+    train, test = split_records(man, settings.test_fraction, settings.seed)
+    keyed: dict[tuple, list[int]] = {}
+    for i, row in enumerate(man.itertuples(index=False)):
+        keyed.setdefault((row.n1_rpm, row.torque_Nm), []).append(i)
+    models: list[PairModel | None] = [None] * len(man)
+    wear_states: list[list[tuple[float, PairModel]]] = [[] for _ in range(len(man))]
+    for idx in keyed.values():
+        scn = scenarios[idx[0]]
+        known = [float(man.cycles.iloc[i]) for i in idx if not pd.isna(man.cycles.iloc[i])]
+        top = max([*known, 1.0])
+        grid = list(np.linspace(0, 1.2 * top, settings.wear_grid)) if known else []
+        by_cycles, root = worn_models(scn, ms, known + grid)
+        for i in idx:
+            c = man.cycles.iloc[i]
+            models[i] = by_cycles[0.0 if pd.isna(c) else float(c)]
+            wear_states[i] = [(root[float(g)], by_cycles[float(g)]) for g in grid]
+    fs = man.fs_hz.to_numpy(float)
+    segments = [signature_segments(bundle.signals[r], fs[i], *shaft_rates(scenarios[i]),
+                                   scenarios[i].gear.z1, man.quantity.iloc[i] == "dte_m",
+                                   settings.segment_s) for i, r in enumerate(man.record)]
+    if len({s.shape[1] for s in segments}) != 1:
+        raise ValueError("the records' signatures differ in length (mixed quantities, speeds "
+                         "or sampling rates); split the bundle into bundles of one kind")
+    if min(s.shape[0] for s in segments) < 2:
+        raise ValueError(f"every record needs at least two analysis segments of "
+                         f"{settings.segment_s:g} s (their scatter is the noise of the "
+                         "comparison); lengthen the records or shorten segment_s")
+    # one-segment model against an n-segment mean: var = sd^2 (1 + 1/n); pooled over records
+    var = np.median([s.var(axis=0, ddof=1) * (1 + 1 / s.shape[0]) for s in segments], axis=0)
+    entry_sd = np.sqrt(var + settings.floor_db**2)
+    f1, f2 = shaft_rates(scenarios[0])
+    names = signature_names(f1, f2, base.gear.z1, fs[0], man.quantity.iloc[0] == "dte_m")
+    noise = np.array([white_noise_std(bundle.signals[r], fs[i], 0.5 * f1 * base.gear.z1)
+                      for i, r in enumerate(man.record)])
+    return Records(bundle, scenarios, models, [s.mean(axis=0) for s in segments], entry_sd,
+                   names, noise, train, test, settings, wear_states)
+
+
+def shaft_rates(scn: Scenario) -> tuple[float, float]:
+    f1 = scn.operating.n1_rpm / 60
+    return f1, f1 * scn.gear.z1 / scn.gear.z2
+
+
+def with_nuisance(m: PairModel, nuisance: dict, base_ratio: float) -> PairModel:
+    """The declared model with calibrated damping and error amplitudes."""
+    return dataclasses.replace(
+        m, damping=m.damping * nuisance["damping_ratio"] / base_ratio,
+        long_error=nuisance["eccentricity1_um"] * 1e-6 * math.sin(m.geometry.alpha_w),
+        short_error=nuisance["profile_error_um"] * 1e-6)
+
+
+def model_signals(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | None,
+                  values: dict, models: list[PairModel] | None = None) -> list[np.ndarray]:
+    """Simulated records (one analysis segment each) of records ``idx`` through the chain."""
+    man = rec.bundle.manifest
+    base_ratio = rec.scenarios[0].dynamics.damping_ratio
+    ms = [with_nuisance(m, nuisance, base_ratio)
+          for m in (models if models is not None else [rec.models[i] for i in idx])]
+    if eff is not None and eff.model is not None:
+        ms = [eff.model(m, values) for m in ms]
+    out: list[np.ndarray] = [np.empty(0)] * len(idx)
+    fs_all = man.fs_hz.to_numpy(float)[idx]
+    for fs in np.unique(fs_all):
+        sel = np.flatnonzero(fs_all == fs)
+        dyn = dataclasses.replace(rec.scenarios[0].dynamics, sample_rate_hz=float(fs),
+                                  duration_s=rec.settings.segment_s,
+                                  transient_s=rec.settings.transient_s,
+                                  phase_bins=16)
+        resp = simulate([ms[k] for k in sel], dyn)
+        for j, k in enumerate(sel):
+            i = idx[k]
+            if man.quantity.iloc[i] == "dte_m":
+                x = resp.dte[j]
+            else:
+                x = housing_acceleration(resp.force[j], nuisance["housing_mass_kg"])
+            if eff is not None and eff.record is not None:
+                x = eff.record(x, float(fs), values)
+            rng = np.random.default_rng([rec.settings.seed, int(i)])
+            out[k] = x + rec.noise_std[i] * rng.standard_normal(x.size)
+    return out
+
+
+
+def residuals_db(rec: Records, idx: np.ndarray, signals: list[np.ndarray]) -> np.ndarray:
+    """Measured minus model signature, (records ``idx``, entries) [dB]."""
+    man = rec.bundle.manifest
+    res = []
+    for k, i in enumerate(idx):
+        scn = rec.scenarios[i]
+        sig = signature(signals[k], float(man.fs_hz.iloc[i]), *shaft_rates(scn), scn.gear.z1,
+                        man.quantity.iloc[i] == "dte_m", rec.settings.segment_s)
+        res.append(rec.measured[i] - sig)
+    return np.array(res)
+
+
+def residuals(rec: Records, idx: np.ndarray, signals: list[np.ndarray]) -> np.ndarray:
+    """Standardised residuals (dB residual over the entry's scatter), all records stacked."""
+    return (residuals_db(rec, idx, signals) / rec.entry_sd).ravel()
+
+
+def rms(x: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(x**2)))
+
+
+def _to_unit(p: float, lo: float, hi: float, is_log: bool) -> float:
+    return (math.log(p / lo) / math.log(hi / lo)) if is_log else (p - lo) / (hi - lo)
+
+
+def _from_unit(u: float, lo: float, hi: float, is_log: bool) -> float:
+    return lo * (hi / lo) ** u if is_log else lo + u * (hi - lo)
+
+
+def calibrate(rec: Records, start: dict) -> dict:
+    """Fit the declared nuisance parameters on the train records (bounded least squares)."""
+    names = [n for n in NUISANCE if n != "housing_mass_kg" or accel_in(rec)]
+    u0 = np.array([np.clip(_to_unit(start[n], *NUISANCE[n]), 0.01, 0.99) for n in names])
+
+    def values(u):
+        return start | {n: _from_unit(float(v), *NUISANCE[n]) for n, v in zip(names, u,
+                                                                                 strict=True)}
+
+    def fun(u):
+        return residuals(rec, rec.train, model_signals(rec, rec.train, values(u), None, {}))
+
+    sol = optimize.least_squares(fun, u0, bounds=(0, 1), diff_step=0.02,
+                                 max_nfev=rec.settings.max_nfev * 2)
+    return values(sol.x)
+
+
+def accel_in(rec: Records) -> bool:
+    return bool((rec.bundle.manifest.quantity == "accel_m_s2").any())
+
+
+@dataclass
+class Candidate:
+    name: str
+    option: dict
+    values: dict
+    train_rss: float
+    n_params: int
+    heldout_db: float
+    bic: float = 0.0
+
+
+def fit_effect(rec: Records, eff: Effect, option: dict, nuisance: dict) -> Candidate:
+    """Fit one effect's parameters (and m_h) on the train records; judge it on the test ones."""
+    params = list(eff.params)
+    free = [(p.name, p.low, p.high, p.log) for p in params]
+    if accel_in(rec):
+        free.append(("housing_mass_kg", *NUISANCE["housing_mass_kg"]))
+
+    def split(u):
+        v = {n: _from_unit(float(x), lo, hi, lg) for (n, lo, hi, lg), x in zip(free, u,
+                                                                                 strict=True)}
+        return nuisance | {"housing_mass_kg": v.pop("housing_mass_kg",
+                                                    nuisance["housing_mass_kg"])}, option | v
+
+    def fun(u):
+        nui, vals = split(u)
+        return residuals(rec, rec.train, model_signals(rec, rec.train, nui, eff, vals))
+
+    m_unit = [_to_unit(nuisance["housing_mass_kg"], *NUISANCE["housing_mass_kg"])]
+    best = None
+    for start in (0.2, 0.5, 0.8):  # sizes across the realistic range, the best one refined
+        u0 = np.array([start] * len(params) + (m_unit if accel_in(rec) else []))
+        cost = float(np.sum(fun(u0) ** 2))
+        if best is None or cost < best[0]:
+            best = (cost, u0)
+    sol = optimize.least_squares(fun, best[1], bounds=(0, 1), diff_step=0.02,
+                                 max_nfev=rec.settings.max_nfev)
+    nui, vals = split(sol.x)
+    held = residuals(rec, rec.test, model_signals(rec, rec.test, nui, eff, vals))
+    return Candidate(eff.name, option, vals | {"housing_mass_kg": nui["housing_mass_kg"]},
+                     float(np.sum(sol.fun**2)), len(free), rms(held))
+
+
+def bic(chi2: float, n: int, k: int) -> float:
+    """Bayesian information criterion of standardised residuals (known scatter)."""
+    return chi2 + k * math.log(n)
+
+
+def feature_error(rec: Records, idx: np.ndarray, signals: list[np.ndarray]) -> float:
+    """Mean relative error of the Table 13 features, model against measurement [%]."""
+    errs = []
+    for k, i in enumerate(idx):
+        meas = features(rec.bundle.signals[rec.bundle.records[i]])
+        mod = features(signals[k])
+        errs += [abs(float(mod[f]) / float(meas[f]) - 1) * 100 for f in FEATURES]
+    return float(np.mean(errs))
+
+
+def wear_estimates(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | None,
+                   values: dict) -> np.ndarray:
+    """Model-based wear estimate of each record: the wear state of nearest signature [mm]."""
+    out = []
+    for i in idx:
+        states = rec.wear_states[i]
+        if not states:
+            out.append(np.nan)
+            continue
+        wear = np.array([w for w, _ in states])
+        sig = model_signals(rec, np.array([i] * len(states)), nuisance, eff, values,
+                            models=[m for _, m in states])
+        cost = np.array([rms(residuals(rec, np.array([i]), [s])) for s in sig])
+        j = int(np.argmin(cost))
+        if 0 < j < len(cost) - 1:  # parabolic refinement between grid states
+            c0, c1, c2 = cost[j - 1:j + 2]
+            d = c0 - 2 * c1 + c2
+            shift = 0.5 * (c0 - c2) / d if d > 0 else 0.0
+            out.append(float(np.interp(j + np.clip(shift, -1, 1), np.arange(len(wear)), wear)))
+        else:
+            out.append(float(wear[j]))
+    return np.array(out)
+
+
+def residual_table(rec: Records, idx: np.ndarray, signals: list[np.ndarray]) -> pd.Series:
+    """Mean dB residual of each signature entry over records ``idx``."""
+    return pd.Series(residuals_db(rec, idx, signals).mean(axis=0), index=rec.names)
+
+
+def candidates_for(rec: Records) -> list[tuple[Effect, dict]]:
+    q = set(rec.bundle.manifest.quantity)
+    return [(e, o) for e in EFFECTS.values() if q & set(e.quantities) for o in e.options]
+
+
+def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings = LoopSettings(),
+             progress: bool = False) -> dict:
+    """The whole loop on one bundle; returns the report as a dict (see the module text)."""
+    rec = prepare(bundle, base, settings)
+    dyn = base.dynamics
+    start = {"damping_ratio": dyn.damping_ratio, "eccentricity1_um": dyn.eccentricity1_um,
+             "profile_error_um": dyn.profile_error_um, "housing_mass_kg": dyn.housing_mass_kg}
+    nuisance = calibrate(rec, start)
+    base_train = model_signals(rec, rec.train, nuisance, None, {})
+    base_test = model_signals(rec, rec.test, nuisance, None, {})
+    n_train = residuals(rec, rec.train, base_train).size
+    null_rss = float(np.sum(residuals(rec, rec.train, base_train) ** 2))
+    null_bic = bic(null_rss, n_train, 0)
+    before = rms(residuals(rec, rec.test, base_test))
+    ranking = []
+    from tqdm import tqdm
+
+    for eff, option in tqdm(candidates_for(rec), desc="candidates", disable=not progress):
+        c = fit_effect(rec, eff, option, nuisance)
+        c.bic = bic(c.train_rss, n_train, c.n_params)
+        ranking.append(c)
+        log.info("%s %s: held-out %.2f dB (baseline %.2f), dBIC %.1f", c.name, c.option,
+                 c.heldout_db, before, c.bic - null_bic)
+    ranking.sort(key=lambda c: c.heldout_db)
+    best = ranking[0]
+    adopt = (best.heldout_db <= (1 - settings.min_gain) * before
+             and best.bic - null_bic <= -settings.min_delta_bic)
+    chosen = EFFECTS[best.name] if adopt else None
+    after_nui = nuisance | ({"housing_mass_kg": best.values["housing_mass_kg"]} if adopt else {})
+    after_vals = best.values if adopt else {}
+    after_test = (model_signals(rec, rec.test, after_nui, chosen, after_vals) if adopt
+                  else base_test)
+    man = bundle.manifest
+    known = np.array([i for i in rec.test if not pd.isna(man.wear_mm.iloc[i])
+                      and rec.wear_states[i]], int)
+    wear_err = {}
+    if known.size:
+        true = man.wear_mm.to_numpy(float)[known]
+        for key, (nui, eff, vals) in {"before": (nuisance, None, {}),
+                                      "after": (after_nui, chosen, after_vals)}.items():
+            est = wear_estimates(rec, known, nui, eff, vals)
+            ok = true > 0
+            wear_err[key] = (float(np.mean(np.abs(est[ok] - true[ok]) / true[ok]) * 100)
+                             if ok.any() else float(np.mean(np.abs(est - true))))
+    return {
+        "chosen_effect": chosen.name if chosen else None,
+        "chosen_option": best.option if adopt else None,
+        "chosen_parameters": {k: v for k, v in best.values.items()} if adopt else None,
+        "error_before": before,
+        "error_after": rms(residuals(rec, rec.test, after_test)),
+        "error_unit": "dB (RMS of the held-out records' signature residuals)",
+        "feature_error_before_pct": feature_error(rec, rec.test, base_test),
+        "feature_error_after_pct": feature_error(rec, rec.test, after_test),
+        "wear_error_before_pct": wear_err.get("before"),
+        "wear_error_after_pct": wear_err.get("after"),
+        "calibration": nuisance,
+        "null_bic": null_bic,
+        "ranking": [{"effect": c.name, "option": c.option, "parameters": c.values,
+                     "heldout_error_db": c.heldout_db, "delta_bic": c.bic - null_bic,
+                     "n_params": c.n_params} for c in ranking],
+        "decision_rule": {"min_gain": settings.min_gain, "min_delta_bic": settings.min_delta_bic},
+        "train_records": [bundle.records[i] for i in rec.train],
+        "test_records": [bundle.records[i] for i in rec.test],
+        "residual_before": residual_table(rec, rec.test, base_test).to_dict(),
+        "residual_after": residual_table(rec, rec.test, after_test).to_dict(),
+        "_signals": {"test": rec.test, "before": base_test, "after": after_test, "rec": rec},
+    }
+
+
+def write_report(report: dict, out: Path) -> None:
+    """report.json, report.md, order_spectra.png and residuals.png into ``out``."""
+    from physics.files import atomic_write
+    from physics.loop_report import figures, markdown
+
+    plain = {k: v for k, v in report.items() if not k.startswith("_")}
+    text = json.dumps(plain, indent=2, default=float)
+    atomic_write(out / "report.json", lambda p: p.write_text(text + "\n"))
+    atomic_write(out / "report.md", lambda p: p.write_text(markdown(plain)))
+    figures(report, out)

@@ -1,0 +1,80 @@
+"""Markdown and figures of a measured-data loop report (:mod:`physics.loop`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+import numpy as np
+
+from physics.files import atomic_write
+from physics.order_analysis import line_amplitudes
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+
+
+def markdown(r: dict) -> str:
+    lines = ["# Measured-data loop", ""]
+    chosen = r["chosen_effect"]
+    lines.append(f"**Chosen effect:** {chosen or 'none (no candidate passes the null test)'}")
+    if chosen:
+        params = ", ".join(f"{k} = {v:.4g}" for k, v in r["chosen_parameters"].items()
+                           if isinstance(v, float))
+        lines.append(f"  fitted: {params}")
+    lines += ["", "| held-out error | before | after |", "|---|---|---|",
+              f"| signature [dB RMS] | {r['error_before']:.3f} | {r['error_after']:.3f} |",
+              f"| Table 13 features [% mean rel.] | {r['feature_error_before_pct']:.2f} | "
+              f"{r['feature_error_after_pct']:.2f} |"]
+    if r.get("wear_error_before_pct") is not None:
+        lines.append(f"| wear estimate [% mean rel.] | {r['wear_error_before_pct']:.2f} | "
+                     f"{r['wear_error_after_pct']:.2f} |")
+    cal = ", ".join(f"{k} = {v:.4g}" for k, v in r["calibration"].items())
+    lines += ["", f"Calibrated nuisance parameters (train records): {cal}.", "",
+              "## Ranking (held-out error; BIC relative to the calibrated model)", "",
+              "| effect | option | held-out [dB] | dBIC | parameters |", "|---|---|---|---|---|"]
+    for c in r["ranking"]:
+        p = ", ".join(f"{k}={v:.3g}" for k, v in c["parameters"].items() if isinstance(v, float))
+        lines.append(f"| {c['effect']} | {c['option'] or ''} | {c['heldout_error_db']:.3f} | "
+                     f"{c['delta_bic']:.1f} | {p} |")
+    rule = r["decision_rule"]
+    lines += ["", f"Decision rule: adopt the best candidate only if it cuts the held-out error "
+              f"by at least {rule['min_gain']:.0%} and the BIC by at least "
+              f"{rule['min_delta_bic']:g}.", "", "## Largest residuals before (measured minus "
+              "model, dB, mean over held-out records)", ""]
+    res = sorted(r["residual_before"].items(), key=lambda kv: -abs(kv[1]))[:10]
+    lines += [f"- {k}: {v:+.2f} dB (after: {r['residual_after'][k]:+.2f})" for k, v in res]
+    return "\n".join(lines) + "\n"
+
+
+def figures(report: dict, out: Path) -> None:
+    """order_spectra.png (one held-out record) and residuals.png (per signature entry)."""
+    sig = report["_signals"]
+    rec, i = sig["rec"], int(sig["test"][0])
+    man = rec.bundle.manifest
+    fs = float(man.fs_hz.iloc[i])
+    f1 = float(man.n1_rpm.iloc[i]) / 60
+    z1 = rec.scenarios[i].gear.z1
+    orders = np.arange(0.25, 3.5 * z1, 0.25)
+    fig, ax = plt.subplots(figsize=(10, 4.5))
+    n = int(rec.settings.segment_s * fs)
+    meas = rec.bundle.signals[rec.bundle.records[i]][:n]
+    for x, label in ((meas, "measured"), (sig["before"][0], "calibrated model"),
+                     (sig["after"][0], "extended model")):
+        ax.semilogy(orders, line_amplitudes(x, fs, orders * f1) + 1e-30, label=label, lw=0.9)
+    ax.set(xlabel="pinion order", ylabel=f"amplitude [{man.quantity.iloc[i]}]",
+           title=f"order spectrum of held-out record {rec.bundle.records[i]}")
+    ax.legend()
+    atomic_write(out / "order_spectra.png", lambda p: fig.savefig(p, dpi=110, format="png"))
+    plt.close(fig)
+    names = list(report["residual_before"])
+    fig, ax = plt.subplots(figsize=(12, 4.5))
+    pos = np.arange(len(names))
+    ax.bar(pos - 0.2, [report["residual_before"][k] for k in names], 0.4, label="before")
+    ax.bar(pos + 0.2, [report["residual_after"][k] for k in names], 0.4, label="after")
+    ax.set_xticks(pos, names, rotation=90, fontsize=6)
+    ax.set(ylabel="measured - model [dB]", title="signature residual, held-out records")
+    ax.legend()
+    fig.tight_layout()
+    atomic_write(out / "residuals.png", lambda p: fig.savefig(p, dpi=110, format="png"))
+    plt.close(fig)
