@@ -12,19 +12,24 @@ its run folder.
 2. **Calibration** of the declared nuisance parameters on the train records: mesh damping ratio,
    pinion run-out and profile error amplitudes, and the housing's effective mass ``m_h`` (for
    acceleration records), by bounded least squares on the signature residuals.
-   Measurement noise is not fitted: its level is read off each record (median of its Welch
-   spectrum, the lines being sparse) and the same white noise is added to the model's record.
-3. **Residual**: the signature of :mod:`physics.order_analysis` (mesh harmonics and shaft
-   sidebands from order analysis, half-octave bands, statistics, synchronous-average kurtosis,
-   all in dB) of measurement minus calibrated model, per entry.
+   Measurement noise is not fitted: its level is read off each record's spectral floor
+   (:func:`physics.order_analysis.white_noise_std`) and white noise of that level (seeded per
+   record) is added to the model's record.
+3. **Residual**: the signature of :mod:`physics.order_analysis` (mesh harmonics with pinion and
+   gear sidebands up to 0.45 fs, half-octave bands, statistics, synchronous-average kurtosis,
+   all in dB) of measurement minus calibrated model, per entry, divided by the entry's scatter
+   between the measured records' segments (pooled over records, plus a floor ``floor_db``):
+   a standardised residual whose RMS is about 1 where model and measurement agree up to noise.
 4. **Attribution**: every effect of :mod:`physics.effects` that can show in the bundle's
    quantities is added in turn, its parameters fitted on the train records (nuisance kept at the
-   calibration, ``m_h`` refitted); candidates are ranked by held-out error (RMS dB over the test
-   records' signatures) with the Bayesian information criterion on the train records beside it.
+   calibration, ``m_h`` refitted); candidates are ranked by held-out error (RMS standardised
+   residual over the test records) with the Bayesian information criterion on the train
+   records beside it (chi-square plus k ln n, the scatter being known).
    The **null test**: the best candidate is adopted only if it lowers the held-out error by at
    least ``min_gain`` (20 %) and its BIC by at least ``min_delta_bic`` (10, "very strong" on
    Kass & Raftery's scale); otherwise the report says no candidate explains the residual.
-5. **Report**: error before and after on the held-out records, as signature error [dB], as the
+5. **Report**: error before and after on the held-out records, as the standardised signature
+   residual (the figure the report leads with) and in dB, as the
    mean relative error of the Table 13 features [%], and, where the wear is known, as the error of
    a model-based wear estimate (the wear state whose simulated signature is nearest) [%].
 """
@@ -35,17 +40,21 @@ import dataclasses
 import json
 import logging
 import math
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import hydra
 import numpy as np
 import pandas as pd
+from hydra.core.hydra_config import HydraConfig
+from omegaconf import DictConfig, OmegaConf
 from scipy import optimize
 
 from physics.bundle import Bundle
 from physics.dynamics import PairModel, build_model, simulate
 from physics.effects import EFFECTS, Effect
-from physics.evolution import simulate_dynamic_wear
+from physics.evolution import root_wear_evolution, simulate_dynamic_wear
 from physics.features import FEATURES, features
 from physics.measurement import housing_acceleration
 from physics.order_analysis import (
@@ -54,7 +63,7 @@ from physics.order_analysis import (
     signature_segments,
     white_noise_std,
 )
-from physics.params import Scenario
+from physics.params import Scenario, scenario_from_config
 from physics.stiffness import MeshStiffness
 
 log = logging.getLogger(__name__)
@@ -75,6 +84,7 @@ class LoopSettings:
     wear_grid: int = 10  # wear states of the model-based wear estimate
     max_nfev: int = 30
     floor_db: float = 0.3  # model error floor added to each entry's scatter
+    candidates: tuple[str, ...] | None = None  # effects to try; None: the whole library
 
 
 @dataclass
@@ -149,13 +159,12 @@ def prepare(bundle: Bundle, base: Scenario, settings: LoopSettings) -> Records:
     wear_states: list[list[tuple[float, PairModel]]] = [[] for _ in range(len(man))]
     for idx in keyed.values():
         scn = scenarios[idx[0]]
-        known = [float(man.cycles.iloc[i]) for i in idx if not pd.isna(man.cycles.iloc[i])]
-        top = max([*known, 1.0])
-        grid = list(np.linspace(0, 1.2 * top, settings.wear_grid)) if known else []
-        by_cycles, root = worn_models(scn, ms, known + grid)
+        cycles = {i: record_cycles(scn, man.iloc[i]) for i in idx}
+        known = [c for c in cycles.values() if c > 0]
+        grid = list(np.linspace(0, 1.2 * max(known), settings.wear_grid)) if known else []
+        by_cycles, root = worn_models(scn, ms, [*cycles.values(), *grid])
         for i in idx:
-            c = man.cycles.iloc[i]
-            models[i] = by_cycles[0.0 if pd.isna(c) else float(c)]
+            models[i] = by_cycles[cycles[i]]
             wear_states[i] = [(root[float(g)], by_cycles[float(g)]) for g in grid]
     fs = man.fs_hz.to_numpy(float)
     segments = [signature_segments(bundle.signals[r], fs[i], *shaft_rates(scenarios[i]),
@@ -177,6 +186,29 @@ def prepare(bundle: Bundle, base: Scenario, settings: LoopSettings) -> Records:
                       for i, r in enumerate(man.record)])
     return Records(bundle, scenarios, models, [s.mean(axis=0) for s in segments], entry_sd,
                    names, noise, train, test, settings, wear_states)
+
+
+def cycles_for_wear(scn: Scenario, wear_mm: np.ndarray, cycles_max: float = 1.5e7
+                    ) -> np.ndarray:
+    """Cycle counts at which the model's pinion root wear reaches ``wear_mm``."""
+    for _ in range(5):
+        grid = np.linspace(0.0, cycles_max, 16)
+        root = root_wear_evolution(scn, grid)[0] * 1e3
+        if root[-1] >= np.max(wear_mm):
+            return np.interp(wear_mm, root, grid)
+        cycles_max *= 2
+    raise ValueError(f"the model's root wear reaches only {root[-1]:.4g} mm in {cycles_max:.3g} "
+                     f"cycles, below {np.max(wear_mm):g} mm: check the operating point and "
+                     "tribology.regime")
+
+
+def record_cycles(scn: Scenario, row: pd.Series) -> float:
+    """A record's load cycles: stated, else those at which the model reaches its wear, else 0."""
+    if not pd.isna(row.cycles):
+        return float(row.cycles)
+    if not pd.isna(row.wear_mm) and row.wear_mm > 0:
+        return float(cycles_for_wear(scn, np.array([float(row.wear_mm)]))[0])
+    return 0.0
 
 
 def shaft_rates(scn: Scenario) -> tuple[float, float]:
@@ -245,21 +277,21 @@ def rms(x: np.ndarray) -> float:
     return float(np.sqrt(np.mean(x**2)))
 
 
-def _to_unit(p: float, lo: float, hi: float, is_log: bool) -> float:
+def to_unit(p: float, lo: float, hi: float, is_log: bool) -> float:
     return (math.log(p / lo) / math.log(hi / lo)) if is_log else (p - lo) / (hi - lo)
 
 
-def _from_unit(u: float, lo: float, hi: float, is_log: bool) -> float:
+def from_unit(u: float, lo: float, hi: float, is_log: bool) -> float:
     return lo * (hi / lo) ** u if is_log else lo + u * (hi - lo)
 
 
 def calibrate(rec: Records, start: dict) -> dict:
     """Fit the declared nuisance parameters on the train records (bounded least squares)."""
     names = [n for n in NUISANCE if n != "housing_mass_kg" or accel_in(rec)]
-    u0 = np.array([np.clip(_to_unit(start[n], *NUISANCE[n]), 0.01, 0.99) for n in names])
+    u0 = np.array([np.clip(to_unit(start[n], *NUISANCE[n]), 0.01, 0.99) for n in names])
 
     def values(u):
-        return start | {n: _from_unit(float(v), *NUISANCE[n]) for n, v in zip(names, u,
+        return start | {n: from_unit(float(v), *NUISANCE[n]) for n, v in zip(names, u,
                                                                                  strict=True)}
 
     def fun(u):
@@ -293,7 +325,7 @@ def fit_effect(rec: Records, eff: Effect, option: dict, nuisance: dict) -> Candi
         free.append(("housing_mass_kg", *NUISANCE["housing_mass_kg"]))
 
     def split(u):
-        v = {n: _from_unit(float(x), lo, hi, lg) for (n, lo, hi, lg), x in zip(free, u,
+        v = {n: from_unit(float(x), lo, hi, lg) for (n, lo, hi, lg), x in zip(free, u,
                                                                                  strict=True)}
         return nuisance | {"housing_mass_kg": v.pop("housing_mass_kg",
                                                     nuisance["housing_mass_kg"])}, option | v
@@ -302,7 +334,7 @@ def fit_effect(rec: Records, eff: Effect, option: dict, nuisance: dict) -> Candi
         nui, vals = split(u)
         return residuals(rec, rec.train, model_signals(rec, rec.train, nui, eff, vals))
 
-    m_unit = [_to_unit(nuisance["housing_mass_kg"], *NUISANCE["housing_mass_kg"])]
+    m_unit = [to_unit(nuisance["housing_mass_kg"], *NUISANCE["housing_mass_kg"])]
     best = None
     for start in (0.2, 0.5, 0.8):  # sizes across the realistic range, the best one refined
         u0 = np.array([start] * len(params) + (m_unit if accel_in(rec) else []))
@@ -361,14 +393,23 @@ def residual_table(rec: Records, idx: np.ndarray, signals: list[np.ndarray]) -> 
     return pd.Series(residuals_db(rec, idx, signals).mean(axis=0), index=rec.names)
 
 
-def candidates_for(rec: Records) -> list[tuple[Effect, dict]]:
-    q = set(rec.bundle.manifest.quantity)
-    return [(e, o) for e in EFFECTS.values() if q & set(e.quantities) for o in e.options]
+def candidates_for(quantities: set[str], settings: LoopSettings) -> list[tuple[Effect, dict]]:
+    """(effect, option) pairs to try: the library's (or ``settings.candidates``) effects that can
+    show in the records' quantities."""
+    names = settings.candidates if settings.candidates is not None else tuple(EFFECTS)
+    unknown = sorted(set(names) - set(EFFECTS))
+    if unknown:
+        raise ValueError(f"loop.candidates: {unknown} not in the effect library; choose from "
+                         f"{sorted(EFFECTS)}")
+    return [(EFFECTS[n], o) for n in names if quantities & set(EFFECTS[n].quantities)
+            for o in EFFECTS[n].options]
 
 
-def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings = LoopSettings(),
+def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = None,
              progress: bool = False) -> dict:
     """The whole loop on one bundle; returns the report as a dict (see the module text)."""
+    settings = settings or LoopSettings()
+    candidates = candidates_for(set(bundle.manifest.quantity), settings)
     rec = prepare(bundle, base, settings)
     dyn = base.dynamics
     start = {"damping_ratio": dyn.damping_ratio, "eccentricity1_um": dyn.eccentricity1_um,
@@ -383,7 +424,7 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings = LoopSettin
     ranking = []
     from tqdm import tqdm
 
-    for eff, option in tqdm(candidates_for(rec), desc="candidates", disable=not progress):
+    for eff, option in tqdm(candidates, desc="candidates", disable=not progress):
         c = fit_effect(rec, eff, option, nuisance)
         c.bic = bic(c.train_rss, n_train, c.n_params)
         ranking.append(c)
@@ -411,12 +452,16 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings = LoopSettin
             wear_err[key] = (float(np.mean(np.abs(est[ok] - true[ok]) / true[ok]) * 100)
                              if ok.any() else float(np.mean(np.abs(est - true))))
     return {
+        "mode": "bundle",
         "chosen_effect": chosen.name if chosen else None,
         "chosen_option": best.option if adopt else None,
         "chosen_parameters": {k: v for k, v in best.values.items()} if adopt else None,
         "error_before": before,
         "error_after": rms(residuals(rec, rec.test, after_test)),
-        "error_unit": "dB (RMS of the held-out records' signature residuals)",
+        "error_unit": "RMS of the held-out records' signature residuals, each in units of its "
+                      "own scatter between segments (1: at the noise)",
+        "error_before_db": rms(residuals_db(rec, rec.test, base_test)),
+        "error_after_db": rms(residuals_db(rec, rec.test, after_test)),
         "feature_error_before_pct": feature_error(rec, rec.test, base_test),
         "feature_error_after_pct": feature_error(rec, rec.test, after_test),
         "wear_error_before_pct": wear_err.get("before"),
@@ -424,7 +469,7 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings = LoopSettin
         "calibration": nuisance,
         "null_bic": null_bic,
         "ranking": [{"effect": c.name, "option": c.option, "parameters": c.values,
-                     "heldout_error_db": c.heldout_db, "delta_bic": c.bic - null_bic,
+                     "heldout_error": c.heldout_db, "delta_bic": c.bic - null_bic,
                      "n_params": c.n_params} for c in ranking],
         "decision_rule": {"min_gain": settings.min_gain, "min_delta_bic": settings.min_delta_bic},
         "train_records": [bundle.records[i] for i in rec.train],
@@ -433,6 +478,24 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings = LoopSettin
         "residual_after": residual_table(rec, rec.test, after_test).to_dict(),
         "_signals": {"test": rec.test, "before": base_test, "after": after_test, "rec": rec},
     }
+
+
+def load_input(cfg: DictConfig) -> tuple[Bundle | pd.DataFrame, Scenario]:
+    """The bundle or feature table named by ``cfg.input`` and the scenario (with the bundle's
+    gear overrides); refuses a bad input before any work."""
+    from physics.bundle import read_bundle, read_feature_table
+
+    container = OmegaConf.to_container(cfg, resolve=True)
+    path = Path(str(cfg.input))
+    if path.is_dir():
+        data = read_bundle(path, int(container["gear"]["z1"]))
+        container["gear"] = container["gear"] | data.gear
+    elif path.is_file() and path.suffix == ".csv":
+        data = read_feature_table(path)
+    else:
+        raise ValueError(f"data = {str(cfg.input)!r} is neither a bundle folder nor a feature-"
+                         "table .csv file; see shared/specs/measured-bundle.md")
+    return data, scenario_from_config(container)
 
 
 def write_report(report: dict, out: Path) -> None:
@@ -445,3 +508,33 @@ def write_report(report: dict, out: Path) -> None:
     atomic_write(out / "report.json", lambda p: p.write_text(text + "\n"))
     atomic_write(out / "report.md", lambda p: p.write_text(markdown(plain)))
     figures(report, out)
+
+
+@hydra.main(version_base="1.3", config_path="../conf", config_name="loop")
+def main(cfg: DictConfig) -> None:
+    from physics.feature_loop import run_feature_table
+
+    data, base = load_input(cfg)
+    opts = OmegaConf.to_container(cfg.loop, resolve=True)
+    if opts.get("candidates") is not None:
+        opts["candidates"] = tuple(opts["candidates"])
+    settings = LoopSettings(**opts)
+    if isinstance(data, Bundle):
+        report = run_loop(data, base, settings, progress=bool(cfg.progress))
+    else:
+        report = run_feature_table(data, base, settings)
+    out = Path(HydraConfig.get().runtime.output_dir)
+    write_report(report, out)
+    log.info("chosen effect: %s; held-out error %.3f -> %.3f; report in %s",
+             report["chosen_effect"], report["error_before"], report["error_after"], out)
+
+
+def data_argument(argv: list[str]) -> list[str]:
+    """``data=PATH`` on the command line means the loop's ``input``: ``conf/data`` is the
+    surrogate's config group, so Hydra would read ``data=`` as a choice of that group."""
+    return [f"input={a[5:]}" if a.startswith("data=") else a for a in argv]
+
+
+if __name__ == "__main__":
+    sys.argv = data_argument(sys.argv)
+    main()

@@ -22,33 +22,50 @@ def markdown(r: dict) -> str:
         params = ", ".join(f"{k} = {v:.4g}" for k, v in r["chosen_parameters"].items()
                            if isinstance(v, float))
         lines.append(f"  fitted: {params}")
+    table = r.get("mode") == "feature_table"
+    lead = ("features [RMS log ratio, leave-one-row-out]" if table
+            else "signature [RMS standardised residual]")
     lines += ["", "| held-out error | before | after |", "|---|---|---|",
-              f"| signature [dB RMS] | {r['error_before']:.3f} | {r['error_after']:.3f} |",
+              f"| {lead} | {r['error_before']:.3f} | {r['error_after']:.3f} |",
               f"| Table 13 features [% mean rel.] | {r['feature_error_before_pct']:.2f} | "
               f"{r['feature_error_after_pct']:.2f} |"]
+    if not table:
+        lines.append(f"| signature [dB RMS] | {r['error_before_db']:.2f} | "
+                     f"{r['error_after_db']:.2f} |")
     if r.get("wear_error_before_pct") is not None:
         lines.append(f"| wear estimate [% mean rel.] | {r['wear_error_before_pct']:.2f} | "
                      f"{r['wear_error_after_pct']:.2f} |")
     cal = ", ".join(f"{k} = {v:.4g}" for k, v in r["calibration"].items())
     lines += ["", f"Calibrated nuisance parameters (train records): {cal}.", "",
               "## Ranking (held-out error; BIC relative to the calibrated model)", "",
-              "| effect | option | held-out [dB] | dBIC | parameters |", "|---|---|---|---|---|"]
+              "| effect | option | held-out error | dBIC | parameters |", "|---|---|---|---|---|"]
     for c in r["ranking"]:
         p = ", ".join(f"{k}={v:.3g}" for k, v in c["parameters"].items() if isinstance(v, float))
-        lines.append(f"| {c['effect']} | {c['option'] or ''} | {c['heldout_error_db']:.3f} | "
+        lines.append(f"| {c['effect']} | {c['option'] or ''} | {c['heldout_error']:.3f} | "
                      f"{c['delta_bic']:.1f} | {p} |")
     rule = r["decision_rule"]
     lines += ["", f"Decision rule: adopt the best candidate only if it cuts the held-out error "
               f"by at least {rule['min_gain']:.0%} and the BIC by at least "
-              f"{rule['min_delta_bic']:g}.", "", "## Largest residuals before (measured minus "
-              "model, dB, mean over held-out records)", ""]
-    res = sorted(r["residual_before"].items(), key=lambda kv: -abs(kv[1]))[:10]
-    lines += [f"- {k}: {v:+.2f} dB (after: {r['residual_after'][k]:+.2f})" for k, v in res]
+              f"{rule['min_delta_bic']:g}."]
+    if table:
+        lines += ["", "## Rise of each feature from the first to the last row", "",
+                  "| feature | measured | model before | model after |", "|---|---|---|---|"]
+        lines += [f"| {k} | {v:.3g} | {r['rise_before'][k]:.3g} | {r['rise_after'][k]:.3g} |"
+                  for k, v in r["rise_measured"].items()]
+    else:
+        lines += ["", "## Largest residuals before (measured minus model, dB, mean over "
+                  "held-out records)", ""]
+        res = sorted(r["residual_before"].items(), key=lambda kv: -abs(kv[1]))[:10]
+        lines += [f"- {k}: {v:+.2f} dB (after: {r['residual_after'][k]:+.2f})" for k, v in res]
     return "\n".join(lines) + "\n"
 
 
 def figures(report: dict, out: Path) -> None:
-    """order_spectra.png (one held-out record) and residuals.png (per signature entry)."""
+    """order_spectra.png (one held-out record) and residuals.png (per signature entry), or
+    feature_trends.png for a feature table."""
+    if report.get("mode") == "feature_table":
+        _feature_trends(report, out)
+        return
     sig = report["_signals"]
     rec, i = sig["rec"], int(sig["test"][0])
     man = rec.bundle.manifest
@@ -77,4 +94,22 @@ def figures(report: dict, out: Path) -> None:
     ax.legend()
     fig.tight_layout()
     atomic_write(out / "residuals.png", lambda p: fig.savefig(p, dpi=110, format="png"))
+    plt.close(fig)
+
+
+def _feature_trends(report: dict, out: Path) -> None:
+    wear = np.array(report["wear_mm"])
+    names = list(report["features_measured"])
+    fig, axes = plt.subplots(1, len(names), figsize=(2.6 * len(names), 3.2))
+    for ax, n in zip(np.atleast_1d(axes), names, strict=True):
+        for key, style, label in (("features_measured", "ko-", "measured"),
+                                  ("features_before", "C0s--", "calibrated model"),
+                                  ("features_after", "C1^-", "extended model")):
+            ax.plot(wear * 1e3, report[key][n], style, label=label, ms=4, lw=1)
+        ax.set(title=n, xlabel="root wear [um]")
+        ax.set_yscale("log")
+    np.atleast_1d(axes)[0].legend(fontsize=7)
+    fig.suptitle(f"features against wear; chosen effect: {report['chosen_effect']}")
+    fig.tight_layout()
+    atomic_write(out / "feature_trends.png", lambda p: fig.savefig(p, dpi=110, format="png"))
     plt.close(fig)
