@@ -39,6 +39,7 @@ from physics.loop import (
     LoopSettings,
     candidates_for,
     cycles_for_wear,
+    declared_nuisance,
     from_unit,
     to_unit,
     with_nuisance,
@@ -171,10 +172,7 @@ def run_feature_table(df: pd.DataFrame, base: Scenario,
     candidates_for(set(), settings)  # refuses unknown names before any work
     td = prepare_table(df, base, settings)
     rows = np.arange(len(td.wear))
-    dyn = base.dynamics
-    start = {"damping_ratio": dyn.damping_ratio, "eccentricity1_um": dyn.eccentricity1_um,
-             "profile_error_um": dyn.profile_error_um, "housing_mass_kg": dyn.housing_mass_kg,
-             "noise": _noise_bounds(td)[2] * 0.2}
+    start = declared_nuisance(base) | {"noise": _noise_bounds(td)[2] * 0.2}
     gain = [("housing_mass_kg", *NUISANCE["housing_mass_kg"])] if td.quantity != "dte_m" else []
     names = [n for n in NUISANCE if n != "housing_mass_kg"]
     cal_free = [(n, *NUISANCE[n]) for n in names] + gain + [_noise_bounds(td)]

@@ -73,6 +73,11 @@ NUISANCE = {"damping_ratio": (0.01, 0.3, True), "eccentricity1_um": (0.2, 60.0, 
             "profile_error_um": (0.1, 30.0, True), "housing_mass_kg": (0.01, 1e5, True)}
 
 
+def declared_nuisance(scn: Scenario) -> dict[str, float]:
+    """The nuisance parameters' configured values (the calibration's starting point)."""
+    return {n: float(getattr(scn.dynamics, n)) for n in NUISANCE}
+
+
 @dataclass(frozen=True)
 class LoopSettings:
     segment_s: float = 0.25  # analysis segment; the model simulates one
@@ -411,10 +416,7 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
     settings = settings or LoopSettings()
     candidates = candidates_for(set(bundle.manifest.quantity), settings)
     rec = prepare(bundle, base, settings)
-    dyn = base.dynamics
-    start = {"damping_ratio": dyn.damping_ratio, "eccentricity1_um": dyn.eccentricity1_um,
-             "profile_error_um": dyn.profile_error_um, "housing_mass_kg": dyn.housing_mass_kg}
-    nuisance = calibrate(rec, start)
+    nuisance = calibrate(rec, declared_nuisance(base))
     base_train = model_signals(rec, rec.train, nuisance, None, {})
     base_test = model_signals(rec, rec.test, nuisance, None, {})
     n_train = residuals(rec, rec.train, base_train).size

@@ -18,7 +18,7 @@ import pandas as pd
 from physics.bundle import write_bundle
 from physics.dynamics import simulate
 from physics.effects import effect
-from physics.loop import shaft_rates, with_nuisance, worn_models
+from physics.loop import declared_nuisance, shaft_rates, with_nuisance, worn_models
 from physics.measurement import add_noise, housing_acceleration
 from physics.params import Scenario
 from physics.stiffness import MeshStiffness
@@ -30,10 +30,7 @@ def make_bundle(path: str | Path, base: Scenario, effect_name: str | None, seed:
     """Write a bundle; return its path and the truth (effect, its values, the nuisance)."""
     rng = np.random.default_rng([seed, 7])
     dyn = base.dynamics
-    nuisance = {"damping_ratio": dyn.damping_ratio, "eccentricity1_um": dyn.eccentricity1_um,
-                "profile_error_um": dyn.profile_error_um,
-                "housing_mass_kg": dyn.housing_mass_kg}
-    nuisance = {k: v * rng.uniform(0.6, 1.6) for k, v in nuisance.items()}
+    nuisance = {k: v * rng.uniform(0.6, 1.6) for k, v in declared_nuisance(base).items()}
     eff = effect(effect_name) if effect_name else None
     values = {}
     if eff is not None:
