@@ -29,7 +29,6 @@ from physics.params import scenario_from_config
 from physics.synthetic import make_bundle
 
 ROOT = Path(__file__).resolve().parents[1]
-TABLES = ROOT.parent / "shared" / "reference" / "thesis_tables"
 FS = 40960.0
 
 
@@ -120,11 +119,16 @@ def test_split_is_by_record_and_honours_the_manifest():
         split_records(manifest(2, split=["train", "train"]), 0.3, 0)
 
 
-def test_feature_tables_of_the_thesis_parse():
-    table15 = TABLES / "table15_measured_acceleration_features.csv"
+def test_feature_tables_of_the_thesis_parse(tmp_path):
+    # the headers of thesis Tables 15 (housing acceleration) and 14 (DTE, in 1e-5 m)
+    table15 = tmp_path / "t15.csv"
+    table15.write_text("wear_mm,rms_m_per_s2,peak_to_peak_m_per_s2,kurtosis,crest,margin,impulse\n"
+                       "0,1.0,16.0,4.3,8.9,14.0,11.6\n")
     q, cols = parse_columns(read_feature_table(table15))
     assert q == "accel_m_s2" and cols["peak_to_peak_m_per_s2"] == ("peak_to_peak", 1.0)
-    q, cols = parse_columns(read_feature_table(TABLES / "table14_dte_features_case3.csv"))
+    table14 = pd.DataFrame(columns=["cycles_1e6", "wear_mm", "rms_1e-5_m", "peak_to_peak_1e-5_m",
+                                    "kurtosis", "crest", "margin", "impulse"])
+    q, cols = parse_columns(table14)
     assert q == "dte_m" and cols["rms_1e-5_m"] == ("rms", 1e-5)
     with pytest.raises(ValueError, match="'energy' is not a Table 13 feature"):
         parse_columns(pd.DataFrame({"wear_mm": [0.0], "energy": [1.0], "rms_m": [1.0]}))
