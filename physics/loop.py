@@ -50,6 +50,7 @@ import pandas as pd
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, OmegaConf
 from scipy import optimize
+from tqdm import tqdm
 
 from physics.bundle import Bundle
 from physics.dynamics import PairModel, build_model, simulate
@@ -419,13 +420,11 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
     nuisance = calibrate(rec, declared_nuisance(base))
     base_train = model_signals(rec, rec.train, nuisance, None, {})
     base_test = model_signals(rec, rec.test, nuisance, None, {})
-    n_train = residuals(rec, rec.train, base_train).size
-    null_rss = float(np.sum(residuals(rec, rec.train, base_train) ** 2))
-    null_bic = bic(null_rss, n_train, 0)
+    null_res = residuals(rec, rec.train, base_train)
+    n_train = null_res.size
+    null_bic = bic(float(np.sum(null_res**2)), n_train, 0)
     before = rms(residuals(rec, rec.test, base_test))
     ranking = []
-    from tqdm import tqdm
-
     for eff, option in tqdm(candidates, desc="candidates", disable=not progress):
         c = fit_effect(rec, eff, option, nuisance)
         c.bic = bic(c.train_rss, n_train, c.n_params)
@@ -457,7 +456,7 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
         "mode": "bundle",
         "chosen_effect": chosen.name if chosen else None,
         "chosen_option": best.option if adopt else None,
-        "chosen_parameters": {k: v for k, v in best.values.items()} if adopt else None,
+        "chosen_parameters": dict(best.values) if adopt else None,
         "error_before": before,
         "error_after": rms(residuals(rec, rec.test, after_test)),
         "error_unit": "RMS of the held-out records' signature residuals, each in units of its "
