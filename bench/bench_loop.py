@@ -29,6 +29,9 @@ from physics.loop import LoopSettings, run_loop
 from physics.params import scenario_from_config
 from physics.synthetic import make_bundle
 
+#: effect-to-noise power [dB] below which an effect has not changed the records (round-off)
+ABSENT_DB = -100.0
+
 
 def base_scenario():
     return scenario_from_config({"case": 3, "tribology": {"regime": "dry"}})
@@ -38,11 +41,12 @@ def one(job: tuple[str | None, int, int, str]) -> dict:
     name, seed, records, tmp = job
     base = base_scenario()
     quantity = "dte_m" if name == "sensor" else "accel_m_s2"
-    path, _ = make_bundle(Path(tmp) / f"{name}_{seed}", base, name, seed, quantity=quantity,
-                          records=records)
+    path, truth = make_bundle(Path(tmp) / f"{name}_{seed}", base, name, seed,
+                              quantity=quantity, records=records)
     t = time.perf_counter()
     r = run_loop(read_bundle(path), base, LoopSettings(seed=seed))
     return {"truth": name or "none", "seed": seed, "chosen": r["chosen_effect"] or "none",
+            "effect_to_noise_db": truth["effect_to_noise_db"],
             "error_before": r["error_before"], "error_after": r["error_after"],
             "wear_error_before_pct": r["wear_error_before_pct"],
             "wear_error_after_pct": r["wear_error_after_pct"],
@@ -75,17 +79,23 @@ def main() -> None:
     runs.to_csv(out / "loop_runs.csv", index=False)
     confusion = pd.crosstab(runs.truth, runs.chosen)
     confusion.to_csv(out / "loop_confusion.csv")
-    eff = runs[runs.truth != "none"]
+    # an effect that changes the records by no more than round-off is not in the data: such
+    # bundles (backlash growth without contact loss) are clean bundles
+    present = runs.effect_to_noise_db > ABSENT_DB
+    eff = runs[present]
     right = eff.truth == eff.chosen
     halved = eff.error_after <= 0.5 * eff.error_before
-    clean = runs[runs.truth == "none"]
+    clean = runs[~present]
     print(runs.round(3).to_string(index=False))
     print("\nconfusion matrix (rows: effect in the data, columns: effect the loop chose)")
     print(confusion.to_string())
-    print(f"\nright effect named: {right.mean():.0%} of {len(eff)} bundles (target >= 90 %)")
-    print(f"held-out error at least halved: {halved.mean():.0%} (target >= 90 %)")
-    print(f"nothing added on clean bundles: {(clean.chosen == 'none').mean():.0%} of "
-          f"{len(clean)} (target >= 95 %)")
+    print(f"\nright effect named: {right.mean():.0%} of {len(eff)} bundles whose effect changes "
+          "the records (target >= 90 %)")
+    print(f"held-out error at least halved: {halved.mean():.0%} of them (target >= 90 %)")
+    n_clean = int((runs.truth == "none").sum())
+    print(f"nothing added on bundles without an effect in the records: "
+          f"{(clean.chosen == 'none').mean():.0%} of {len(clean)} ({n_clean} clean, "
+          f"{len(clean) - n_clean} with an effect below round-off; target >= 95 %)")
     print(f"median loop time: {runs.seconds.median():.1f} s per bundle of {args.records} records")
 
 

@@ -11,7 +11,11 @@ its run folder.
    manifest's ``split`` column where given, else seeded), never by windows of one record.
 2. **Calibration** of the declared nuisance parameters on the train records: mesh damping ratio,
    pinion run-out and profile error amplitudes, and the housing's effective mass ``m_h`` (for
-   acceleration records), by bounded least squares on the signature residuals.
+   acceleration records). A parameter that does not move the residuals (the pinion run-out on
+   the line of action: a shaft-rate error is dynamically inert in the torsional model) is held
+   at its declared value and reported as not identifiable. The search (:func:`search`): a
+   scrambled Sobol sample around the declared values, ``m_h`` levelled at each point, the best
+   refined by bounded least squares on the standardised signature residuals.
    Measurement noise is not fitted: its level is read off each record's spectral floor
    (:func:`physics.order_analysis.white_noise_std`) and white noise of that level (seeded per
    record) is added to the model's record.
@@ -21,10 +25,13 @@ its run folder.
    between the measured records' segments (pooled over records, plus a floor ``floor_db``):
    a standardised residual whose RMS is about 1 where model and measurement agree up to noise.
 4. **Attribution**: every effect of :mod:`physics.effects` that can show in the bundle's
-   quantities is added in turn, its parameters fitted on the train records (nuisance kept at the
-   calibration, ``m_h`` refitted); candidates are ranked by held-out error (RMS standardised
-   residual over the test records) with the Bayesian information criterion on the train
-   records beside it (chi-square plus k ln n, the scatter being known).
+   quantities is added in turn. Screening: the effect at a grid of sizes, nuisance at the
+   calibration. The best ``refine`` candidates by train chi-square then get the same search as
+   the calibration, their parameters jointly with the identifiable nuisance (a missing effect
+   biases the calibration, at worst to its bounds, so the nuisance must move with the effect).
+   Candidates are ranked by held-out error (RMS standardised residual over the test records)
+   with the Bayesian information criterion on the train records beside it (chi-square plus
+   k ln n, the scatter being known, k the effect's parameters).
    The **null test**: the best candidate is adopted only if it lowers the held-out error by at
    least ``min_gain`` (20 %) and its BIC by at least ``min_delta_bic`` (10, "very strong" on
    Kass & Raftery's scale); otherwise the report says no candidate explains the residual.
@@ -37,6 +44,7 @@ its run folder.
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import json
 import logging
 import math
@@ -50,6 +58,7 @@ import pandas as pd
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, OmegaConf
 from scipy import optimize
+from scipy.stats import qmc
 from tqdm import tqdm
 
 from physics.bundle import Bundle
@@ -72,6 +81,17 @@ log = logging.getLogger(__name__)
 #: declared nuisance parameters: name, bounds, log-scaled
 NUISANCE = {"damping_ratio": (0.01, 0.3, True), "eccentricity1_um": (0.2, 60.0, True),
             "profile_error_um": (0.1, 30.0, True), "housing_mass_kg": (0.01, 1e5, True)}
+#: the nuisance parameters the dynamics see (``m_h`` acts on the measurement chain)
+DYNAMIC_NUISANCE = ("damping_ratio", "eccentricity1_um", "profile_error_um")
+#: signature entries that do not scale with the record's gain
+SCALE_FREE = ("kurtosis", "crest", "tsa_kurtosis")
+#: RMS change of the standardised train residuals below which a parameter is not identifiable
+MIN_SENSITIVITY = 0.02
+#: half-width of the nuisance's search around the calibration (unit coordinates: a factor
+#: of 2.3 in damping ratio, of 4 in profile error)
+EXPLORE_SPAN = 0.25
+#: simulations kept by :func:`responses`
+CACHE_SIZE = 256
 
 
 def declared_nuisance(scn: Scenario) -> dict[str, float]:
@@ -88,7 +108,17 @@ class LoopSettings:
     min_gain: float = 0.2  # adopt an effect only if it cuts the held-out error by this share
     min_delta_bic: float = 10.0
     wear_grid: int = 10  # wear states of the model-based wear estimate
-    max_nfev: int = 30
+    max_nfev: int = 20  # least-squares evaluations per fit
+    refine: int = 3  # screened candidates refined jointly with the nuisance
+    explore: int = 32  # Sobol points searched before each refinement (0 or a power of 2)
+
+    def __post_init__(self):
+        if self.explore < 0 or self.explore & (self.explore - 1):
+            raise ValueError(f"loop.explore = {self.explore} must be 0 or a power of 2 (a Sobol "
+                             "sample keeps its balance only then); use e.g. 16 or 32")
+        if self.refine < 1:
+            raise ValueError(f"loop.refine = {self.refine} must be >= 1 (at least the best "
+                             "screened candidate is refined)")
     floor_db: float = 0.3  # model error floor added to each entry's scatter
     candidates: tuple[str, ...] | None = None  # effects to try; None: the whole library
 
@@ -108,6 +138,7 @@ class Records:
     test: np.ndarray
     settings: LoopSettings
     wear_states: list[list[tuple[float, PairModel]]] = field(default_factory=list)
+    cache: dict = field(default_factory=dict)  # simulations by dynamic parameters
 
 
 def split_records(man: pd.DataFrame, test_fraction: float, seed: int) -> tuple[np.ndarray,
@@ -230,14 +261,26 @@ def with_nuisance(m: PairModel, nuisance: dict, base_ratio: float) -> PairModel:
         short_error=nuisance["profile_error_um"] * 1e-6)
 
 
-def model_signals(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | None,
-                  values: dict, models: list[PairModel] | None = None) -> list[np.ndarray]:
-    """Simulated records (one analysis segment each) of records ``idx`` through the chain."""
+def responses(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | None,
+              values: dict, models: list[PairModel] | None = None) -> list[np.ndarray]:
+    """Simulated DTE or mesh force (by each record's quantity) of records ``idx``, one analysis
+    segment each.
+
+    Memoised on the parameters the dynamics see (``rec.cache``): a change of the measurement
+    chain's parameters (``m_h``, a transfer path, a sensor) reuses the simulation.
+    """
+    dynamic = eff is not None and eff.model is not None
+    key = None
+    if models is None:
+        key = (tuple(int(i) for i in idx), tuple(nuisance[n] for n in DYNAMIC_NUISANCE),
+               (eff.name, tuple(sorted(values.items()))) if dynamic else None)
+        if key in rec.cache:
+            return rec.cache[key]
     man = rec.bundle.manifest
     base_ratio = rec.scenarios[0].dynamics.damping_ratio
     ms = [with_nuisance(m, nuisance, base_ratio)
           for m in (models if models is not None else [rec.models[i] for i in idx])]
-    if eff is not None and eff.model is not None:
+    if dynamic:
         ms = [eff.model(m, values) for m in ms]
     out: list[np.ndarray] = [np.empty(0)] * len(idx)
     fs_all = man.fs_hz.to_numpy(float)[idx]
@@ -245,21 +288,33 @@ def model_signals(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | N
         sel = np.flatnonzero(fs_all == fs)
         dyn = dataclasses.replace(rec.scenarios[0].dynamics, sample_rate_hz=float(fs),
                                   duration_s=rec.settings.segment_s,
-                                  transient_s=rec.settings.transient_s,
-                                  phase_bins=16)
+                                  transient_s=rec.settings.transient_s, phase_bins=16)
         resp = simulate([ms[k] for k in sel], dyn)
         for j, k in enumerate(sel):
-            i = idx[k]
-            if man.quantity.iloc[i] == "dte_m":
-                x = resp.dte[j]
-            else:
-                x = housing_acceleration(resp.force[j], nuisance["housing_mass_kg"])
-            if eff is not None and eff.record is not None:
-                x = eff.record(x, float(fs), values)
-            rng = np.random.default_rng([rec.settings.seed, int(i)])
-            out[k] = x + rec.noise_std[i] * rng.standard_normal(x.size)
+            out[k] = resp.dte[j] if man.quantity.iloc[idx[k]] == "dte_m" else resp.force[j]
+    if key is not None:
+        if len(rec.cache) >= CACHE_SIZE:
+            rec.cache.pop(next(iter(rec.cache)))  # the oldest entry
+        rec.cache[key] = out
     return out
 
+
+def model_signals(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | None,
+                  values: dict, models: list[PairModel] | None = None) -> list[np.ndarray]:
+    """Simulated records (one analysis segment each) of records ``idx`` through the chain:
+    rigid-housing acceleration (or DTE), the effect's measurement stage, the record's noise."""
+    man = rec.bundle.manifest
+    raw = responses(rec, idx, nuisance, eff, values, models)
+    out = []
+    for k, i in enumerate(idx):
+        x = raw[k]
+        if man.quantity.iloc[i] != "dte_m":
+            x = housing_acceleration(x, nuisance["housing_mass_kg"])
+        if eff is not None and eff.record is not None:
+            x = eff.record(x, float(man.fs_hz.iloc[i]), values)
+        rng = np.random.default_rng([rec.settings.seed, int(i)])  # common numbers per record
+        out.append(x + rec.noise_std[i] * rng.standard_normal(x.size))
+    return out
 
 
 def residuals_db(rec: Records, idx: np.ndarray, signals: list[np.ndarray]) -> np.ndarray:
@@ -291,68 +346,154 @@ def from_unit(u: float, lo: float, hi: float, is_log: bool) -> float:
     return lo * (hi / lo) ** u if is_log else lo + u * (hi - lo)
 
 
-def calibrate(rec: Records, start: dict) -> dict:
-    """Fit the declared nuisance parameters on the train records (bounded least squares)."""
-    names = [n for n in NUISANCE if n != "housing_mass_kg" or accel_in(rec)]
-    u0 = np.array([np.clip(to_unit(start[n], *NUISANCE[n]), 0.01, 0.99) for n in names])
-
-    def values(u):
-        return start | {n: from_unit(float(v), *NUISANCE[n]) for n, v in zip(names, u,
-                                                                                 strict=True)}
-
-    def fun(u):
-        return residuals(rec, rec.train, model_signals(rec, rec.train, values(u), None, {}))
-
-    sol = optimize.least_squares(fun, u0, bounds=(0, 1), diff_step=0.02,
-                                 max_nfev=rec.settings.max_nfev * 2)
-    return values(sol.x)
-
-
 def accel_in(rec: Records) -> bool:
     return bool((rec.bundle.manifest.quantity == "accel_m_s2").any())
+
+
+def with_level(rec: Records, nuisance: dict, eff: Effect | None, values: dict) -> dict:
+    """``m_h`` moved so that the model's level matches the train records' (acceleration only).
+
+    ``m_h`` divides every amplitude, so in dB it is an offset of the entries that scale with
+    the record (all but kurtosis and crest factors): one step of its weighted mean residual.
+    The noise does not scale with it, so this is a starting value, not the fit.
+    """
+    if not accel_in(rec):
+        return nuisance
+    res = residuals_db(rec, rec.train, model_signals(rec, rec.train, nuisance, eff, values))
+    w = np.where([n not in SCALE_FREE for n in rec.names], rec.entry_sd**-2.0, 0.0)
+    offset = float(np.sum(res * w) / (res.shape[0] * np.sum(w)))
+    lo, hi, _ = NUISANCE["housing_mass_kg"]
+    return nuisance | {"housing_mass_kg": float(np.clip(
+        nuisance["housing_mass_kg"] * 10 ** (-offset / 20), lo, hi))}
+
+
+def train_cost(rec: Records, nuisance: dict, eff: Effect | None, values: dict) -> float:
+    return float(np.sum(residuals(rec, rec.train, model_signals(rec, rec.train, nuisance, eff,
+                                                                values)) ** 2))
+
+
+def identifiable(rec: Records, nuisance: dict, names: list[str]) -> list[str]:
+    """The nuisance parameters that change the train residuals: each is moved by a tenth of
+    its (log) range; one that moves the standardised residuals by less than 0.02 RMS is not
+    identifiable from these records and stays at its declared value."""
+    r0 = residuals(rec, rec.train, model_signals(rec, rec.train, nuisance, None, {}))
+    out = []
+    for n in names:
+        u = to_unit(nuisance[n], *NUISANCE[n])
+        moved = nuisance | {n: from_unit(u + (0.1 if u < 0.5 else -0.1), *NUISANCE[n])}
+        r1 = residuals(rec, rec.train, model_signals(rec, rec.train, moved, None, {}))
+        if rms(r1 - r0) >= MIN_SENSITIVITY:
+            out.append(n)
+    return out
+
+
+def least_squares(rec: Records, eff: Effect | None, fixed: dict, start: dict,
+                  free: list[tuple[str, float, float, bool]], max_nfev: int) -> tuple[dict,
+                                                                                      float]:
+    """Bounded least squares of the train residuals over ``free`` parameters (name, bounds,
+    log), in unit-scaled coordinates; ``fixed | start`` holds all values, the nuisance's and
+    the effect's. Returns the fitted values and the train chi-square."""
+    def values(u):
+        return fixed | start | {n: from_unit(float(x), lo, hi, lg)
+                                for (n, lo, hi, lg), x in zip(free, u, strict=True)}
+
+    def fun(u):
+        v = values(u)
+        nui = {n: v[n] for n in NUISANCE}
+        return residuals(rec, rec.train, model_signals(rec, rec.train, nui, eff,
+                                                       {k: x for k, x in v.items()
+                                                        if k not in NUISANCE}))
+
+    if not free:
+        return fixed | start, float(np.sum(fun(np.empty(0)) ** 2))
+    u0 = np.array([np.clip(to_unit(start[n], lo, hi, lg), 0.001, 0.999)
+                   for n, lo, hi, lg in free])
+    sol = optimize.least_squares(fun, u0, bounds=(0, 1), diff_step=0.01, max_nfev=max_nfev)
+    return values(sol.x), float(np.sum(sol.fun**2))
 
 
 @dataclass
 class Candidate:
     name: str
     option: dict
-    values: dict
+    values: dict  # the effect's parameters (with its option)
+    nuisance: dict  # refitted with the effect
     train_rss: float
     n_params: int
-    heldout_db: float
+    refined: bool = False
+    heldout_db: float = math.nan
     bic: float = 0.0
 
 
-def fit_effect(rec: Records, eff: Effect, option: dict, nuisance: dict) -> Candidate:
-    """Fit one effect's parameters (and m_h) on the train records; judge it on the test ones."""
-    params = list(eff.params)
-    free = [(p.name, p.low, p.high, p.log) for p in params]
-    if accel_in(rec):
-        free.append(("housing_mass_kg", *NUISANCE["housing_mass_kg"]))
-
-    def split(u):
-        v = {n: from_unit(float(x), lo, hi, lg) for (n, lo, hi, lg), x in zip(free, u,
-                                                                                 strict=True)}
-        return nuisance | {"housing_mass_kg": v.pop("housing_mass_kg",
-                                                    nuisance["housing_mass_kg"])}, option | v
-
-    def fun(u):
-        nui, vals = split(u)
-        return residuals(rec, rec.train, model_signals(rec, rec.train, nui, eff, vals))
-
-    m_unit = [to_unit(nuisance["housing_mass_kg"], *NUISANCE["housing_mass_kg"])]
+def screen_effect(rec: Records, eff: Effect, option: dict, nuisance: dict) -> Candidate:
+    """The effect at a grid of sizes over its parameters' ranges (nuisance at the calibration,
+    ``m_h`` levelled at each), the best grid point kept."""
+    per = 7 if len(eff.params) == 1 else 5
     best = None
-    for start in (0.2, 0.5, 0.8):  # sizes across the realistic range, the best one refined
-        u0 = np.array([start] * len(params) + (m_unit if accel_in(rec) else []))
-        cost = float(np.sum(fun(u0) ** 2))
-        if best is None or cost < best[0]:
-            best = (cost, u0)
-    sol = optimize.least_squares(fun, best[1], bounds=(0, 1), diff_step=0.02,
-                                 max_nfev=rec.settings.max_nfev)
-    nui, vals = split(sol.x)
-    held = residuals(rec, rec.test, model_signals(rec, rec.test, nui, eff, vals))
-    return Candidate(eff.name, option, vals | {"housing_mass_kg": nui["housing_mass_kg"]},
-                     float(np.sum(sol.fun**2)), len(free), rms(held))
+    for u in itertools.product(*[np.linspace(0.05, 0.95, per)] * len(eff.params)):
+        vals = option | {p.name: from_unit(x, p.low, p.high, p.log)
+                         for p, x in zip(eff.params, u, strict=True)}
+        nui = with_level(rec, nuisance, eff, vals)
+        cost = train_cost(rec, nui, eff, vals)
+        if best is None or cost < best.train_rss:
+            best = Candidate(eff.name, option, vals, nui, cost, len(eff.params))
+    return best
+
+
+def explore(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[str]
+            ) -> Candidate:
+    """The best of ``c`` and a scrambled Sobol sample (``settings.explore`` points) over the
+    effect's whole range and the dynamic nuisance within ``EXPLORE_SPAN`` (unit coordinates)
+    of its declared values, ``m_h`` levelled at each. A missing effect drags the calibration
+    (to the bounds, at worst), and least squares from a single start stays in its basin; the
+    declared values are the prior that does not depend on the fit."""
+    params = eff.params if eff is not None else ()
+    dyn = [n for n in free_nuisance if n in DYNAMIC_NUISANCE]
+    prior = declared_nuisance(rec.scenarios[0])
+    dim = len(params) + len(dyn)
+    pts = (qmc.Sobol(dim, seed=rec.settings.seed).random(rec.settings.explore) if dim
+           else np.empty((0, 0)))
+    best = c
+    for u in pts:
+        vals = c.option | {p.name: from_unit(float(x), p.low, p.high, p.log)
+                           for p, x in zip(params, u, strict=False)}
+        nui = dict(c.nuisance)
+        for n, x in zip(dyn, u[len(params):], strict=True):
+            centre = to_unit(prior[n], *NUISANCE[n])
+            nui[n] = from_unit(float(np.clip(centre + EXPLORE_SPAN * (2 * x - 1), 0, 1)),
+                               *NUISANCE[n])
+        nui = with_level(rec, nui, eff, vals)
+        cost = train_cost(rec, nui, eff, vals)
+        if cost < best.train_rss:
+            best = dataclasses.replace(c, values=vals, nuisance=nui, train_rss=cost)
+    return best
+
+
+def search(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[str]
+           ) -> Candidate:
+    """The model's (the declared one's, ``eff`` None, or with an effect) parameters fitted on
+    the train records: the best explored start refined by least squares, the effect's
+    parameters jointly with the identifiable nuisance. The declared model and every refined
+    candidate get the same search."""
+    c = explore(rec, eff, c, free_nuisance)
+    free = [(p.name, p.low, p.high, p.log) for p in (eff.params if eff is not None else ())]
+    free += [(n, *NUISANCE[n]) for n in free_nuisance]
+    fitted, rss = least_squares(rec, eff, c.option, c.values | c.nuisance, free,
+                                rec.settings.max_nfev)
+    return dataclasses.replace(c, values={k: v for k, v in fitted.items() if k not in NUISANCE},
+                               nuisance={n: fitted[n] for n in NUISANCE}, train_rss=rss,
+                               refined=True)
+
+
+def calibrate(rec: Records, start: dict) -> tuple[dict, list[str]]:
+    """Fit the identifiable declared nuisance parameters on the train records (from their
+    declared values); returns the calibrated nuisance and the names of those held at their
+    declared values (not identifiable from these records)."""
+    names = [n for n in NUISANCE if n != "housing_mass_kg" or accel_in(rec)]
+    start = with_level(rec, start, None, {})
+    free = identifiable(rec, start, names)
+    c = Candidate("declared", {}, {}, start, train_cost(rec, start, None, {}), 0)
+    return search(rec, None, c, free).nuisance, [n for n in names if n not in free]
 
 
 def bic(chi2: float, n: int, k: int) -> float:
@@ -417,26 +558,33 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
     settings = settings or LoopSettings()
     candidates = candidates_for(set(bundle.manifest.quantity), settings)
     rec = prepare(bundle, base, settings)
-    nuisance = calibrate(rec, declared_nuisance(base))
+    nuisance, held = calibrate(rec, declared_nuisance(base))
+    free_nuisance = [n for n in DYNAMIC_NUISANCE if n not in held]
+    free_nuisance += ["housing_mass_kg"] if accel_in(rec) else []
     base_train = model_signals(rec, rec.train, nuisance, None, {})
     base_test = model_signals(rec, rec.test, nuisance, None, {})
     null_res = residuals(rec, rec.train, base_train)
     n_train = null_res.size
     null_bic = bic(float(np.sum(null_res**2)), n_train, 0)
     before = rms(residuals(rec, rec.test, base_test))
-    ranking = []
-    for eff, option in tqdm(candidates, desc="candidates", disable=not progress):
-        c = fit_effect(rec, eff, option, nuisance)
+    ranking = [screen_effect(rec, eff, option, nuisance)
+               for eff, option in tqdm(candidates, desc="screening", disable=not progress)]
+    ranking.sort(key=lambda c: c.train_rss)
+    top = settings.refine
+    ranking[:top] = [search(rec, EFFECTS[c.name], c, free_nuisance)
+                     for c in tqdm(ranking[:top], desc="refining", disable=not progress)]
+    for c in ranking:
+        c.heldout_db = rms(residuals(rec, rec.test, model_signals(rec, rec.test, c.nuisance,
+                                                                  EFFECTS[c.name], c.values)))
         c.bic = bic(c.train_rss, n_train, c.n_params)
-        ranking.append(c)
-        log.info("%s %s: held-out %.2f dB (baseline %.2f), dBIC %.1f", c.name, c.option,
-                 c.heldout_db, before, c.bic - null_bic)
+        log.info("%s %s: held-out %.2f (baseline %.2f), dBIC %.1f%s", c.name, c.option,
+                 c.heldout_db, before, c.bic - null_bic, "" if c.refined else " (screened)")
     ranking.sort(key=lambda c: c.heldout_db)
     best = ranking[0]
     adopt = (best.heldout_db <= (1 - settings.min_gain) * before
              and best.bic - null_bic <= -settings.min_delta_bic)
     chosen = EFFECTS[best.name] if adopt else None
-    after_nui = nuisance | ({"housing_mass_kg": best.values["housing_mass_kg"]} if adopt else {})
+    after_nui = best.nuisance if adopt else nuisance
     after_vals = best.values if adopt else {}
     after_test = (model_signals(rec, rec.test, after_nui, chosen, after_vals) if adopt
                   else base_test)
@@ -456,7 +604,8 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
         "mode": "bundle",
         "chosen_effect": chosen.name if chosen else None,
         "chosen_option": best.option if adopt else None,
-        "chosen_parameters": dict(best.values) if adopt else None,
+        "chosen_parameters": ({k: v for k, v in best.values.items() if k not in best.option}
+                              if adopt else None),
         "error_before": before,
         "error_after": rms(residuals(rec, rec.test, after_test)),
         "error_unit": "RMS of the held-out records' signature residuals, each in units of its "
@@ -468,8 +617,12 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
         "wear_error_before_pct": wear_err.get("before"),
         "wear_error_after_pct": wear_err.get("after"),
         "calibration": nuisance,
+        "not_identifiable": held,
+        "nuisance_after": after_nui,
         "null_bic": null_bic,
-        "ranking": [{"effect": c.name, "option": c.option, "parameters": c.values,
+        "ranking": [{"effect": c.name, "option": c.option,
+                     "parameters": {k: v for k, v in c.values.items() if k not in c.option},
+                     "nuisance": c.nuisance, "refined": c.refined,
                      "heldout_error": c.heldout_db, "delta_bic": c.bic - null_bic,
                      "n_params": c.n_params} for c in ranking],
         "decision_rule": {"min_gain": settings.min_gain, "min_delta_bic": settings.min_delta_bic},

@@ -16,7 +16,7 @@ import numpy as np
 import pandas as pd
 
 from physics.bundle import write_bundle
-from physics.dynamics import simulate
+from physics.dynamics import Response, simulate
 from physics.effects import effect
 from physics.loop import declared_nuisance, shaft_rates, with_nuisance, worn_models
 from physics.measurement import add_noise, housing_acceleration
@@ -42,18 +42,20 @@ def make_bundle(path: str | Path, base: Scenario, effect_name: str | None, seed:
     cycles = np.linspace(0.0, cycles_max, records)
     ms = MeshStiffness(base.gear, base.material)
     by_cycles, root = worn_models(base, ms, list(cycles))
-    models = [with_nuisance(by_cycles[float(c)], nuisance, dyn.damping_ratio) for c in cycles]
+    declared = [with_nuisance(by_cycles[float(c)], nuisance, dyn.damping_ratio) for c in cycles]
+    models = declared
     if eff is not None and eff.model is not None:
-        models = [eff.model(m, values) for m in models]
+        models = [eff.model(m, values) for m in declared]
     run = dataclasses.replace(dyn, duration_s=duration_s, transient_s=0.1, phase_bins=16)
-    resp = simulate(models, run)
-    if quantity == "dte_m":
-        x = resp.dte
-    else:
-        x = housing_acceleration(resp.force, nuisance["housing_mass_kg"])
+    clean = chain(simulate(models, run), quantity, nuisance["housing_mass_kg"])
+    plain = (chain(simulate(declared, run), quantity, nuisance["housing_mass_kg"])
+             if models is not declared else clean)
     if eff is not None and eff.record is not None:
-        x = eff.record(x, dyn.sample_rate_hz, values)
-    x = add_noise(x, snr_db, np.random.default_rng([seed, 8]))
+        clean = eff.record(clean, dyn.sample_rate_hz, values)
+    x = add_noise(clean, snr_db, np.random.default_rng([seed, 8]))
+    # the power the effect adds to the records against the noise's (-inf: it adds nothing)
+    with np.errstate(divide="ignore"):
+        effect_db = float(10 * np.log10(np.mean((clean - plain) ** 2) / np.mean((x - clean) ** 2)))
     names = [f"r{k:02d}" for k in range(records)]
     manifest = pd.DataFrame({
         "record": names, "quantity": quantity, "fs_hz": dyn.sample_rate_hz,
@@ -61,5 +63,10 @@ def make_bundle(path: str | Path, base: Scenario, effect_name: str | None, seed:
         "wear_mm": [root[float(c)] for c in cycles], "cycles": cycles, "split": "",
     })
     truth = {"effect": effect_name, "values": values, "nuisance": nuisance, "seed": seed,
-             "f1_hz": shaft_rates(base)[0]}
+             "f1_hz": shaft_rates(base)[0], "effect_to_noise_db": effect_db}
     return write_bundle(path, manifest, dict(zip(names, x, strict=True))), truth
+
+
+def chain(resp: Response, quantity: str, housing_mass_kg: float) -> np.ndarray:
+    """The declared measurement chain's records of a simulated response."""
+    return resp.dte if quantity == "dte_m" else housing_acceleration(resp.force, housing_mass_kg)
