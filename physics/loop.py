@@ -90,6 +90,8 @@ MIN_SENSITIVITY = 0.02
 #: half-width of the nuisance's search around the calibration (unit coordinates: a factor
 #: of 2.3 in damping ratio, of 4 in profile error)
 EXPLORE_SPAN = 0.25
+#: least-squares evaluations that polish a screened candidate's best grid point
+SCREEN_NFEV = 6
 #: simulations kept by :func:`responses`
 CACHE_SIZE = 256
 
@@ -427,7 +429,9 @@ class Candidate:
 
 def screen_effect(rec: Records, eff: Effect, option: dict, nuisance: dict) -> Candidate:
     """The effect at a grid of sizes over its parameters' ranges (nuisance at the calibration,
-    ``m_h`` levelled at each), the best grid point kept."""
+    ``m_h`` levelled at each), the best grid point polished by a short least squares of the
+    effect's parameters and ``m_h`` (a grid step is a factor of 2 in size, too coarse for an
+    effect whose signature is sharp, such as a sensor gain on the DTE mean)."""
     per = 7 if len(eff.params) == 1 else 5
     best = None
     for u in itertools.product(*[np.linspace(0.05, 0.95, per)] * len(eff.params)):
@@ -437,7 +441,11 @@ def screen_effect(rec: Records, eff: Effect, option: dict, nuisance: dict) -> Ca
         cost = train_cost(rec, nui, eff, vals)
         if best is None or cost < best.train_rss:
             best = Candidate(eff.name, option, vals, nui, cost, len(eff.params))
-    return best
+    free = [(p.name, p.low, p.high, p.log) for p in eff.params]
+    free += [("housing_mass_kg", *NUISANCE["housing_mass_kg"])] if accel_in(rec) else []
+    fitted, rss = least_squares(rec, eff, option, best.values | best.nuisance, free, SCREEN_NFEV)
+    return dataclasses.replace(best, values={k: v for k, v in fitted.items() if k not in NUISANCE},
+                               nuisance={n: fitted[n] for n in NUISANCE}, train_rss=rss)
 
 
 def explore(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[str]
