@@ -113,6 +113,8 @@ class LoopSettings:
     max_nfev: int = 20  # least-squares evaluations per fit
     refine: int = 3  # screened candidates refined jointly with the nuisance
     explore: int = 32  # Sobol points searched before each refinement (0 or a power of 2)
+    floor_db: float = 0.3  # model error floor added to each entry's scatter
+    candidates: tuple[str, ...] | None = None  # effects to try; None: the whole library
 
     def __post_init__(self):
         if self.explore < 0 or self.explore & (self.explore - 1):
@@ -121,8 +123,6 @@ class LoopSettings:
         if self.refine < 1:
             raise ValueError(f"loop.refine = {self.refine} must be >= 1 (at least the best "
                              "screened candidate is refined)")
-    floor_db: float = 0.3  # model error floor added to each entry's scatter
-    candidates: tuple[str, ...] | None = None  # effects to try; None: the whole library
 
 
 @dataclass
