@@ -207,6 +207,9 @@ def run_feature_table(df: pd.DataFrame, base: Scenario,
     before = model_features(td, rows, null["nuisance"], None, {})
     after = model_features(td, rows, chosen["nuisance"], eff, chosen["parameters"])
 
+    def effect_values(c: dict) -> dict:  # the fitted parameters, without the option
+        return {k: v for k, v in c["parameters"].items() if k not in c["option"]}
+
     def table(m: np.ndarray) -> dict:
         return {n: m[:, j].tolist() for j, n in enumerate(td.names)}
 
@@ -220,7 +223,7 @@ def run_feature_table(df: pd.DataFrame, base: Scenario,
         "mode": "feature_table",
         "chosen_effect": chosen["effect"],
         "chosen_option": best["option"] if adopt else None,
-        "chosen_parameters": chosen["parameters"] | chosen["nuisance"] if adopt else None,
+        "chosen_parameters": effect_values(chosen) if adopt else None,
         "error_before": null["heldout"],
         "error_after": chosen["heldout"],
         "error_unit": "RMS natural-log ratio of the features, leave-one-row-out",
@@ -229,9 +232,11 @@ def run_feature_table(df: pd.DataFrame, base: Scenario,
         "wear_error_before_pct": None,
         "wear_error_after_pct": None,
         "calibration": nuisance,
+        "calibrated_on": "the least-worn row",
+        "nuisance_after": chosen["nuisance"],
         "null_bic": null["bic"],
         "ranking": [{"effect": c["effect"], "option": c["option"],
-                     "parameters": c["parameters"] | c["nuisance"],
+                     "parameters": effect_values(c), "nuisance": c["nuisance"],
                      "heldout_error": c["heldout"], "delta_bic": c["bic"] - null["bic"],
                      "n_params": c["n_params"]} for c in ranking],
         "decision_rule": {"min_gain": settings.min_gain, "min_delta_bic": settings.min_delta_bic},

@@ -625,6 +625,7 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
         "wear_error_before_pct": wear_err.get("before"),
         "wear_error_after_pct": wear_err.get("after"),
         "calibration": nuisance,
+        "calibrated_on": "the train records",
         "not_identifiable": held,
         "nuisance_after": after_nui,
         "null_bic": null_bic,

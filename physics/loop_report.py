@@ -36,21 +36,23 @@ def markdown(r: dict) -> str:
         lines.append(f"| wear estimate [% mean rel.] | {r['wear_error_before_pct']:.2f} | "
                      f"{r['wear_error_after_pct']:.2f} |")
     cal = ", ".join(f"{k} = {v:.4g}" for k, v in r["calibration"].items())
-    lines += ["", f"Calibrated nuisance parameters (train records): {cal}."]
+    lines += ["", f"Calibrated nuisance parameters ({r['calibrated_on']}): "
+              f"{cal}."]
     if r.get("not_identifiable"):
         lines.append(f"Not identifiable from these records (held at the declared value): "
                      f"{', '.join(r['not_identifiable'])}.")
     if chosen and r.get("nuisance_after"):
         after = ", ".join(f"{k} = {v:.4g}" for k, v in r["nuisance_after"].items())
         lines.append(f"Refitted with the chosen effect: {after}.")
+    staged = any("refined" in c for c in r["ranking"])  # bundles: screened, then refined
     lines += ["", "## Ranking (held-out error; BIC relative to the calibrated model)", "",
-              "| effect | option | held-out error | dBIC | parameters | fit |",
-              "|---|---|---|---|---|---|"]
+              "| effect | option | held-out error | dBIC | parameters |" + (" fit |" * staged),
+              "|---|---|---|---|---|" + ("---|" * staged)]
     for c in r["ranking"]:
         p = ", ".join(f"{k}={v:.3g}" for k, v in c["parameters"].items() if isinstance(v, float))
-        fit = "" if "refined" not in c else ("refined" if c["refined"] else "screened")
+        fit = (" refined |" if c["refined"] else " screened |") if staged else ""
         lines.append(f"| {c['effect']} | {c['option'] or ''} | {c['heldout_error']:.3f} | "
-                     f"{c['delta_bic']:.1f} | {p} | {fit} |")
+                     f"{c['delta_bic']:.1f} | {p} |{fit}")
     rule = r["decision_rule"]
     lines += ["", f"Decision rule: adopt the best candidate only if it cuts the held-out error "
               f"by at least {rule['min_gain']:.0%} and the BIC by at least "
