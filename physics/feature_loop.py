@@ -192,7 +192,7 @@ def run_feature_table(df: pd.DataFrame, base: Scenario,
         held = np.concatenate(held)
         n = len(rows) * len(td.names)
         return {"effect": eff.name if eff else None, "option": option, "nuisance": nui,
-                "parameters": vals, "n_params": len(free), "rss": rss,
+                "parameters": vals, "n_params": len(eff.params) if eff else 0, "rss": rss,
                 "bic": n * math.log(rss / n) + len(free) * math.log(n),
                 "heldout": float(np.sqrt(np.mean(held**2)))}
 

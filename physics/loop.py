@@ -22,13 +22,15 @@ its run folder.
 3. **Residual**: the signature of :mod:`physics.order_analysis` (mesh harmonics with pinion and
    gear sidebands up to 0.45 fs, half-octave bands, statistics, synchronous-average kurtosis,
    all in dB) of measurement minus calibrated model, per entry, divided by the entry's scatter
-   between the measured records' segments (pooled over records, plus a floor ``floor_db``):
-   a standardised residual whose RMS is about 1 where model and measurement agree up to noise.
+   between the measured records' segments (pooled over the train records, plus a floor
+   ``floor_db``): a standardised residual whose RMS is about 1 where model and measurement
+   agree up to noise.
 4. **Attribution**: every effect of :mod:`physics.effects` that can show in the bundle's
    quantities is added in turn. Screening: the effect at a grid of sizes, nuisance at the
-   calibration. The best ``refine`` candidates by train chi-square then get the same search as
-   the calibration, their parameters jointly with the identifiable nuisance (a missing effect
-   biases the calibration, at worst to its bounds, so the nuisance must move with the effect).
+   calibration, the best size polished by a short least squares. The best ``refine``
+   candidates by train chi-square then get the same search as the calibration, their
+   parameters jointly with the identifiable nuisance (a missing effect biases the
+   calibration, at worst to its bounds, so the nuisance must move with the effect).
    Candidates are ranked by held-out error (RMS standardised residual over the test records)
    with the Bayesian information criterion on the train records beside it (chi-square plus
    k ln n, the scatter being known, k the effect's parameters).
@@ -87,7 +89,7 @@ DYNAMIC_NUISANCE = ("damping_ratio", "eccentricity1_um", "profile_error_um")
 SCALE_FREE = ("kurtosis", "crest", "tsa_kurtosis")
 #: RMS change of the standardised train residuals below which a parameter is not identifiable
 MIN_SENSITIVITY = 0.02
-#: half-width of the nuisance's search around the calibration (unit coordinates: a factor
+#: half-width of the nuisance's search around its declared values (unit coordinates: a factor
 #: of 2.3 in damping ratio, of 4 in profile error)
 EXPLORE_SPAN = 0.25
 #: least-squares evaluations that polish a screened candidate's best grid point
@@ -110,7 +112,7 @@ class LoopSettings:
     min_gain: float = 0.2  # adopt an effect only if it cuts the held-out error by this share
     min_delta_bic: float = 10.0
     wear_grid: int = 10  # wear states of the model-based wear estimate
-    max_nfev: int = 20  # least-squares evaluations per fit
+    max_nfev: int = 20  # least-squares evaluations per fit (Jacobian's not counted)
     refine: int = 3  # screened candidates refined jointly with the nuisance
     explore: int = 32  # Sobol points searched before each refinement (0 or a power of 2)
     floor_db: float = 0.3  # model error floor added to each entry's scatter
@@ -216,8 +218,10 @@ def prepare(bundle: Bundle, base: Scenario, settings: LoopSettings) -> Records:
         raise ValueError(f"every record needs at least two analysis segments of "
                          f"{settings.segment_s:g} s (their scatter is the noise of the "
                          "comparison); lengthen the records or shorten segment_s")
-    # one-segment model against an n-segment mean: var = sd^2 (1 + 1/n); pooled over records
-    var = np.median([s.var(axis=0, ddof=1) * (1 + 1 / s.shape[0]) for s in segments], axis=0)
+    # one-segment model against an n-segment mean: var = sd^2 (1 + 1/n); pooled over the train
+    # records (the test records' data enter only their own residuals)
+    var = np.median([segments[i].var(axis=0, ddof=1) * (1 + 1 / segments[i].shape[0])
+                     for i in train], axis=0)
     entry_sd = np.sqrt(var + settings.floor_db**2)
     f1, f2 = shaft_rates(scenarios[0])
     names = signature_names(f1, f2, base.gear.z1, fs[0], man.quantity.iloc[0] == "dte_m")
@@ -295,6 +299,8 @@ def responses(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | None,
         for j, k in enumerate(sel):
             out[k] = resp.dte[j] if man.quantity.iloc[idx[k]] == "dte_m" else resp.force[j]
     if key is not None:
+        for x in out:
+            x.flags.writeable = False  # shared by every later call with this key
         if len(rec.cache) >= CACHE_SIZE:
             rec.cache.pop(next(iter(rec.cache)))  # the oldest entry
         rec.cache[key] = out
@@ -374,10 +380,10 @@ def train_cost(rec: Records, nuisance: dict, eff: Effect | None, values: dict) -
                                                                 values)) ** 2))
 
 
-def identifiable(rec: Records, nuisance: dict, names: list[str]) -> list[str]:
-    """The nuisance parameters that change the train residuals: each is moved by a tenth of
-    its (log) range; one that moves the standardised residuals by less than 0.02 RMS is not
-    identifiable from these records and stays at its declared value."""
+def identifiable(rec: Records, nuisance: dict, names: tuple[str, ...]) -> list[str]:
+    """Those of ``names`` that change the train residuals: each is moved by a tenth of its
+    (log) range; one that moves the standardised residuals by less than ``MIN_SENSITIVITY``
+    RMS is not identifiable from these records and stays at its declared value."""
     r0 = residuals(rec, rec.train, model_signals(rec, rec.train, nuisance, None, {}))
     out = []
     for n in names:
@@ -387,6 +393,12 @@ def identifiable(rec: Records, nuisance: dict, names: list[str]) -> list[str]:
         if rms(r1 - r0) >= MIN_SENSITIVITY:
             out.append(n)
     return out
+
+
+def split_fitted(fitted: dict) -> tuple[dict, dict]:
+    """(effect values with option, nuisance) of a fitted parameter set."""
+    return ({k: v for k, v in fitted.items() if k not in NUISANCE},
+            {n: fitted[n] for n in NUISANCE})
 
 
 def least_squares(rec: Records, eff: Effect | None, fixed: dict, start: dict,
@@ -400,11 +412,8 @@ def least_squares(rec: Records, eff: Effect | None, fixed: dict, start: dict,
                                 for (n, lo, hi, lg), x in zip(free, u, strict=True)}
 
     def fun(u):
-        v = values(u)
-        nui = {n: v[n] for n in NUISANCE}
-        return residuals(rec, rec.train, model_signals(rec, rec.train, nui, eff,
-                                                       {k: x for k, x in v.items()
-                                                        if k not in NUISANCE}))
+        vals, nui = split_fitted(values(u))
+        return residuals(rec, rec.train, model_signals(rec, rec.train, nui, eff, vals))
 
     if not free:
         return fixed | start, float(np.sum(fun(np.empty(0)) ** 2))
@@ -423,15 +432,15 @@ class Candidate:
     train_rss: float
     n_params: int
     refined: bool = False
-    heldout_db: float = math.nan
+    heldout: float = math.nan
     bic: float = 0.0
 
 
 def screen_effect(rec: Records, eff: Effect, option: dict, nuisance: dict) -> Candidate:
     """The effect at a grid of sizes over its parameters' ranges (nuisance at the calibration,
     ``m_h`` levelled at each), the best grid point polished by a short least squares of the
-    effect's parameters and ``m_h`` (a grid step is a factor of 2 in size, too coarse for an
-    effect whose signature is sharp, such as a sensor gain on the DTE mean)."""
+    effect's parameters and ``m_h`` (a grid step is a seventh of the range, a factor of 1.4
+    even for a sensor gain, too coarse for a signature as sharp as a gain on the DTE mean)."""
     per = 7 if len(eff.params) == 1 else 5
     best = None
     for u in itertools.product(*[np.linspace(0.05, 0.95, per)] * len(eff.params)):
@@ -444,8 +453,8 @@ def screen_effect(rec: Records, eff: Effect, option: dict, nuisance: dict) -> Ca
     free = [(p.name, p.low, p.high, p.log) for p in eff.params]
     free += [("housing_mass_kg", *NUISANCE["housing_mass_kg"])] if accel_in(rec) else []
     fitted, rss = least_squares(rec, eff, option, best.values | best.nuisance, free, SCREEN_NFEV)
-    return dataclasses.replace(best, values={k: v for k, v in fitted.items() if k not in NUISANCE},
-                               nuisance={n: fitted[n] for n in NUISANCE}, train_rss=rss)
+    vals, nui = split_fitted(fitted)
+    return dataclasses.replace(best, values=vals, nuisance=nui, train_rss=rss)
 
 
 def explore(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[str]
@@ -488,20 +497,20 @@ def search(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[s
     free += [(n, *NUISANCE[n]) for n in free_nuisance]
     fitted, rss = least_squares(rec, eff, c.option, c.values | c.nuisance, free,
                                 rec.settings.max_nfev)
-    return dataclasses.replace(c, values={k: v for k, v in fitted.items() if k not in NUISANCE},
-                               nuisance={n: fitted[n] for n in NUISANCE}, train_rss=rss,
-                               refined=True)
+    vals, nui = split_fitted(fitted)
+    return dataclasses.replace(c, values=vals, nuisance=nui, train_rss=rss, refined=True)
 
 
 def calibrate(rec: Records, start: dict) -> tuple[dict, list[str]]:
-    """Fit the identifiable declared nuisance parameters on the train records (from their
-    declared values); returns the calibrated nuisance and the names of those held at their
-    declared values (not identifiable from these records)."""
-    names = [n for n in NUISANCE if n != "housing_mass_kg" or accel_in(rec)]
+    """Fit the declared nuisance parameters on the train records (from their declared
+    values); returns the calibrated nuisance and the names of the free ones. ``m_h`` scales
+    every acceleration amplitude and is always free for acceleration records; a dynamic
+    parameter that is not identifiable stays at its declared value."""
     start = with_level(rec, start, None, {})
-    free = identifiable(rec, start, names)
+    free = identifiable(rec, start, DYNAMIC_NUISANCE)
+    free += ["housing_mass_kg"] if accel_in(rec) else []
     c = Candidate("declared", {}, {}, start, train_cost(rec, start, None, {}), 0)
-    return search(rec, None, c, free).nuisance, [n for n in names if n not in free]
+    return search(rec, None, c, free).nuisance, free
 
 
 def bic(chi2: float, n: int, k: int) -> float:
@@ -566,9 +575,7 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
     settings = settings or LoopSettings()
     candidates = candidates_for(set(bundle.manifest.quantity), settings)
     rec = prepare(bundle, base, settings)
-    nuisance, held = calibrate(rec, declared_nuisance(base))
-    free_nuisance = [n for n in DYNAMIC_NUISANCE if n not in held]
-    free_nuisance += ["housing_mass_kg"] if accel_in(rec) else []
+    nuisance, free_nuisance = calibrate(rec, declared_nuisance(base))
     base_train = model_signals(rec, rec.train, nuisance, None, {})
     base_test = model_signals(rec, rec.test, nuisance, None, {})
     null_res = residuals(rec, rec.train, base_train)
@@ -582,14 +589,14 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
     ranking[:top] = [search(rec, EFFECTS[c.name], c, free_nuisance)
                      for c in tqdm(ranking[:top], desc="refining", disable=not progress)]
     for c in ranking:
-        c.heldout_db = rms(residuals(rec, rec.test, model_signals(rec, rec.test, c.nuisance,
+        c.heldout = rms(residuals(rec, rec.test, model_signals(rec, rec.test, c.nuisance,
                                                                   EFFECTS[c.name], c.values)))
         c.bic = bic(c.train_rss, n_train, c.n_params)
         log.info("%s %s: held-out %.2f (baseline %.2f), dBIC %.1f%s", c.name, c.option,
-                 c.heldout_db, before, c.bic - null_bic, "" if c.refined else " (screened)")
-    ranking.sort(key=lambda c: c.heldout_db)
+                 c.heldout, before, c.bic - null_bic, "" if c.refined else " (screened)")
+    ranking.sort(key=lambda c: c.heldout)
     best = ranking[0]
-    adopt = (best.heldout_db <= (1 - settings.min_gain) * before
+    adopt = (best.heldout <= (1 - settings.min_gain) * before
              and best.bic - null_bic <= -settings.min_delta_bic)
     chosen = EFFECTS[best.name] if adopt else None
     after_nui = best.nuisance if adopt else nuisance
@@ -608,6 +615,7 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
             ok = true > 0
             wear_err[key] = (float(np.mean(np.abs(est[ok] - true[ok]) / true[ok]) * 100)
                              if ok.any() else float(np.mean(np.abs(est - true))))
+    rec.cache.clear()  # the report keeps the records, not the simulations
     return {
         "mode": "bundle",
         "chosen_effect": chosen.name if chosen else None,
@@ -626,13 +634,13 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
         "wear_error_after_pct": wear_err.get("after"),
         "calibration": nuisance,
         "calibrated_on": "the train records",
-        "not_identifiable": held,
+        "not_identifiable": [n for n in DYNAMIC_NUISANCE if n not in free_nuisance],
         "nuisance_after": after_nui,
         "null_bic": null_bic,
         "ranking": [{"effect": c.name, "option": c.option,
                      "parameters": {k: v for k, v in c.values.items() if k not in c.option},
                      "nuisance": c.nuisance, "refined": c.refined,
-                     "heldout_error": c.heldout_db, "delta_bic": c.bic - null_bic,
+                     "heldout_error": c.heldout, "delta_bic": c.bic - null_bic,
                      "n_params": c.n_params} for c in ranking],
         "decision_rule": {"min_gain": settings.min_gain, "min_delta_bic": settings.min_delta_bic},
         "train_records": [bundle.records[i] for i in rec.train],
