@@ -184,9 +184,9 @@ def run_feature_table(df: pd.DataFrame, base: Scenario,
         free = ([(p.name, p.low, p.high, p.log) for p in eff.params] if eff else []) + refit
         nui, vals, rss = _fit(td, rows, free, nuisance, eff, option)
         held = []
-        for r in rows:  # leave one row out
+        for r in rows:  # leave one row out: the same fit, blind to the row
             keep = rows[rows != r]
-            n_k, v_k, _ = _fit(td, keep, free, nui, eff, vals)
+            n_k, v_k, _ = _fit(td, keep, free, nuisance, eff, option)
             held.append(_log_ratio(td, np.array([r]), model_features(td, np.array([r]), n_k,
                                                                      eff, v_k)))
         held = np.concatenate(held)
