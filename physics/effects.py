@@ -77,6 +77,10 @@ class Effect:
     def defaults(self) -> dict:
         return {p.name: p.typical for p in self.params} | dict(self.options[0])
 
+    def bounds(self) -> list[tuple[str, float, float, bool]]:
+        """(name, low, high, log) of each parameter: the free-parameter form of the fits."""
+        return [(p.name, p.low, p.high, p.log) for p in self.params]
+
 
 def _gear_runout(m: PairModel, v: dict) -> PairModel:
     """Eccentricity e of the gear: its line-of-action component e sin(aw) is a kinematic error

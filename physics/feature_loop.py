@@ -45,7 +45,7 @@ from physics.loop import (
     with_nuisance,
     worn_models,
 )
-from physics.measurement import housing_acceleration
+from physics.measurement import declared_chain, sensed
 from physics.params import Scenario
 from physics.stiffness import MeshStiffness
 
@@ -114,8 +114,7 @@ def model_features(td: TableData, rows: np.ndarray, nuisance: dict, eff: Effect 
     run = dataclasses.replace(dyn, duration_s=td.settings.segment_s,
                               transient_s=td.settings.transient_s, phase_bins=16)
     resp = simulate(ms, run)
-    x = resp.dte if td.quantity == "dte_m" else housing_acceleration(
-        resp.force, nuisance["housing_mass_kg"])
+    x = declared_chain(sensed(resp, td.quantity), td.quantity, nuisance["housing_mass_kg"])
     if eff is not None and eff.record is not None:
         x = eff.record(x, dyn.sample_rate_hz, values)
     rng = np.random.default_rng(td.settings.seed)
@@ -181,7 +180,7 @@ def run_feature_table(df: pd.DataFrame, base: Scenario,
     refit = [*gain, _noise_bounds(td)]  # refitted with every candidate and every fold
 
     def judge(eff: Effect | None, option: dict) -> dict:
-        free = ([(p.name, p.low, p.high, p.log) for p in eff.params] if eff else []) + refit
+        free = (eff.bounds() if eff else []) + refit
         nui, vals, rss = _fit(td, rows, free, nuisance, eff, option)
         held = []
         for r in rows:  # leave one row out: the same fit, blind to the row

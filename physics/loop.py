@@ -68,7 +68,7 @@ from physics.dynamics import PairModel, build_model, simulate
 from physics.effects import EFFECTS, Effect
 from physics.evolution import root_wear_evolution, simulate_dynamic_wear
 from physics.features import FEATURES, features
-from physics.measurement import housing_acceleration
+from physics.measurement import declared_chain, sensed
 from physics.order_analysis import (
     signature,
     signature_names,
@@ -297,7 +297,7 @@ def responses(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | None,
                                   transient_s=rec.settings.transient_s, phase_bins=16)
         resp = simulate([ms[k] for k in sel], dyn)
         for j, k in enumerate(sel):
-            out[k] = resp.dte[j] if man.quantity.iloc[idx[k]] == "dte_m" else resp.force[j]
+            out[k] = sensed(resp, man.quantity.iloc[idx[k]])[j]
     if key is not None:
         for x in out:
             x.flags.writeable = False  # shared by every later call with this key
@@ -315,9 +315,7 @@ def model_signals(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | N
     raw = responses(rec, idx, nuisance, eff, values, models)
     out = []
     for k, i in enumerate(idx):
-        x = raw[k]
-        if man.quantity.iloc[i] != "dte_m":
-            x = housing_acceleration(x, nuisance["housing_mass_kg"])
+        x = declared_chain(raw[k], man.quantity.iloc[i], nuisance["housing_mass_kg"])
         if eff is not None and eff.record is not None:
             x = eff.record(x, float(man.fs_hz.iloc[i]), values)
         rng = np.random.default_rng([rec.settings.seed, int(i)])  # common numbers per record
@@ -450,7 +448,7 @@ def screen_effect(rec: Records, eff: Effect, option: dict, nuisance: dict) -> Ca
         cost = train_cost(rec, nui, eff, vals)
         if best is None or cost < best.train_rss:
             best = Candidate(eff.name, option, vals, nui, cost, len(eff.params))
-    free = [(p.name, p.low, p.high, p.log) for p in eff.params]
+    free = eff.bounds()
     free += [("housing_mass_kg", *NUISANCE["housing_mass_kg"])] if accel_in(rec) else []
     fitted, rss = least_squares(rec, eff, option, best.values | best.nuisance, free, SCREEN_NFEV)
     vals, nui = split_fitted(fitted)
@@ -493,7 +491,7 @@ def search(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[s
     parameters jointly with the identifiable nuisance. The declared model and every refined
     candidate get the same search."""
     c = explore(rec, eff, c, free_nuisance)
-    free = [(p.name, p.low, p.high, p.log) for p in (eff.params if eff is not None else ())]
+    free = eff.bounds() if eff is not None else []
     free += [(n, *NUISANCE[n]) for n in free_nuisance]
     fitted, rss = least_squares(rec, eff, c.option, c.values | c.nuisance, free,
                                 rec.settings.max_nfev)

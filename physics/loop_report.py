@@ -36,8 +36,7 @@ def markdown(r: dict) -> str:
         lines.append(f"| wear estimate [% mean rel.] | {r['wear_error_before_pct']:.2f} | "
                      f"{r['wear_error_after_pct']:.2f} |")
     cal = ", ".join(f"{k} = {v:.4g}" for k, v in r["calibration"].items())
-    lines += ["", f"Calibrated nuisance parameters ({r['calibrated_on']}): "
-              f"{cal}."]
+    lines += ["", f"Calibrated nuisance parameters ({r['calibrated_on']}): {cal}."]
     if r.get("not_identifiable"):
         lines.append(f"Not identifiable from these records (held at the declared value): "
                      f"{', '.join(r['not_identifiable'])}.")

@@ -10,7 +10,12 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
+
+if TYPE_CHECKING:
+    from physics.dynamics import Response
 
 
 def housing_acceleration(force: np.ndarray, housing_mass_kg: float) -> np.ndarray:
@@ -18,6 +23,18 @@ def housing_acceleration(force: np.ndarray, housing_mass_kg: float) -> np.ndarra
     if not housing_mass_kg > 0:
         raise ValueError(f"housing_mass_kg = {housing_mass_kg!r} must be > 0 (kg)")
     return (force - force.mean(axis=-1, keepdims=True)) / housing_mass_kg
+
+
+def sensed(resp: Response, quantity: str) -> np.ndarray:
+    """The response a record of ``quantity`` is made from: DTE for ``dte_m``, the dynamic mesh
+    force for housing acceleration (``accel_m_s2``), one row per simulated model."""
+    return resp.dte if quantity == "dte_m" else resp.force
+
+
+def declared_chain(x: np.ndarray, quantity: str, housing_mass_kg: float) -> np.ndarray:
+    """The declared chain applied to :func:`sensed`: DTE as it is, the force through the rigid
+    housing."""
+    return x if quantity == "dte_m" else housing_acceleration(x, housing_mass_kg)
 
 
 def add_noise(x: np.ndarray, snr_db: float, rng: np.random.Generator) -> np.ndarray:

@@ -16,10 +16,10 @@ import numpy as np
 import pandas as pd
 
 from physics.bundle import write_bundle
-from physics.dynamics import Response, simulate
+from physics.dynamics import simulate
 from physics.effects import effect
 from physics.loop import declared_nuisance, shaft_rates, with_nuisance, worn_models
-from physics.measurement import add_noise, housing_acceleration
+from physics.measurement import add_noise, declared_chain, sensed
 from physics.params import Scenario
 from physics.stiffness import MeshStiffness
 
@@ -47,9 +47,12 @@ def make_bundle(path: str | Path, base: Scenario, effect_name: str | None, seed:
     if eff is not None and eff.model is not None:
         models = [eff.model(m, values) for m in declared]
     run = dataclasses.replace(dyn, duration_s=duration_s, transient_s=0.1, phase_bins=16)
-    clean = chain(simulate(models, run), quantity, nuisance["housing_mass_kg"])
-    plain = (chain(simulate(declared, run), quantity, nuisance["housing_mass_kg"])
-             if models is not declared else clean)
+    def chain(ms):
+        return declared_chain(sensed(simulate(ms, run), quantity), quantity,
+                              nuisance["housing_mass_kg"])
+
+    clean = chain(models)
+    plain = chain(declared) if models is not declared else clean
     if eff is not None and eff.record is not None:
         clean = eff.record(clean, dyn.sample_rate_hz, values)
     x = add_noise(clean, snr_db, np.random.default_rng([seed, 8]))
@@ -65,8 +68,3 @@ def make_bundle(path: str | Path, base: Scenario, effect_name: str | None, seed:
     truth = {"effect": effect_name, "values": values, "nuisance": nuisance, "seed": seed,
              "f1_hz": shaft_rates(base)[0], "effect_to_noise_db": effect_db}
     return write_bundle(path, manifest, dict(zip(names, x, strict=True))), truth
-
-
-def chain(resp: Response, quantity: str, housing_mass_kg: float) -> np.ndarray:
-    """The declared measurement chain's records of a simulated response."""
-    return resp.dte if quantity == "dte_m" else housing_acceleration(resp.force, housing_mass_kg)
