@@ -1,37 +1,26 @@
 """Train the wear surrogate: ``python train.py case=3`` (see ``python train.py --help``).
 
-Hydra takes a number after ``=`` as an integer and refuses integers as config-group choices, so
-``case=3`` (and ``case=1,2,3``) is passed on as ``case='3'`` (``'1','2','3'``); nothing else of
-the command line is touched.
+``case`` is a plain key of the train config (``conf/train/train.yaml``): 1-5 for one operating
+case of thesis Table 11, ``all`` for one network of the five.
 """
 
 from __future__ import annotations
 
-import re
-import sys
-
 import hydra
 from omegaconf import DictConfig
 
-_CASE = re.compile(r"^(\+{0,2}case=)([0-9]+(?:,[0-9]+)*)$")
+from physics.command import run_command
+from surrogate import settings
+
+settings.register()
 
 
-def quote_case_choices(argv: list[str]) -> list[str]:
-    """``case=3`` -> ``case='3'``, ``case=1,2`` -> ``case='1','2'``; other arguments unchanged."""
-    out = []
-    for arg in argv:
-        m = _CASE.match(arg)
-        out.append(m.group(1) + ",".join(f"'{c}'" for c in m.group(2).split(",")) if m else arg)
-    return out
-
-
-@hydra.main(version_base="1.3", config_path="conf", config_name="train")
+@hydra.main(version_base="1.3", config_path="pkg://gearwear_conf.train", config_name="train")
 def main(cfg: DictConfig) -> float:
-    from surrogate.training import train  # after Hydra parsed the command line: fast --help
+    from surrogate.training import fit, kept, prepare  # after Hydra parsed the command line
 
-    return train(cfg)
+    return run_command(cfg, prepare, fit, kept)
 
 
 if __name__ == "__main__":
-    sys.argv = quote_case_choices(sys.argv)
     main()

@@ -20,8 +20,8 @@ import numpy as np
 import pandas as pd
 from hydra import compose, initialize_config_dir
 
-from physics.empirical_inverse import EmpiricalInverse
-from physics.generate import generate
+from physics.dataset.__main__ import generate
+from physics.estimators.empirical_inverse import EmpiricalInverse
 
 CONF = str(Path(__file__).resolve().parents[1] / "conf")
 

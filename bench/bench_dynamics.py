@@ -17,10 +17,10 @@ import warnings
 import numba
 import numpy as np
 
-from physics.dynamics import build_model, simulate, simulate_two_dof
-from physics.evolution import root_wear_evolution
+from physics.dynamics.evolution import root_wear_evolution
+from physics.dynamics.model import build_model, simulate, simulate_two_dof
+from physics.gear.stiffness import SainsotRangeWarning
 from physics.params import Scenario, scenario_from_config
-from physics.stiffness import SainsotRangeWarning
 
 warnings.simplefilter("ignore", SainsotRangeWarning)
 

@@ -24,11 +24,11 @@ from pathlib import Path
 
 import pandas as pd
 
-from physics.bundle import read_bundle
-from physics.effects import EFFECTS
-from physics.loop import LoopSettings, model_signals, residuals, rms, run_loop
+from physics.loop.bundle import read_bundle
+from physics.loop.bundle_loop import LoopSettings, model_signals, residuals, rms, run_loop
+from physics.loop.effects import EFFECTS
+from physics.loop.synthetic import make_bundle
 from physics.params import scenario_from_config
-from physics.synthetic import make_bundle
 
 #: effect-to-noise power [dB] below which an effect has not changed the records (round-off)
 ABSENT_DB = -100.0

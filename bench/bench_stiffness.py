@@ -16,11 +16,11 @@ import warnings
 import numpy as np
 from scipy.integrate import IntegrationWarning, quad
 
-from physics.load_sharing import pair_loads
+from physics.gear.load_sharing import pair_loads
+from physics.gear.stiffness import MeshStiffness, SainsotRangeWarning
+from physics.gear.tooth_fem import fe_pair_stiffness
 from physics.params import GearPair, Material, Scenario
-from physics.stiffness import MeshStiffness, SainsotRangeWarning
-from physics.tooth_fem import fe_pair_stiffness
-from physics.wear import quasi_static_force
+from physics.tribology.wear import quasi_static_force
 
 warnings.simplefilter("ignore", SainsotRangeWarning)
 warnings.simplefilter("ignore", IntegrationWarning)  # the reference quad on a polyline

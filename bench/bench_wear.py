@@ -18,8 +18,8 @@ import numpy as np
 from hydra import compose, initialize_config_dir
 
 from physics.params import Scenario
-from physics.reproduce import reproduce
-from physics.wear import simulate_wear, wear_rate
+from physics.reproduce.thesis import reproduce
+from physics.tribology.wear import simulate_wear, wear_rate
 
 ROOT = Path(__file__).resolve().parents[1]
 

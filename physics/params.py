@@ -13,19 +13,62 @@ the value, the allowed range and how to fix it, before any computation starts.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
-from pathlib import Path
+import numbers
+from dataclasses import dataclass, field, fields
+from importlib.resources import files
+from importlib.resources.abc import Traversable
 from typing import Any
 
 R_GAS = 8.314462618  # J/(mol K), CODATA 2018 molar gas constant
 
 
-def _check_range(owner: str, name: str, value: float, lo: float, hi: float, hint: str = "") -> None:
-    """Raise ``ValueError`` unless ``lo < value < hi`` (open interval, finite)."""
-    ok = isinstance(value, int | float) and not isinstance(value, bool)
-    if not (ok and math.isfinite(value) and lo < value < hi):
-        rule = f"must lie in ({lo:g}, {hi:g})"
-        raise ValueError(f"{owner}.{name} = {value!r} {rule}" + (f"; {hint}" if hint else ""))
+def bounded(default: Any, lo: float, hi: float, hint: str = "", *, closed: bool = False,
+            whole: bool = False) -> Any:
+    """A numeric field with its allowed range (``lo < v < hi``; ``closed``: ``lo <= v < hi``;
+    ``whole``: a whole number in ``[lo, hi]``) and a hint for the fix, checked by
+    :func:`validate_fields`."""
+    return field(default=default, metadata={"lo": lo, "hi": hi, "hint": hint, "closed": closed,
+                                            "whole": whole})
+
+
+def choice(default: str, *allowed: str) -> Any:
+    """A text field restricted to ``allowed``."""
+    return field(default=default, metadata={"choices": allowed})
+
+
+def _fail(owner: str, name: str, value: Any, rule: str, hint: str = "") -> ValueError:
+    return ValueError(f"{owner}.{name} = {value!r} {rule}" + (f"; {hint}" if hint else ""))
+
+
+def validate_fields(obj: Any, owner: str) -> None:
+    """Check and normalise every field of dataclass ``obj`` declared with :func:`bounded` or
+    :func:`choice`: numpy scalars and integral floats become plain ``int``/``float``; a value
+    of the wrong type or outside its range raises ``ValueError`` naming the field, the value,
+    the rule and the fix. ``None`` passes where the default is ``None``."""
+    for f in fields(obj):
+        meta, v = f.metadata, getattr(obj, f.name)
+        if v is None and f.default is None:
+            continue
+        if "choices" in meta:
+            if v not in meta["choices"]:
+                raise _fail(owner, f.name, v, f"must be one of {list(meta['choices'])}")
+            continue
+        if "lo" not in meta:
+            continue
+        lo, hi, hint = meta["lo"], meta["hi"], meta["hint"]
+        if meta["whole"]:
+            ok = isinstance(v, numbers.Integral) or (isinstance(v, float) and v.is_integer())
+            if isinstance(v, bool) or not ok or not lo <= v <= hi:
+                raise _fail(owner, f.name, v, f"must be a whole number in [{lo:g}, {hi:g}]", hint)
+            object.__setattr__(obj, f.name, int(v))
+            continue
+        if isinstance(v, bool) or not isinstance(v, numbers.Real) or not math.isfinite(v):
+            raise _fail(owner, f.name, v, "must be a finite number", hint)
+        inside = lo <= v < hi if meta["closed"] else lo < v < hi
+        if not inside:
+            left = "[" if meta["closed"] else "("
+            raise _fail(owner, f.name, v, f"must lie in {left}{lo:g}, {hi:g})", hint)
+        object.__setattr__(obj, f.name, float(v))
 
 
 @dataclass(frozen=True)
@@ -37,47 +80,37 @@ class GearPair:
     shaft and a gear on a 30 mm shaft, and the ISO 53 profile A cutter tip radius 0.38 m.
     """
 
-    module_mm: float = 2.0
-    z1: int = 18
-    z2: int = 27
-    pressure_angle_deg: float = 20.0
-    face_width_mm: float = 30.0
-    ha_star: float = 1.0
-    c_star: float = 0.25
-    center_distance_mm: float | None = None
-    bore_radius1_mm: float = 10.0
-    bore_radius2_mm: float = 15.0
-    cutter_tip_radius_coeff: float = 0.38  # ISO 53:1998 basic rack profile A, rho_fP / m
+    module_mm: float = bounded(2.0, 0.0, 100.0, "give the module in mm")
+    z1: int = bounded(18, 5, 1000, "teeth of the pinion", whole=True)
+    z2: int = bounded(27, 5, 1000, "teeth of the gear", whole=True)
+    pressure_angle_deg: float = bounded(20.0, 10.0, 35.0)
+    face_width_mm: float = bounded(30.0, 0.0, 2000.0)
+    ha_star: float = bounded(1.0, 0.0, 2.0)
+    c_star: float = bounded(0.25, 0.0, 1.0)
+    center_distance_mm: float | None = bounded(None, 0.0, 1e5, "null: the standard distance")
+    bore_radius1_mm: float = bounded(10.0, 0.0, 1e5)
+    bore_radius2_mm: float = bounded(15.0, 0.0, 1e5)
+    # ISO 53:1998 basic rack profile A, rho_fP / m
+    cutter_tip_radius_coeff: float = bounded(0.38, 0.0, 0.6, closed=True)
 
     def __post_init__(self) -> None:
         o = "gear"
-        _check_range(o, "module_mm", self.module_mm, 0.0, 100.0, "give the module in mm")
-        for name in ("z1", "z2"):
-            z = getattr(self, name)
-            if not isinstance(z, int) or isinstance(z, bool) or not 5 <= z <= 1000:
-                raise ValueError(f"{o}.{name} = {z!r} must be a whole number of teeth in [5, 1000]")
+        validate_fields(self, o)
         if self.z1 > self.z2:
             raise ValueError(
                 f"{o}.z1 = {self.z1} exceeds z2 = {self.z2}: z1 is the pinion, the smaller wheel; "
                 "swap them"
             )
-        _check_range(o, "pressure_angle_deg", self.pressure_angle_deg, 10.0, 35.0)
-        _check_range(o, "face_width_mm", self.face_width_mm, 0.0, 2000.0)
-        _check_range(o, "ha_star", self.ha_star, 0.0, 2.0)
-        _check_range(o, "c_star", self.c_star, 0.0, 1.0)
-        _check_range(o, "cutter_tip_radius_coeff", self.cutter_tip_radius_coeff, -1e-12, 0.6)
         a0 = self.standard_center_distance_mm
-        if self.center_distance_mm is not None:
-            _check_range(
-                o, "center_distance_mm", self.center_distance_mm, 0.9 * a0, 1.1 * a0,
-                f"the standard centre distance is {a0:g} mm; null selects it",
-            )
-        rf1 = self.module_mm * (self.z1 / 2 - self.ha_star - self.c_star)
-        rf2 = self.module_mm * (self.z2 / 2 - self.ha_star - self.c_star)
-        _check_range(o, "bore_radius1_mm", self.bore_radius1_mm, 0.0, rf1,
-                     f"the pinion root radius is {rf1:g} mm; the bore must lie inside it")
-        _check_range(o, "bore_radius2_mm", self.bore_radius2_mm, 0.0, rf2,
-                     f"the gear root radius is {rf2:g} mm; the bore must lie inside it")
+        a = self.center_distance_mm
+        if a is not None and not 0.9 * a0 < a < 1.1 * a0:
+            raise _fail(o, "center_distance_mm", a, f"must lie in ({0.9 * a0:g}, {1.1 * a0:g})",
+                        f"the standard centre distance is {a0:g} mm; null selects it")
+        for name, z in (("bore_radius1_mm", self.z1), ("bore_radius2_mm", self.z2)):
+            rf = self.module_mm * (z / 2 - self.ha_star - self.c_star)
+            if not getattr(self, name) < rf:
+                raise _fail(o, name, getattr(self, name), f"must be below the root radius "
+                            f"{rf:g} mm", "the bore must lie inside the root circle")
 
     @property
     def standard_center_distance_mm(self) -> float:
@@ -119,22 +152,16 @@ class Material:
       m^2/s.
     """
 
-    youngs_modulus_GPa: float = 206.0
-    poisson: float = 0.3
-    hardness_GPa: float = 7.0
-    thermal_conductivity_W_mK: float = 46.0
-    density_kg_m3: float = 7830.0
-    specific_heat_J_kgK: float = 465.0
+    youngs_modulus_GPa: float = bounded(206.0, 0.0, 1000.0)
+    poisson: float = bounded(0.3, 0.0, 0.5)
+    hardness_GPa: float = bounded(7.0, 0.0, 50.0,
+                                  "give the indentation hardness in GPa (HV x 0.009807)")
+    thermal_conductivity_W_mK: float = bounded(46.0, 0.0, 500.0)
+    density_kg_m3: float = bounded(7830.0, 0.0, 30000.0)
+    specific_heat_J_kgK: float = bounded(465.0, 0.0, 5000.0)
 
     def __post_init__(self) -> None:
-        o = "material"
-        _check_range(o, "youngs_modulus_GPa", self.youngs_modulus_GPa, 0.0, 1000.0)
-        _check_range(o, "poisson", self.poisson, 0.0, 0.5)
-        _check_range(o, "hardness_GPa", self.hardness_GPa, 0.0, 50.0,
-                     "give the indentation hardness in GPa (HV x 0.009807)")
-        _check_range(o, "thermal_conductivity_W_mK", self.thermal_conductivity_W_mK, 0.0, 500.0)
-        _check_range(o, "density_kg_m3", self.density_kg_m3, 0.0, 30000.0)
-        _check_range(o, "specific_heat_J_kgK", self.specific_heat_J_kgK, 0.0, 5000.0)
+        validate_fields(self, "material")
 
     @property
     def E(self) -> float:
@@ -163,26 +190,18 @@ class Lubricant:
     """
 
     name: str = "thesis baseline"
-    eta0_Pa_s: float = 0.35
-    alpha_m2_per_N: float = 2.5e-8
-    rho0_kg_m3: float = 870.0
-    temp_visc_coeff_per_K: float = 0.03
-    limiting_shear_coeff: float = 0.091
-    molecular_diameter_m: float = 3e-10
-    vibration_time_s: float = 3e-12
-    adsorption_heat_J_mol: float = 4.9e4
+    eta0_Pa_s: float = bounded(0.35, 0.0, 100.0, "dynamic viscosity in Pa s")
+    alpha_m2_per_N: float = bounded(
+        2.5e-8, 0.0, 1e-7, "pressure-viscosity coefficient in m^2/N (1/Pa), e.g. 2.2e-8")
+    rho0_kg_m3: float = bounded(870.0, 0.0, 3000.0)
+    temp_visc_coeff_per_K: float = bounded(0.03, 0.0, 0.2)
+    limiting_shear_coeff: float = bounded(0.091, 0.0, 1.0)
+    molecular_diameter_m: float = bounded(3e-10, 0.0, 1e-8)
+    vibration_time_s: float = bounded(3e-12, 0.0, 1e-9)
+    adsorption_heat_J_mol: float = bounded(4.9e4, 0.0, 1e6)
 
     def __post_init__(self) -> None:
-        o = "lubricant"
-        _check_range(o, "eta0_Pa_s", self.eta0_Pa_s, 0.0, 100.0, "dynamic viscosity in Pa s")
-        _check_range(o, "alpha_m2_per_N", self.alpha_m2_per_N, 0.0, 1e-7,
-                     "pressure-viscosity coefficient in m^2/N (1/Pa), e.g. 2.2e-8")
-        _check_range(o, "rho0_kg_m3", self.rho0_kg_m3, 0.0, 3000.0)
-        _check_range(o, "temp_visc_coeff_per_K", self.temp_visc_coeff_per_K, 0.0, 0.2)
-        _check_range(o, "limiting_shear_coeff", self.limiting_shear_coeff, 0.0, 1.0)
-        _check_range(o, "molecular_diameter_m", self.molecular_diameter_m, 0.0, 1e-8)
-        _check_range(o, "vibration_time_s", self.vibration_time_s, 0.0, 1e-9)
-        _check_range(o, "adsorption_heat_J_mol", self.adsorption_heat_J_mol, 0.0, 1e6)
+        validate_fields(self, "lubricant")
 
 
 @dataclass(frozen=True)
@@ -197,36 +216,26 @@ class Tribology:
     (2.7.5, Table 5).
     """
 
-    sigma_um: float = 0.5
-    wear_coeff: float = 5e-4
-    dry_wear_coeff: float = 2e-8
-    dry_friction_coeff: float = 0.1
-    regime: str = "mixed"
+    sigma_um: float = bounded(0.5, 0.0, 10.0, "composite RMS roughness in um")
+    wear_coeff: float = bounded(5e-4, 0.0, 1.0)
+    dry_wear_coeff: float = bounded(2e-8, 0.0, 1.0)
+    dry_friction_coeff: float = bounded(0.1, 0.0, 1.0)
+    regime: str = choice("mixed", "mixed", "dry")
 
     def __post_init__(self) -> None:
-        o = "tribology"
-        _check_range(o, "sigma_um", self.sigma_um, 0.0, 10.0, "composite RMS roughness in um")
-        _check_range(o, "wear_coeff", self.wear_coeff, 0.0, 1.0)
-        _check_range(o, "dry_wear_coeff", self.dry_wear_coeff, 0.0, 1.0)
-        _check_range(o, "dry_friction_coeff", self.dry_friction_coeff, 0.0, 1.0)
-        if self.regime not in ("mixed", "dry"):
-            raise ValueError(f"tribology.regime = {self.regime!r} must be 'mixed' or 'dry'")
+        validate_fields(self, "tribology")
 
 
 @dataclass(frozen=True)
 class Operating:
     """Operating point (thesis Table 1 / Table 11): pinion speed, torque on the gear, bulk temp."""
 
-    n1_rpm: float = 2000.0
-    torque_Nm: float = 300.0
-    bulk_temperature_K: float = 315.0
+    n1_rpm: float = bounded(2000.0, 0.0, 1e5, "pinion speed in r/min, positive")
+    torque_Nm: float = bounded(300.0, 0.0, 1e6, "gear torque in N m, positive")
+    bulk_temperature_K: float = bounded(315.0, 200.0, 500.0, "bulk temperature in kelvin")
 
     def __post_init__(self) -> None:
-        o = "operating"
-        _check_range(o, "n1_rpm", self.n1_rpm, 0.0, 1e5, "pinion speed in r/min, positive")
-        _check_range(o, "torque_Nm", self.torque_Nm, 0.0, 1e6, "gear torque in N m, positive")
-        _check_range(o, "bulk_temperature_K", self.bulk_temperature_K, 200.0, 500.0,
-                     "bulk temperature in kelvin")
+        validate_fields(self, "operating")
 
     @property
     def omega1(self) -> float:
@@ -242,20 +251,13 @@ class WearSolver:
     (anywhere on either flank) allowed before the profile and all contact quantities are updated.
     """
 
-    n_points: int = 401
-    update_um: float = 1.0
-    temperature_tol_K: float = 1e-3
-    max_iterations: int = 100
+    n_points: int = bounded(401, 21, 100_001, whole=True)
+    update_um: float = bounded(1.0, 0.0, 100.0)
+    temperature_tol_K: float = bounded(1e-3, 0.0, 10.0)
+    max_iterations: int = bounded(100, 1, 100_000, whole=True)
 
     def __post_init__(self) -> None:
-        o = "solver"
-        if not isinstance(self.n_points, int) or not 21 <= self.n_points <= 100_001:
-            raise ValueError(f"{o}.n_points = {self.n_points!r} must be a whole number in "
-                             "[21, 100001]")
-        _check_range(o, "update_um", self.update_um, 0.0, 100.0)
-        _check_range(o, "temperature_tol_K", self.temperature_tol_K, 0.0, 10.0)
-        if not isinstance(self.max_iterations, int) or self.max_iterations < 1:
-            raise ValueError(f"{o}.max_iterations = {self.max_iterations!r} must be >= 1")
+        validate_fields(self, "solver")
 
 
 @dataclass(frozen=True)
@@ -284,46 +286,25 @@ class Dynamics:
       transfer path.
     """
 
-    damping_ratio: float = 0.07
-    half_backlash_um: float = 47.5
-    eccentricity1_um: float = 7.5
-    profile_error_um: float = 3.0
-    inertia1_kg_m2: float | None = None
-    inertia2_kg_m2: float | None = None
-    sample_rate_hz: float = 40960.0
-    duration_s: float = 0.1
-    transient_s: float = 0.02
-    step_factor: float = 0.25
-    phase_bins: int = 512
-    housing_mass_kg: float = 20.0
+    damping_ratio: float = bounded(0.07, 0.0, 1.0, "fraction of critical damping; 0.03-0.17 "
+                                   "for gear meshes", closed=True)
+    half_backlash_um: float = bounded(47.5, 0.0, 1e4, "half the normal backlash, um",
+                                      closed=True)
+    eccentricity1_um: float = bounded(7.5, 0.0, 1000.0, closed=True)
+    profile_error_um: float = bounded(3.0, 0.0, 1000.0, closed=True)
+    inertia1_kg_m2: float | None = bounded(None, 0.0, 1e3, "null: a solid steel disc")
+    inertia2_kg_m2: float | None = bounded(None, 0.0, 1e3, "null: a solid steel disc")
+    sample_rate_hz: float = bounded(40960.0, 100.0, 1e7)
+    duration_s: float = bounded(0.1, 0.0, 100.0)
+    transient_s: float = bounded(0.02, 0.0, 100.0, closed=True)
+    step_factor: float = bounded(
+        0.25, 0.0, 2.78, "omega_max dt above 2.78 makes fourth-order Runge-Kutta unstable; 0.25 "
+        "keeps it accurate")
+    phase_bins: int = bounded(512, 16, 1 << 20, whole=True)
+    housing_mass_kg: float = bounded(20.0, 0.0, 1e5)
 
     def __post_init__(self) -> None:
-        o = "dynamics"
-        if not (isinstance(self.damping_ratio, int | float) and 0 <= self.damping_ratio < 1):
-            raise ValueError(f"{o}.damping_ratio = {self.damping_ratio!r} must lie in [0, 1) "
-                             "(fraction of critical damping; 0.03-0.17 for gear meshes)")
-        if not (isinstance(self.half_backlash_um, int | float) and self.half_backlash_um >= 0
-                and math.isfinite(self.half_backlash_um)):
-            raise ValueError(f"{o}.half_backlash_um = {self.half_backlash_um!r} must be >= 0 "
-                             "(half the normal backlash, um)")
-        for name in ("eccentricity1_um", "profile_error_um"):
-            v = getattr(self, name)
-            if not (isinstance(v, int | float) and 0 <= v < 1000):
-                raise ValueError(f"{o}.{name} = {v!r} must lie in [0, 1000) um")
-        for name in ("inertia1_kg_m2", "inertia2_kg_m2"):
-            if getattr(self, name) is not None:
-                _check_range(o, name, getattr(self, name), 0.0, 1e3)
-        _check_range(o, "sample_rate_hz", self.sample_rate_hz, 100.0, 1e7)
-        _check_range(o, "housing_mass_kg", self.housing_mass_kg, 0.0, 1e5)
-        _check_range(o, "duration_s", self.duration_s, 0.0, 100.0)
-        if not (isinstance(self.transient_s, int | float) and 0 <= self.transient_s < 100):
-            raise ValueError(f"{o}.transient_s = {self.transient_s!r} must lie in [0, 100) s")
-        if not (isinstance(self.step_factor, int | float) and 0 < self.step_factor < 2.78):
-            raise ValueError(
-                f"{o}.step_factor = {self.step_factor!r} must lie in (0, 2.78): omega_max dt above "
-                "2.78 makes fourth-order Runge-Kutta unstable; 0.25 keeps it accurate")
-        if not isinstance(self.phase_bins, int) or self.phase_bins < 16:
-            raise ValueError(f"{o}.phase_bins = {self.phase_bins!r} must be a whole number >= 16")
+        validate_fields(self, "dynamics")
 
 
 @dataclass(frozen=True)
@@ -350,20 +331,20 @@ def _build(cls: type, values: dict[str, Any], where: str) -> Any:
     unknown = sorted(set(values) - known)
     if unknown:
         raise ValueError(f"{where}: unknown key(s) {unknown}; allowed: {sorted(known)}")
-    coerced = {}
-    for f in fields(cls):
-        if f.name in values:
-            v = values[f.name]
-            # YAML gives 2 for 2.0; keep ints for integer fields, floats elsewhere.
-            if f.type in ("float", "float | None") and isinstance(v, int) and not isinstance(
-                v, bool
-            ):
-                v = float(v)
-            coerced[f.name] = v
-    return cls(**coerced)
+    return cls(**values)
 
 
-CASES_FILE = Path(__file__).resolve().parent.parent / "conf" / "cases.yaml"
+def config_file(*parts: str) -> Traversable:
+    """A file of the physics configs (``conf/physics/`` in the checkout), found through the
+    installed package ``gearwear_conf``, so it works from any folder and from a wheel."""
+    return files("gearwear_conf").joinpath("physics", *parts)
+
+
+def config_choices(group: str) -> list[str]:
+    """The choices of a physics config group (``lubricant`` -> ``['pao', 'sae30', 'thesis']``)."""
+    return sorted(p.name[:-5] for p in config_file(group).iterdir() if p.name.endswith(".yaml"))
+
+
 _CASE_FIELDS = {
     "operating": ("n1_rpm", "torque_Nm"),
     "lubricant": ("eta0_Pa_s", "alpha_m2_per_N", "limiting_shear_coeff"),
@@ -371,11 +352,11 @@ _CASE_FIELDS = {
 
 
 def operating_cases() -> dict[int, dict[str, float]]:
-    """The five operating cases of thesis Table 11, from ``conf/cases.yaml``."""
+    """The five operating cases of thesis Table 11, from ``conf/physics/cases.yaml``."""
     import yaml
 
-    with open(CASES_FILE) as fh:
-        return {int(k): dict(v) for k, v in yaml.safe_load(fh).items()}
+    text = config_file("cases.yaml").read_text()
+    return {int(k): dict(v) for k, v in yaml.safe_load(text).items()}
 
 
 def case_values(case: Any) -> dict[str, float]:

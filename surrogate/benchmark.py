@@ -26,21 +26,22 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from hydra import compose, initialize_config_dir
+from hydra import compose, initialize_config_module
 from hydra.utils import instantiate
 
-from physics.empirical_inverse import EmpiricalInverse, wear_errors
-from physics.files import atomic_write
+from physics.estimators.empirical_inverse import EmpiricalInverse, wear_errors
+from physics.files import atomic_write, pyplot
+from surrogate import settings
 from surrogate.inference import Surrogate
-from surrogate.training import parity_figure, plt, train
+from surrogate.training import parity_figure, train
 
-CONF = str(Path(__file__).resolve().parents[1] / "conf")
 TARGET = "root_wear_mm"
 log = logging.getLogger(__name__)
 
 
 def train_config(root: Path, out: Path, *overrides: str):
-    with initialize_config_dir(config_dir=CONF, version_base="1.3"):
+    settings.register()
+    with initialize_config_module("gearwear_conf.train", version_base="1.3"):
         return compose("train", overrides=[
             f"paths.root_dir={root}", f"paths.output_dir={out}", "logger=csv",
             "trainer.enable_progress_bar=false", *overrides])
@@ -92,7 +93,7 @@ def evaluate(name: str, surrogate: Surrogate, est: EmpiricalInverse, test: pd.Da
 
 def run(out: Path, root: Path, max_epochs: int | None = None) -> pd.DataFrame:
     extra = [f"trainer.max_epochs={max_epochs}"] if max_epochs else []
-    scenarios = [(f"case{c}", [f"case='{c}'"]) for c in range(1, 6)]
+    scenarios = [(f"case{c}", [f"case={c}"]) for c in range(1, 6)]
     scenarios.append(("all", ["case=all"]))
     scenarios += [(f"loco{c}", ["case=all", f"data.holdout_case={c}"]) for c in range(1, 6)]
     rows, plots = [], {}
@@ -107,9 +108,9 @@ def run(out: Path, root: Path, max_epochs: int | None = None) -> pd.DataFrame:
         r, plots[name] = evaluate(name, surrogate, est, dm.frames["test"], speed=name == "case3")
         rows += r
         if name == "case3":
-            noisy_cfg = train_config(root, out / "models" / "noisy", "case='3'",
+            noisy_cfg = train_config(root, out / "models" / "noisy", "case=3",
                                      f"data.dataset={root}/data/dataset_snr20.parquet",
-                                     "data.generate_overrides=['data.snr_db=20']", *extra)
+                                     "+data.generate.snr_db=20", *extra)
             noisy = instantiate(noisy_cfg.data)
             noisy.setup()
             r, plots["noisy_case3"] = evaluate("noisy_case3", surrogate, est,
@@ -117,6 +118,7 @@ def run(out: Path, root: Path, max_epochs: int | None = None) -> pd.DataFrame:
             rows += r
     table = pd.DataFrame(rows)
     atomic_write(out / "benchmark.csv", lambda p: table.to_csv(p, index=False))
+    plt = pyplot()
     fig, axes = plt.subplots(1, 4, figsize=(18, 4.6))
     for ax, name in zip(axes, ["case3", "all", "loco3", "noisy_case3"], strict=True):
         d = plots[name]

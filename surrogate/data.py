@@ -18,30 +18,53 @@ import lightning as L
 import numpy as np
 import pandas as pd
 import torch
-from hydra import compose, initialize_config_dir
 from torch.utils.data import DataLoader, TensorDataset
 
-from physics.dataset import units as dataset_units
-from physics.features import FEATURES
-from physics.generate import generate
+from physics.dataset.generation import (
+    DATASET_TRIBOLOGY,
+    DatasetJob,
+    build_dataset,
+    plan_dataset,
+    spec_from_config,
+)
+from physics.dataset.generation import units as dataset_units
+from physics.params import Scenario, operating_cases
+from physics.signals.features import FEATURES
 from surrogate.schema import FeatureSchema
 
 log = logging.getLogger(__name__)
-CONF = str(Path(__file__).resolve().parents[1] / "conf")
 #: the default inputs: the Table 13 features of the DTE and of the housing acceleration
 DEFAULT_INPUTS = [f"{q}_{f}" for q in ("dte", "acc") for f in FEATURES]
 CONDITIONS = ["n1_rpm", "torque_Nm"]
 
 
-def load_dataset(path: str | Path, generate_overrides: list[str] | None = None) -> pd.DataFrame:
-    """Read the dataset at ``path``, generating it with ``physics.generate`` if it is missing."""
+def cases_of(case: str | int) -> list[int]:
+    """``case`` of the train config: one operating case of Table 11 (1-5) or ``all``."""
+    valid = sorted(operating_cases())
+    if str(case).strip() == "all":
+        return valid
+    if str(case).strip() in {str(c) for c in valid}:
+        return [int(case)]
+    raise ValueError(f"case = {case!r} is not an operating case; use one of {valid} (thesis "
+                     "Table 11) or all")
+
+
+def dataset_job(path: str | Path, spec: dict | None = None, jobs: int = 2) -> DatasetJob:
+    """The checked build of the dataset at ``path`` (``spec``: DatasetSpec values other than the
+    defaults), as ``python -m physics.dataset out_dir=<folder> name=<stem>`` would run it."""
+    path = Path(path)
+    if path.suffix != ".parquet":
+        raise ValueError(f"data.dataset = {str(path)!r} must name a .parquet file")
+    return plan_dataset(Scenario(tribology=DATASET_TRIBOLOGY), spec_from_config(spec or {}),
+                        path.parent, path.stem, jobs=jobs)
+
+
+def load_dataset(path: str | Path, spec: dict | None = None, jobs: int = 2) -> pd.DataFrame:
+    """Read the dataset at ``path``, building it with the dataset API if it is missing."""
     path = Path(path)
     if not path.is_file():
-        log.info("dataset %s missing: generating it (physics.generate)", path)
-        with initialize_config_dir(config_dir=CONF, version_base="1.3"):
-            cfg = compose("generate", overrides=[f"out_dir={path.parent}", f"name={path.stem}",
-                                                 *(generate_overrides or [])])
-        generate(cfg)
+        log.info("dataset %s missing: generating it (physics.dataset, %d jobs)", path, jobs)
+        build_dataset(dataset_job(path, spec, jobs))
     return pd.read_parquet(path)
 
 
@@ -77,14 +100,16 @@ def split_trajectories(df: pd.DataFrame, val_replicates: int, test_replicates: i
 class WearDataModule(L.LightningDataModule):
     """Features -> pinion root wear, from the dataset of the given cases."""
 
-    def __init__(self, dataset: str, cases: list[int], inputs: list[str] | None = None,
-                 conditions: bool = False, target: str = "root_wear_mm",
+    def __init__(self, dataset: str, case: str | int = 3, inputs: list[str] | None = None,
+                 conditions: bool | None = None, target: str = "root_wear_mm",
                  val_replicates: int = 1, test_replicates: int = 2,
                  holdout_case: int | None = None, batch_size: int = 64, seed: int = 0,
-                 generate_overrides: list[str] | None = None) -> None:
+                 generate: dict | None = None, jobs: int = 2) -> None:
         super().__init__()
         self.dataset = str(dataset)
-        self.cases = [int(c) for c in cases]
+        self.cases = cases_of(case)
+        if conditions is None:  # across cases the operating point is an input
+            conditions = len(self.cases) > 1
         if holdout_case is not None and int(holdout_case) not in self.cases:
             raise ValueError(f"data.holdout_case = {holdout_case} must be one of the cases "
                              f"{self.cases}")
@@ -93,17 +118,24 @@ class WearDataModule(L.LightningDataModule):
         self.val_replicates, self.test_replicates = int(val_replicates), int(test_replicates)
         self.holdout_case = None if holdout_case is None else int(holdout_case)
         self.batch_size, self.seed = int(batch_size), int(seed)
-        self.generate_overrides = list(generate_overrides or [])
+        self.generate, self.jobs = dict(generate or {}), int(jobs)
+        for name, v, lo in (("batch_size", self.batch_size, 1), ("jobs", self.jobs, 1),
+                            ("val_replicates", self.val_replicates, 1),
+                            ("test_replicates", self.test_replicates, 0)):
+            if v < lo:
+                raise ValueError(f"data.{name} = {v} must be >= {lo}")
+        if not Path(self.dataset).is_file():
+            dataset_job(self.dataset, self.generate, self.jobs)  # checks the build's settings
         self.schema: FeatureSchema | None = None
         self.frames: dict[str, pd.DataFrame] = {}
 
     def prepare_data(self) -> None:
-        load_dataset(self.dataset, self.generate_overrides)
+        load_dataset(self.dataset, self.generate, self.jobs)
 
     def setup(self, stage: str | None = None) -> None:
         if self.schema is not None:
             return
-        df = load_dataset(self.dataset, self.generate_overrides)
+        df = load_dataset(self.dataset, self.generate, self.jobs)
         unknown = sorted(set(self.cases) - set(df.case.unique().tolist()))
         if unknown:
             raise ValueError(f"cases {unknown} are not in {self.dataset} (it holds "

@@ -50,9 +50,17 @@ class Surrogate:
         if not isinstance(payload, dict) or payload.get("format") != FORMAT:
             raise ValueError(f"{path} is not a {FORMAT} file; pass the wear_surrogate.pt a "
                              "training run exported")
-        FeatureSchema.from_dict(payload["hparams"]["schema"])  # version check before building
-        model = WearRegressor(**payload["hparams"])
-        model.load_state_dict(payload["state_dict"])
+        try:
+            FeatureSchema.from_dict(payload["hparams"]["schema"])  # version check first
+            model = WearRegressor(**payload["hparams"])
+            model.load_state_dict(payload["state_dict"])
+        except (KeyError, TypeError, RuntimeError) as err:
+            raise ValueError(f"{path} is incomplete or from another model ({err}); pass the "
+                             "wear_surrogate.pt a training run exported") from None
+        bad = [k for k, v in payload["state_dict"].items() if not torch.isfinite(v).all()]
+        if bad:
+            raise ValueError(f"{path} has non-finite weights ({bad[0]}, ...): the training "
+                             "diverged; retrain (e.g. with a smaller model.lr)")
         return cls(model)
 
     def predict_array(self, x: np.ndarray, batch: int = 65536) -> tuple[np.ndarray, np.ndarray]:
@@ -79,6 +87,10 @@ class Surrogate:
         """
         x = self.schema.check(df)
         mean, std = self.predict_array(x)
+        bad = ~(np.isfinite(mean) & np.isfinite(std))
+        if bad.any():
+            raise ValueError(f"the model gives a non-finite wear for row {int(np.argmax(bad))} "
+                             f"({int(bad.sum())} of {len(bad)} rows); nothing is written")
         half = self.model.z * std
         t = self.schema.target
         return pd.DataFrame({f"{t}_pred": np.maximum(mean, 0.0), f"{t}_std": std,

@@ -19,6 +19,8 @@ import lightning as L
 import torch
 from torch import nn
 
+from surrogate.settings import ModelConfig
+
 
 class EnsembleMLP(nn.Module):
     """``members`` MLPs with stacked weights: input ``(batch, n_in)`` -> ``(members, batch, 2)``."""
@@ -61,11 +63,8 @@ class WearRegressor(L.LightningModule):
                  members: int = 5, lr: float = 3e-3, weight_decay: float = 1e-5,
                  interval: float = 0.9) -> None:
         super().__init__()
-        if not 0 < interval < 1:
-            raise ValueError(f"model.interval = {interval} must lie in (0, 1)")
-        for name, v in (("members", members), ("width", width), ("depth", depth)):
-            if not (isinstance(v, int) and v >= 1):
-                raise ValueError(f"model.{name} = {v!r} must be a whole number >= 1")
+        ModelConfig(width=width, depth=depth, members=members, lr=lr, weight_decay=weight_decay,
+                    interval=interval).check()
         self.save_hyperparameters()
         self.net = EnsembleMLP(n_inputs, [width] * depth, members)
         self.z = NormalDist().inv_cdf(0.5 + interval / 2)

@@ -13,12 +13,14 @@ standard deviation, the interval bounds and the ``out_of_range`` flag. From Pyth
 from __future__ import annotations
 
 import logging
+from dataclasses import dataclass
 from pathlib import Path
 
 import hydra
 import pandas as pd
 from omegaconf import DictConfig
 
+from physics.command import run_command
 from physics.files import atomic_write
 from surrogate.inference import Surrogate
 from surrogate.schema import KEEP_COLUMNS
@@ -30,32 +32,56 @@ def read_table(path: str | Path) -> pd.DataFrame:
     path = Path(path)
     if not path.is_file():
         raise ValueError(f"input = {path} does not exist; pass a CSV or parquet feature table")
-    if path.suffix == ".parquet":
-        return pd.read_parquet(path)
-    if path.suffix == ".csv":
-        return pd.read_csv(path)
-    raise ValueError(f"input = {path}: use a .csv or .parquet file")
+    if path.suffix not in (".parquet", ".csv"):
+        raise ValueError(f"input = {path}: use a .csv or .parquet file")
+    try:
+        return pd.read_parquet(path) if path.suffix == ".parquet" else pd.read_csv(path)
+    except (pd.errors.EmptyDataError, pd.errors.ParserError, UnicodeDecodeError,
+            OSError) as err:
+        raise ValueError(f"input = {path} is not a readable table ({err})") from None
+
+
+@dataclass(frozen=True)
+class PredictJob:
+    surrogate: Surrogate
+    table: pd.DataFrame
+    output: Path
+
+
+def prepare(cfg: DictConfig) -> PredictJob:
+    """Load and check the checkpoint and the table, and the output's folder, before any work."""
+    surrogate = Surrogate.load(cfg.ckpt)
+    table = read_table(cfg.input)
+    surrogate.schema.check(table)
+    output = Path(cfg.output)
+    if output.is_dir():
+        raise ValueError(f"output = {str(output)!r} is a folder; give a .csv file name")
+    return PredictJob(surrogate, table, output)
 
 
 def predict_file(ckpt: str | Path, source: str | Path, target: str | Path) -> pd.DataFrame:
     """Predict wear for every row of ``source`` with ``ckpt``; write ``target``; return it."""
-    surrogate = Surrogate.load(ckpt)
-    df = read_table(source)
-    pred = surrogate.predict(df)
+    return execute(PredictJob(Surrogate.load(ckpt), read_table(source), Path(target)))
+
+
+def execute(job: PredictJob) -> pd.DataFrame:
+    df = job.table
+    pred = job.surrogate.predict(df)
     keep = [c for c in df.columns if c in KEEP_COLUMNS and c not in pred.columns]
     result = pd.concat([df[keep], pred], axis=1)
-    atomic_write(target, lambda p: result.to_csv(p, index=False))
+    atomic_write(job.output, lambda p: result.to_csv(p, index=False))
     n_out = int(result.out_of_range.sum())
     if n_out:
         log.warning("%d of %d rows lie outside the training envelope (out_of_range): their "
                     "wear is an extrapolation", n_out, len(result))
+    log.info("%d rows -> %s", len(result), job.output)
     return result
 
 
-@hydra.main(version_base="1.3", config_path="../conf", config_name="predict")
+@hydra.main(version_base="1.3", config_path="pkg://gearwear_conf.predict",
+            config_name="predict")
 def main(cfg: DictConfig) -> None:
-    out = predict_file(cfg.ckpt, cfg.input, cfg.output)
-    log.info("%d rows -> %s", len(out), cfg.output)
+    run_command(cfg, prepare, execute)
 
 
 if __name__ == "__main__":

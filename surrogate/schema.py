@@ -85,6 +85,14 @@ class FeatureSchema:
                     f"column {name}: typical value {typical:.3g} is far outside the training "
                     f"range [{lo:.3g}, {hi:.3g}] {self.units[j]}; is it in another unit? "
                     f"The model expects {self.units[j]}")
+        scale = np.maximum(np.abs(self.low), np.abs(self.high))
+        far = (np.abs(x) > scale * UNIT_FACTOR) & (scale > 0)
+        if far.any():
+            r, j = np.argwhere(far)[0]
+            raise ValueError(
+                f"row {r} column {self.inputs[j]} is {x[r, j]:.4g}, more than {UNIT_FACTOR:g} "
+                f"times the training range [{self.low[j]:.3g}, {self.high[j]:.3g}] "
+                f"{self.units[j]}: a unit or transcription error; repair or drop the row")
         return x
 
     def in_envelope(self, x: np.ndarray, margin: float = 0.05) -> np.ndarray:

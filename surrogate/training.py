@@ -6,55 +6,88 @@ import json
 import logging
 import math
 import warnings
+from dataclasses import dataclass
 from pathlib import Path
 
 import lightning as L
-import matplotlib
 import numpy as np
 import pandas as pd
 import torch
+from hydra.errors import InstantiationException
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
-from physics.empirical_inverse import wear_errors
-from physics.files import atomic_write
+from physics.estimators.empirical_inverse import wear_errors
+from physics.files import atomic_write, pyplot
+from surrogate.data import WearDataModule
 from surrogate.inference import Surrogate, export
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 
 log = logging.getLogger(__name__)
 # lightning 2.6 calls a torch pytree API that torch 2.13 deprecates; harmless, and once per step
 warnings.filterwarnings("ignore", message=r".*LeafSpec.*is deprecated")
 
 
+@dataclass(frozen=True)
+class TrainJob:
+    """A checked training run: everything instantiated that needs no data."""
+
+    cfg: DictConfig
+    data: WearDataModule
+    trainer: L.Trainer
+    out: Path
+
+
+def _instantiate(node: DictConfig, what: str, **kwargs):
+    try:
+        return instantiate(node, **kwargs)
+    except InstantiationException as err:
+        raise ValueError(f"{what}: {err.__cause__ or err}") from None
+
+
+def prepare(cfg: DictConfig) -> TrainJob:
+    """Check the whole run before any work: case, model settings, trainer, callbacks, loggers
+    and the data module (whose dataset, if missing, is planned and checked but not built)."""
+    for key in ("seed",):
+        if isinstance(cfg[key], bool) or not isinstance(cfg[key], int) or cfg[key] < 0:
+            raise ValueError(f"{key} = {cfg[key]!r} must be a whole number >= 0")
+    if cfg.get("threads") is not None and not (isinstance(cfg.threads, int) and cfg.threads > 0):
+        raise ValueError(f"threads = {cfg.threads!r} must be a whole number >= 1 or null")
+    OmegaConf.to_object(cfg.model).check()
+    callbacks = [_instantiate(c, "callbacks") for c in (cfg.get("callbacks") or {}).values()]
+    loggers = [_instantiate(c, "logger") for c in (cfg.get("logger") or {}).values()]
+    trainer = _instantiate(cfg.trainer, "trainer", callbacks=callbacks, logger=loggers or False)
+    data = _instantiate(cfg.data, "data")
+    return TrainJob(cfg, data, trainer, Path(cfg.paths.output_dir))
+
+
 def train(cfg: DictConfig) -> float:
-    """Train on ``cfg``; write checkpoint, exported model, metrics, predictions and parity plot
-    to ``cfg.paths.output_dir``; return ``cfg.optimized_metric``."""
-    out = Path(cfg.paths.output_dir)
+    """Check ``cfg`` and train (:func:`prepare`, :func:`fit`)."""
+    return fit(prepare(cfg))
+
+
+def fit(job: TrainJob) -> float:
+    """Train; write checkpoint, exported model, metrics, predictions and parity plot to the run
+    folder; return ``cfg.optimized_metric``."""
+    cfg, dm, trainer, out = job.cfg, job.data, job.trainer, job.out
     L.seed_everything(cfg.seed, workers=True)
     if cfg.get("threads"):
         torch.set_num_threads(int(cfg.threads))
-    dm = instantiate(cfg.data)
     dm.prepare_data()
     dm.setup()
     model = instantiate(cfg.model, n_inputs=len(dm.inputs), schema=dm.schema.to_dict(),
                         _convert_="all")
-    callbacks = [instantiate(c) for c in (cfg.get("callbacks") or {}).values()]
-    loggers = [instantiate(c) for c in (cfg.get("logger") or {}).values()]
-    trainer = instantiate(cfg.trainer, callbacks=callbacks, logger=loggers or False)
     log.info("training on %d rows (%d trajectories), validating on %d, testing on %d",
              len(dm.frames["train"]), dm.frames["train"].groupby(["case", "replicate"]).ngroups,
              len(dm.frames["val"]), len(dm.frames["test"]))
     trainer.fit(model, dm)
+    if trainer.interrupted:
+        raise KeyboardInterrupt
     has_best = any(getattr(c, "best_model_path", "") for c in trainer.callbacks)
     ckpt = "best" if has_best and not trainer.fast_dev_run else None
-    if ckpt:  # restore the best weights before export
-        best = next(c.best_model_path for c in trainer.callbacks if hasattr(c, "best_model_path"))
-        model.load_state_dict(torch.load(best, map_location="cpu", weights_only=False)
-                              ["state_dict"])
-    val = {k: float(v) for k, v in trainer.validate(model, dm, verbose=False)[0].items()}
-    test = ({k: float(v) for k, v in trainer.test(model, dm, verbose=False)[0].items()}
+    val = {k: float(v) for k, v in
+           trainer.validate(model, dm, ckpt_path=ckpt, verbose=False)[0].items()}
+    test = ({k: float(v) for k, v in
+             trainer.test(model, dm, ckpt_path=ckpt, verbose=False)[0].items()}
             if len(dm.frames["test"]) else {})
     path = export(model, out / "wear_surrogate.pt")
     surrogate = Surrogate.load(path)
@@ -73,6 +106,12 @@ def train(cfg: DictConfig) -> float:
     return float(value) if math.isfinite(value) else float("inf")
 
 
+def kept(job: TrainJob) -> str:
+    """What an interrupted training kept."""
+    return (f"the checkpoints so far are in {job.out / 'checkpoints'}; the run is not "
+            "exported: run the command again to train")
+
+
 def report_test(surrogate: Surrogate, test: pd.DataFrame, out: Path) -> dict[str, float]:
     """Held-out errors in physical units, interval coverage, and the parity plot."""
     t = surrogate.schema.target
@@ -87,7 +126,7 @@ def report_test(surrogate: Surrogate, test: pd.DataFrame, out: Path) -> dict[str
                         f"held-out trajectories: MRE {errors['mean_relative_error_pct']:.2f} %, "
                         f"R2 {errors['r2']:.4f}, coverage {inside.mean():.2f}", t)
     atomic_write(out / "parity.png", lambda p: fig.savefig(p, dpi=120, format="png"))
-    plt.close(fig)
+    pyplot().close(fig)
     return {**{f"test_{k}": v for k, v in errors.items()},
             "test_interval_coverage": float(inside.mean()),
             "test_out_of_range_rows": int(rows.out_of_range.sum())}
@@ -98,7 +137,7 @@ def parity_figure(true: np.ndarray, pred: np.ndarray, half: np.ndarray | None, t
     """Predicted against true wear with the identity line (and intervals if given)."""
     fig = None
     if ax is None:
-        fig, ax = plt.subplots(figsize=(5, 5))
+        fig, ax = pyplot().subplots(figsize=(5, 5))
     ax.errorbar(true, pred, yerr=half, fmt="o", ms=3, alpha=0.6, elinewidth=0.6)
     lim = [0, max(float(np.max(true)), float(np.max(pred))) * 1.05]
     ax.plot(lim, lim, "k--", lw=1)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from physics.geometry import mesh_geometry
+from physics.gear.geometry import mesh_geometry
 from physics.params import GearPair, Scenario
 
 

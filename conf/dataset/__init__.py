@@ -1,0 +1,1 @@
+"""Configs: dataset (see ../__init__.py)."""

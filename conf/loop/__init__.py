@@ -1,0 +1,1 @@
+"""Configs: loop (see ../__init__.py)."""

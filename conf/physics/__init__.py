@@ -1,0 +1,1 @@
+"""Configs: physics (see ../__init__.py)."""

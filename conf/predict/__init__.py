@@ -1,0 +1,1 @@
+"""Configs: predict (see ../__init__.py)."""

@@ -1,0 +1,1 @@
+"""Configs: reproduce (see ../__init__.py)."""

@@ -1,0 +1,1 @@
+"""Configs: train (see ../__init__.py)."""

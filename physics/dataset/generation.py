@@ -1,0 +1,390 @@
+"""Wear and vibration datasets across the operating cases of thesis Table 11 (thesis 4.1-4.3).
+
+One *unit* of work is one replicate of one case: its operating point is jittered (seeded), the
+dynamically coupled wear evolution is run over the cycle grid, every wear state's DTE is
+simulated (one batch), the declared measurement chain of :mod:`physics.measurement` gives the
+DTE and the housing acceleration, noise is added at the configured SNR (seeded), and the
+features of :mod:`physics.features` are taken of both (columns ``dte_*`` and ``acc_*``).
+A unit gives one row per cycle count.
+
+Units are grouped in *chunks*, the independent jobs of a Hydra multirun; each chunk is written
+atomically to ``<name>_chunks/chunk_<i>.parquet`` under the output folder, with the hash of
+everything that determines it in its file metadata, and a finished chunk with the same hash is
+not computed again (a killed run resumes). :func:`merge` joins the chunks into
+``<name>.parquet`` and a JSON sidecar. Everything is seeded, so the same config gives
+byte-identical files.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import numbers
+import re
+import warnings
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass, field
+from importlib.metadata import version
+from multiprocessing import get_context
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+from tqdm import tqdm
+
+from physics.dynamics.evolution import simulate_dynamic_wear
+from physics.dynamics.model import build_model, simulate
+from physics.files import atomic_write
+from physics.gear.stiffness import MeshStiffness, SainsotRangeWarning
+from physics.params import (
+    Dynamics,
+    GearPair,
+    Lubricant,
+    Material,
+    Operating,
+    Scenario,
+    Tribology,
+    WearSolver,
+    bounded,
+    case_values,
+    operating_cases,
+    scenario_from_config,
+    validate_fields,
+)
+from physics.scope import check_scope
+from physics.signals.features import FEATURES, feature_units, features
+from physics.signals.measurement import add_noise, housing_acceleration
+
+SCHEMA_VERSION = 1
+#: columns besides the features, with their units
+BASE_COLUMNS = {
+    "case": "1", "replicate": "1", "cycles": "1", "n1_rpm": "r/min", "torque_Nm": "N m",
+    "eta0_Pa_s": "Pa s", "sigma_um": "um", "root_wear_mm": "mm", "max_wear_mm": "mm",
+    "mean_wear_mm": "mm",
+}
+
+
+@dataclass(frozen=True)
+class DatasetSpec:
+    """What a dataset holds; validated on construction."""
+
+    cases: tuple[int, ...] = (1, 2, 3, 4, 5)
+    cycles_max: float = bounded(1.5e7, 0.0, 1e10, "pinion cycles of the last wear state")
+    wear_states: int = bounded(32, 2, 100_000, "cycle counts per replicate", whole=True)
+    replicates: int = bounded(8, 1, 100_000, whole=True)
+    speed_jitter_pct: float = bounded(1.0, 0.0, 50.0, closed=True)
+    torque_jitter_pct: float = bounded(2.0, 0.0, 50.0, closed=True)
+    snr_db: float = 30.0  # measurement noise (AC power ratio); inf: none
+    seed: int = bounded(0, 0, 2**32 - 1, whole=True)
+    chunks: int = bounded(5, 1, 100_000, "independent jobs", whole=True)
+
+    def __post_init__(self) -> None:
+        validate_fields(self, "data")
+        valid = sorted(operating_cases())
+        for c in self.cases:
+            case_values(c)  # raises, listing the valid cases
+        object.__setattr__(self, "cases", tuple(int(c) for c in self.cases))
+        if len(set(self.cases)) != len(self.cases) or not self.cases:
+            raise ValueError(f"data.cases = {list(self.cases)} must be distinct, from {valid}")
+        snr = self.snr_db
+        if isinstance(snr, bool) or not isinstance(snr, numbers.Real) or not snr > -20:
+            raise ValueError(f"data.snr_db = {snr!r} must be a number > -20 dB (inf: no noise)")
+        if self.chunks > self.units:
+            raise ValueError(f"data.chunks = {self.chunks} must lie in [1, {self.units}] (one "
+                             "unit is a case-replicate pair)")
+
+    @property
+    def units(self) -> int:
+        return len(self.cases) * self.replicates
+
+    def cycles(self) -> np.ndarray:
+        return np.linspace(0.0, self.cycles_max, self.wear_states)
+
+    def chunk_units(self, chunk: int) -> list[tuple[int, int]]:
+        """The (case, replicate) pairs of chunk ``chunk`` (0-based), in a fixed order."""
+        if not 0 <= chunk < self.chunks:
+            raise ValueError(f"chunk = {chunk} must lie in [0, {self.chunks - 1}]")
+        pairs = [(c, r) for c in self.cases for r in range(self.replicates)]
+        return pairs[chunk::self.chunks]
+
+
+def unit_scenario(base: Scenario, spec: DatasetSpec, case: int, replicate: int) -> Scenario:
+    """The case's operating point (Table 11) with this replicate's seeded jitter."""
+    values = case_values(case)
+    rng = np.random.default_rng([spec.seed, case, replicate, 0])
+    speed, torque = rng.uniform(-1, 1, size=2)
+    op = dataclasses.replace(
+        base.operating,
+        n1_rpm=values["n1_rpm"] * (1 + speed * spec.speed_jitter_pct / 100),
+        torque_Nm=values["torque_Nm"] * (1 + torque * spec.torque_jitter_pct / 100))
+    lub = dataclasses.replace(base.lubricant, eta0_Pa_s=values["eta0_Pa_s"],
+                              alpha_m2_per_N=values["alpha_m2_per_N"],
+                              limiting_shear_coeff=values["limiting_shear_coeff"])
+    return dataclasses.replace(base, operating=op, lubricant=lub)
+
+
+def run_unit(base: Scenario, spec: DatasetSpec, case: int, replicate: int,
+             keep_signals: bool = False) -> tuple[pd.DataFrame, np.ndarray | None]:
+    """Rows (one per cycle count) of one case-replicate pair, and optionally its records.
+
+    The records are ``(row, 2, sample)``: the noisy DTE [m] and housing acceleration [m/s^2].
+    """
+    scn = unit_scenario(base, spec, case, replicate)
+    cycles = spec.cycles()
+    ms = MeshStiffness(scn.gear, scn.material)
+    res = simulate_dynamic_wear(scn, float(cycles[-1]), snapshots=list(cycles))
+    models, wear = [], []
+    for n in cycles:
+        w1, w2 = res.snapshots[float(n)]
+        models.append(build_model(scn, ms, res.s, w1, w2) if np.any(w1 + w2 > 0)
+                      else build_model(scn, ms))
+        wear.append((w1[0], w1.max(), float(np.trapezoid(w1, res.s) / np.ptp(res.s))))
+    response = simulate(models, scn.dynamics)
+    rng = np.random.default_rng([spec.seed, case, replicate, 1])
+    dte = add_noise(response.dte, spec.snr_db, rng)
+    acc = add_noise(housing_acceleration(response.force, scn.dynamics.housing_mass_kg),
+                    spec.snr_db, rng)
+    dte_f, acc_f = features(dte), features(acc)
+    wear = np.array(wear) * 1e3
+    rows = pd.DataFrame({
+        "case": case, "replicate": replicate, "cycles": cycles,
+        "n1_rpm": scn.operating.n1_rpm, "torque_Nm": scn.operating.torque_Nm,
+        "eta0_Pa_s": scn.lubricant.eta0_Pa_s, "sigma_um": scn.tribology.sigma_um,
+        "root_wear_mm": wear[:, 0], "max_wear_mm": wear[:, 1], "mean_wear_mm": wear[:, 2],
+        **{f"dte_{k}": dte_f[k] for k in FEATURES},
+        **{f"acc_{k}": acc_f[k] for k in FEATURES},
+    })
+    signals = np.stack([dte, acc], axis=1).astype(np.float32) if keep_signals else None
+    return rows, signals
+
+
+def units() -> dict[str, str]:
+    """Unit of every column of the dataset."""
+    out = dict(BASE_COLUMNS)
+    out.update({f"dte_{k}": u for k, u in feature_units("m").items()})
+    out.update({f"acc_{k}": u for k, u in feature_units("m/s^2").items()})
+    return out
+
+
+def config_hash(payload: dict[str, Any]) -> str:
+    """Stable hash of everything that determines the data (the resolved config)."""
+    text = json.dumps(payload, sort_keys=True, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def _write_parquet(df: pd.DataFrame, path: Path, meta: dict[str, str]) -> None:
+    table = pa.Table.from_pandas(df, preserve_index=False)
+    table = table.replace_schema_metadata({**(table.schema.metadata or {}),
+                                           **{k.encode(): v.encode() for k, v in meta.items()}})
+    atomic_write(path, lambda p: pq.write_table(table, p, compression="zstd"))
+
+
+def chunk_folder(out: Path, name: str) -> Path:
+    """Where the chunks of dataset ``name`` live (one folder per dataset name)."""
+    return out / f"{name}_chunks"
+
+
+def chunk_path(folder: Path, chunk: int) -> Path:
+    return folder / f"chunk_{chunk:03d}.parquet"
+
+
+def chunk_is_done(path: Path, digest: str) -> bool:
+    if not path.is_file():
+        return False
+    try:
+        meta = pq.read_schema(path).metadata or {}
+    except (OSError, pa.ArrowInvalid):
+        return False  # unreadable: compute it again
+    return meta.get(b"gearwear_hash", b"").decode() == digest
+
+
+def run_chunk(base: Scenario, spec: DatasetSpec, chunk: int, folder: Path, digest: str,
+              keep_signals: bool = False) -> bool:
+    """Compute and write one chunk into ``folder`` unless it is there; True if computed."""
+    path = chunk_path(folder, chunk)
+    if chunk_is_done(path, digest):
+        return False
+    frames, signals = [], []
+    with warnings.catch_warnings():
+        # the gear's range warning is issued once by the caller (generate), not once per unit
+        warnings.simplefilter("ignore", SainsotRangeWarning)
+        for case, rep in spec.chunk_units(chunk):
+            rows, sig = run_unit(base, spec, case, rep, keep_signals)
+            frames.append(rows)
+            if sig is not None:
+                signals.append(sig)
+    if keep_signals:
+        stack = np.concatenate(signals)
+        atomic_write(path.with_suffix(".npy"), lambda p: np.save(p.open("wb"), stack))
+    _write_parquet(pd.concat(frames, ignore_index=True), path, {"gearwear_hash": digest})
+    return True
+
+
+def merge(spec: DatasetSpec, out: Path, name: str, digest: str, sidecar: dict[str, Any],
+          keep_signals: bool = False) -> Path:
+    """Join the finished chunks into ``<name>.parquet`` (+ ``.json``, and ``_signals.npy``)."""
+    folder = chunk_folder(out, name)
+    missing = [c for c in range(spec.chunks) if not chunk_is_done(chunk_path(folder, c), digest)]
+    if missing:
+        raise ValueError(f"chunks {missing} of this config are not finished in {out}; run them "
+                         f"first (chunk=<i>) or run without chunk= to do all")
+    frames = [pq.read_table(chunk_path(folder, c)).to_pandas() for c in range(spec.chunks)]
+    df = pd.concat(frames, ignore_index=True)
+    order = np.lexsort((df.cycles.to_numpy(), df.replicate.to_numpy(), df.case.to_numpy()))
+    df = df.iloc[order].reset_index(drop=True)
+    target = out / f"{name}.parquet"
+    _write_parquet(df, target, {"gearwear_hash": digest})
+    if keep_signals:
+        sig = np.concatenate([np.load(chunk_path(folder, c).with_suffix(".npy"))
+                              for c in range(spec.chunks)])[order]
+        atomic_write(out / f"{name}_signals.npy", lambda p: np.save(p.open("wb"), sig))
+    text = json.dumps({**sidecar, "schema_version": SCHEMA_VERSION, "hash": digest,
+                       "rows": len(df), "units": units()}, indent=2, sort_keys=True,
+                      default=str)
+    atomic_write(out / f"{name}.json", lambda p: p.write_text(text + "\n"))
+    return target
+
+
+def spec_from_config(data: dict[str, Any]) -> DatasetSpec:
+    fields = {f.name for f in dataclasses.fields(DatasetSpec)}
+    unknown = sorted(set(data) - fields)
+    if unknown:
+        raise ValueError(f"data: unknown key(s) {unknown}; allowed: {sorted(fields)}")
+    values = dict(data)
+    if "cases" in values:
+        values["cases"] = tuple(values["cases"])
+    return DatasetSpec(**values)
+
+
+#: The thesis's mixed-lubrication constants wear the pinion root by 0.07 um in 1.5e7 cycles
+#: (docs/reproduction.md, Table 2): the features then change by < 0.1 % over the whole life and
+#: carry no information on wear. The dataset therefore uses the thesis's dry Archard law (2.7.5),
+#: whose wear has the magnitude of the thesis's tables and whose feature trends follow Table 14.
+DATASET_TRIBOLOGY = Tribology(regime="dry")
+NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
+
+
+@dataclass
+class DatasetConfig:
+    """Schema of ``python -m physics.dataset`` (``conf/dataset/dataset.yaml``)."""
+
+    gear: GearPair = field(default_factory=GearPair)
+    material: Material = field(default_factory=Material)
+    lubricant: Lubricant = field(default_factory=Lubricant)
+    tribology: Tribology = field(default_factory=lambda: DATASET_TRIBOLOGY)
+    operating: Operating = field(default_factory=Operating)
+    solver: WearSolver = field(default_factory=WearSolver)
+    dynamics: Dynamics = field(default_factory=Dynamics)
+    data: DatasetSpec = field(default_factory=DatasetSpec)
+    out_dir: str = "data"  # relative to the folder the command runs in
+    name: str = "dataset"  # <out_dir>/<name>.parquet, <name>.json (and <name>_signals.npy)
+    chunk: int | None = None  # null: every chunk, then merge; i: only chunk i (multirun job)
+    store_signals: bool = False  # also keep the noisy records (float32) beside the parquet
+    progress: bool = True
+    jobs: int = 2  # chunks run in parallel processes
+
+
+@dataclass(frozen=True)
+class DatasetJob:
+    """A checked dataset build: what to compute and where (nothing computed yet)."""
+
+    base: Scenario
+    spec: DatasetSpec
+    out: Path
+    name: str
+    todo: tuple[int, ...]  # chunks still to compute
+    merge: bool  # all chunks were asked for: join them when done
+    jobs: int = 2
+    store_signals: bool = False
+    progress: bool = True
+
+    @property
+    def digest(self) -> str:
+        return dataset_digest(self.base, self.spec)
+
+    @property
+    def folder(self) -> Path:
+        return chunk_folder(self.out, self.name)
+
+    @property
+    def path(self) -> Path:
+        return self.out / f"{self.name}.parquet"
+
+
+def dataset_digest(base: Scenario, spec: DatasetSpec) -> str:
+    """Hash of everything that determines the rows (the physics and the dataset spec)."""
+    return config_hash({"scenario": dataclasses.asdict(base), "data": dataclasses.asdict(spec)})
+
+
+def plan_dataset(base: Scenario, spec: DatasetSpec, out_dir: str | Path, name: str = "dataset",
+                 chunk: int | None = None, jobs: int = 2, store_signals: bool = False,
+                 progress: bool = True) -> DatasetJob:
+    """Check a dataset build before any work: the name, the chunk, the jobs and every unit's
+    scenario against the model's scope; finished chunks (same hash) are left out."""
+    if not isinstance(name, str) or not NAME.match(name):
+        raise ValueError(f"name = {name!r} must be a plain file name (letters, digits, '_', "
+                         "'-', '.'; no folders): the dataset is written to <out_dir>/<name>"
+                         ".parquet; choose the folder with out_dir")
+    for key, v, lo in (("jobs", jobs, 1), ("chunk", chunk, 0)):
+        if v is not None and (isinstance(v, bool) or not isinstance(v, numbers.Integral)
+                              or v < lo):
+            raise ValueError(f"{key} = {v!r} must be a whole number >= {lo}")
+    chunks = range(spec.chunks) if chunk is None else [int(chunk)]
+    if chunk is not None:
+        spec.chunk_units(int(chunk))  # raises for a chunk outside the spec
+    for c in chunks:
+        for case, rep in spec.chunk_units(c):
+            check_scope(unit_scenario(base, spec, case, rep))
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"out_dir = {str(out_dir)!r} is a file; give a folder")
+    digest = dataset_digest(base, spec)
+    folder = chunk_folder(out, name)
+    todo = tuple(c for c in chunks if not chunk_is_done(chunk_path(folder, c), digest))
+    return DatasetJob(base, spec, out, name, todo, chunk is None, int(jobs),
+                      bool(store_signals), bool(progress))
+
+
+def build_dataset(job: DatasetJob) -> Path | None:
+    """Compute the chunks of ``job`` (in ``job.jobs`` processes) and merge them into the
+    dataset when all were asked for; returns the dataset's path (None for a single chunk)."""
+    if job.todo:
+        MeshStiffness(job.base.gear, job.base.material)  # states the gear-body warning once
+    jobs = max(1, min(job.jobs, len(job.todo)))
+    args = (job.base, job.spec)
+    with tqdm(total=len(job.todo), desc="chunks", unit="chunk", disable=not job.progress) as bar:
+        if jobs == 1:
+            for c in job.todo:
+                run_chunk(*args, c, job.folder, job.digest, job.store_signals)
+                bar.update(1)
+        else:
+            with ProcessPoolExecutor(jobs, mp_context=get_context("spawn")) as pool:
+                futures = [pool.submit(run_chunk, *args, c, job.folder, job.digest,
+                                       job.store_signals) for c in job.todo]
+                for f in as_completed(futures):
+                    f.result()
+                    bar.update(1)
+    if not job.merge:
+        return None
+    sidecar = {"config": {"scenario": dataclasses.asdict(job.base),
+                          "data": dataclasses.asdict(job.spec)},
+               "seed": job.spec.seed, "package_version": version("gearwear"),
+               "description": "one row per (case, replicate, cycles); features of the DTE and "
+                              "the housing acceleration after noise"}
+    return merge(job.spec, job.out, job.name, job.digest, sidecar, job.store_signals)
+
+
+def chunks_kept(job: DatasetJob) -> str:
+    """What an interrupted build kept, and how to go on."""
+    done = [c for c in range(job.spec.chunks) if chunk_is_done(chunk_path(job.folder, c),
+                                                                job.digest)]
+    return (f"{len(done)} of {job.spec.chunks} chunks are kept in {job.folder}; the same command "
+            "resumes from them")
+
+
+def base_scenario(cfg: dict[str, Any]) -> Scenario:
+    return scenario_from_config({k: v for k, v in cfg.items() if k != "case"})

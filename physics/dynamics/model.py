@@ -1,0 +1,452 @@
+"""Torsional vibration of the gear pair with backlash and worn teeth (thesis 3.3-3.5).
+
+Two inertias on their base circles (thesis 3.3)
+
+    J1 theta1'' + r_b1 F = T1,        J2 theta2'' - r_b2 F = -T2,
+    F = c x' + sum_i k_i(t) f(x - g_i(t)),    x = r_b1 theta1 - r_b2 theta2 - e(t)
+
+reduce, with the equivalent mass ``m_e = J1 J2 / (J1 r_b2^2 + J2 r_b1^2)`` and the static mesh
+force ``W0 = T2 / r_b2``, to
+
+    m_e x'' + c x' + sum_i k_i(t) f(x - g_i(t)) = W0 - m_e e''(t).
+
+``f`` is the backlash dead zone of half-width ``Delta_n`` (thesis 3.3). The damping acts through
+the contacts, shared by stiffness, and a contact transmits no tension: where the thesis writes
+``c x'`` for the whole mesh, a pair out of contact here carries neither spring nor damper force,
+so the mesh force never turns negative while the flanks are apart. The pairs in contact are
+``i = A`` (the pair that entered at the start of contact, at roll ``s_start + tau``) and ``i = B``
+(one base pitch ahead, while it is still on the path), with ``tau = r_b1 omega1 t mod p_b``. Their
+stiffnesses ``k_i`` are the potential-energy stiffnesses of the worn teeth
+(:mod:`physics.stiffness`) and ``g_i`` their wear gaps (pinion plus gear wear at the contact
+point): the wear-induced error of the thesis enters pair by pair, so load sharing and contact loss
+follow from the same equation. ``e(t)`` holds the long-period (pinion eccentricity on the line of
+action, shaft rate) and short-period (profile, mesh rate) errors. The thesis's "combined error" is
+``e(t) + sum k_i g_i / sum k_i``.
+
+Integration is the fixed-step classical Runge-Kutta of the thesis, compiled with numba and run in
+parallel over a batch of scenarios; the step is ``step_factor / omega_max`` with ``omega_max`` the
+highest natural frequency ``sqrt(k_max / m_e)``, rounded down to divide the output sample period.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+
+from physics.gear.geometry import MeshGeometry
+from physics.gear.stiffness import MeshStiffness
+from physics.params import Dynamics, Scenario
+
+
+@dataclass(frozen=True)
+class PairModel:
+    """One scenario of the reduced torsional model, ready to integrate (SI units)."""
+
+    geometry: MeshGeometry
+    mass: float  # m_e [kg]
+    damping: float  # c [N s/m]
+    static_force: float  # W0 [N]
+    half_backlash: float  # Delta_n [m]
+    long_error: float  # amplitude of the shaft-rate error on the line of action [m]
+    short_error: float  # amplitude of the mesh-rate error [m]
+    omega1: float  # pinion speed [rad/s]
+    omega_mesh: float  # mesh frequency [rad/s]
+    roll_speed: float  # r_b1 omega1 [m/s]
+    k_a: np.ndarray  # stiffness of pair A over `periods` mesh periods (uniform grid) [N/m]
+    k_b: np.ndarray  # stiffness of pair B (0 out of contact) [N/m]
+    g_a: np.ndarray  # wear gap of pair A [m]
+    g_b: np.ndarray  # wear gap of pair B [m]
+    inertias: tuple[float, float]  # J1, J2 [kg m^2]
+    # --- hooks of the effect library (physics.effects); the defaults are the declared model ---
+    periods: int = 1  # mesh periods the tables span (z1: one pinion revolution, tooth by tooth)
+    lam_a: np.ndarray | None = None  # factor on pair A's force in the equation of motion
+    lam_b: np.ndarray | None = None  # (sliding friction); None: 1
+    gear_error: float = 0.0  # amplitude of the gear's run-out error on the line of action [m]
+    centre_runout: float = 0.0  # amplitude of the centre-distance change it causes [m]
+    omega2: float = 0.0  # gear speed [rad/s]
+    ripple_force: float = 0.0  # amplitude of the torque ripple as mesh force [N]
+    omega_ripple: float = 0.0  # its angular frequency [rad/s]
+
+    @property
+    def omega_max(self) -> float:
+        """Highest natural frequency of the linearised mesh, ``sqrt(k_max / m_e)`` [rad/s]."""
+        return math.sqrt(float(np.max(self.k_a + self.k_b)) / self.mass)
+
+    @property
+    def mesh_frequency_hz(self) -> float:
+        return self.omega_mesh / (2 * math.pi)
+
+    def combined_error(self, t: np.ndarray) -> np.ndarray:
+        """Thesis 3.3's combined error at times t: manufacturing plus wear-induced [m]."""
+        tau = self.phase_index(t)
+        k_a, k_b = self.k_a[tau], self.k_b[tau]
+        wear = (k_a * self.g_a[tau] + k_b * self.g_b[tau]) / (k_a + k_b)
+        return (self.long_error * np.sin(self.omega1 * t)
+                + self.short_error * np.sin(self.omega_mesh * t)
+                + self.gear_error * np.sin(self.omega2 * t) + wear)
+
+    def phase_index(self, t: np.ndarray) -> np.ndarray:
+        """Index into the tables at times ``t`` (they span ``periods`` mesh periods)."""
+        n = len(self.k_a)
+        span = self.geometry.base_pitch * self.periods
+        frac = np.mod(self.roll_speed * np.asarray(t), span) / span
+        return np.minimum((frac * n).astype(int), n - 1)
+
+    def force_factors(self) -> tuple[np.ndarray, np.ndarray]:
+        """The pairs' force factors in the equation of motion (1 without friction)."""
+        ones = np.ones_like(self.k_a)
+        return (ones if self.lam_a is None else self.lam_a,
+                ones if self.lam_b is None else self.lam_b)
+
+
+def blank_inertia(radius: float, bore: float, width: float, density: float) -> float:
+    """Polar moment of a solid steel disc between bore and radius [kg m^2]."""
+    return 0.5 * math.pi * density * width * (radius**4 - bore**4)
+
+
+def build_model(scn: Scenario, stiffness: MeshStiffness | None = None,
+                s_grid: np.ndarray | None = None, wear1: np.ndarray | None = None,
+                wear2: np.ndarray | None = None, n_phase: int = 1024) -> PairModel:
+    """The reduced model of ``scn`` for the teeth worn by ``wear1, wear2`` on ``s_grid``."""
+    dyn, g, op = scn.dynamics, scn.gear, scn.operating
+    if op.n1_rpm > 10000:
+        raise ValueError(f"operating.n1_rpm = {op.n1_rpm:g} is outside the dynamic model's scope "
+                         "(<= 10000 r/min: rigid shafts and bearings, no centrifugal effects)")
+    ms = stiffness or MeshStiffness(g, scn.material)
+    geom = ms.geometry
+    w0 = op.torque_Nm / geom.rb2
+    p_max = 2 * w0 / g.face_width / (math.pi * _pitch_half_width(scn, geom, w0))
+    if p_max > 3.5e9:
+        raise ValueError(
+            f"operating.torque_Nm = {op.torque_Nm:g} gives a single-pair pitch-point Hertz "
+            f"pressure of {p_max / 1e9:.2f} GPa, beyond the model's scope (<= 3.5 GPa, elastic "
+            "contact of case-hardened steel); lower the torque or widen the face")
+    tau = geom.base_pitch * np.arange(n_phase) / n_phase
+    s_a = geom.s_start + tau
+    s_b = s_a + geom.base_pitch
+    on_b = s_b <= geom.s_end
+    k_of = ms.pair_function(s_grid, wear1, wear2)
+    k_a = k_of(s_a)
+    k_b = np.where(on_b, k_of(np.minimum(s_b, geom.s_end)), 0.0)
+    if wear1 is None and wear2 is None:
+        g_a = g_b = np.zeros(n_phase)
+    else:
+        s_grid = np.asarray(s_grid, dtype=float)
+        total = (np.zeros_like(s_grid) if wear1 is None else wear1) + (
+            np.zeros_like(s_grid) if wear2 is None else wear2)
+        g_a = np.interp(s_a, s_grid, total)
+        g_b = np.where(on_b, np.interp(np.minimum(s_b, geom.s_end), s_grid, total), 0.0)
+    rho, width = scn.material.density_kg_m3, g.face_width
+    j1 = dyn.inertia1_kg_m2 or blank_inertia(geom.r1, g.bore_radius1_mm * 1e-3, width, rho)
+    j2 = dyn.inertia2_kg_m2 or blank_inertia(geom.r2, g.bore_radius2_mm * 1e-3, width, rho)
+    mass = j1 * j2 / (j1 * geom.rb2**2 + j2 * geom.rb1**2)
+    k_mean = float(np.mean(k_a + k_b))
+    omega1 = op.omega1
+    return PairModel(
+        geometry=geom, mass=mass, damping=2 * dyn.damping_ratio * math.sqrt(k_mean * mass),
+        static_force=w0, half_backlash=dyn.half_backlash_um * 1e-6,
+        long_error=dyn.eccentricity1_um * 1e-6 * math.sin(geom.alpha_w),
+        short_error=dyn.profile_error_um * 1e-6, omega1=omega1, omega_mesh=omega1 * g.z1,
+        roll_speed=geom.rb1 * omega1, k_a=k_a, k_b=k_b, g_a=g_a, g_b=g_b, inertias=(j1, j2),
+    )
+
+
+def _pitch_half_width(scn: Scenario, geom: MeshGeometry, force: float) -> float:
+    from physics.gear.contact import equivalent_radius, hertz_half_width, reduced_modulus
+
+    R1, R2 = geom.curvature_radii(np.array([0.0]))
+    e_star = reduced_modulus(scn.material, scn.material)
+    return float(hertz_half_width(force / scn.gear.face_width, equivalent_radius(R1, R2),
+                                  e_star)[0])
+
+
+@dataclass(frozen=True)
+class Response:
+    """Steady response of a batch of scenarios, sampled at ``sample_rate_hz`` after the transient.
+
+    Arrays are ``(scenario, sample)``; ``force_by_phase`` is the mean dynamic mesh force over the
+    record in each of ``phase_bins`` bins of the mesh period (phase 0 = a pair enters contact).
+    """
+
+    time: np.ndarray  # [s] since the start of the integration (transient included)
+    dte: np.ndarray  # x [m]
+    force: np.ndarray  # F_d = sum over pairs in contact of k f(x - g) + c_i x' [N]
+    load_a: np.ndarray  # load of pair A [N] (its elastic force and its share of damping)
+    load_b: np.ndarray  # load of pair B [N]
+    force_by_phase: np.ndarray  # [N]
+    time_step: float  # RK4 step [s]
+
+
+def time_step(models: Sequence[PairModel], dyn: Dynamics) -> tuple[float, int]:
+    """RK4 step and sub-steps per output sample: ``dt <= step_factor / omega_max``."""
+    dt_max = dyn.step_factor / max(m.omega_max for m in models)
+    n_sub = max(1, math.ceil(1.0 / (dyn.sample_rate_hz * dt_max)))
+    return 1.0 / (dyn.sample_rate_hz * n_sub), n_sub
+
+
+def simulate(models: Sequence[PairModel] | PairModel, dyn: Dynamics) -> Response:
+    """Integrate a batch of scenarios (parallel over scenarios) and sample their response."""
+    if isinstance(models, PairModel):
+        models = [models]
+    if not models:
+        raise ValueError("simulate needs at least one scenario")
+    n_phase = {(len(m.k_a), m.periods) for m in models}
+    if len(n_phase) != 1:
+        raise ValueError("all scenarios of a batch need the same phase grid and periods")
+    dt, n_sub = time_step(models, dyn)
+    n_transient = round(dyn.transient_s / dt)
+    n_out = round(dyn.duration_s * dyn.sample_rate_hz)
+    par = np.array([[m.mass, m.damping, m.static_force, m.half_backlash, m.long_error,
+                     m.short_error, m.omega1, m.omega_mesh, m.roll_speed,
+                     m.geometry.base_pitch, m.gear_error, m.omega2, m.ripple_force,
+                     m.omega_ripple, len(m.k_a) / m.periods, m.centre_runout,
+                     len(m.k_a) / m.periods / (m.geometry.base_pitch
+                                               * math.sin(m.geometry.alpha_w))]
+                    for m in models])
+    tables = np.stack([np.stack([m.k_a, m.k_b, m.g_a, m.g_b, *m.force_factors()])
+                       for m in models])
+    x0 = np.array([m.half_backlash + m.static_force / (m.k_a[0] + m.k_b[0]) for m in models])
+    out = _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, dyn.phase_bins)
+    dte, force, load_a, load_b, phase_sum, phase_count = out
+    with np.errstate(invalid="ignore"):
+        by_phase = phase_sum / phase_count
+    if np.any(phase_count == 0):
+        raise ValueError(f"dynamics.duration_s = {dyn.duration_s:g} is too short to visit every "
+                         f"one of {dyn.phase_bins} phase bins; lengthen it or use fewer bins")
+    time = n_transient * dt + (np.arange(n_out) + 1) * n_sub * dt
+    return Response(time, dte, force, load_a, load_b, by_phase, dt)
+
+
+@numba.njit(cache=True, fastmath=True, inline="always")
+def _contact(k, u, half, c_v):
+    """Force of one pair: stiffness times the dead-zone deflection plus its share of damping.
+
+    The damping acts through the contact: nothing while the flanks are apart, and a contact
+    never pulls (drive flank >= 0, coast flank <= 0).
+    """
+    if u > half:
+        return max(k * (u - half) + c_v, 0.0)
+    if u < -half:
+        return min(k * (u + half) + c_v, 0.0)
+    return 0.0
+
+
+@numba.njit(cache=True, fastmath=True, inline="always")
+def _lerp(tab, row, i0, i1, frac):
+    return tab[row, i0] + (tab[row, i1] - tab[row, i0]) * frac
+
+
+@numba.njit(cache=True, fastmath=True)
+def _mesh(par, tab, pos, x, v, da):
+    """Force factors and forces of the pairs in contact at table position ``pos``.
+
+    ``pos`` in [0, n) is the mesh phase in table cells; the tables are interpolated linearly and
+    periodically. The mesh damping ``c`` is shared between the pairs by stiffness. ``da`` is the
+    centre-distance change [m] (gear run-out): it moves the ends of the path of contact.
+    """
+    n = tab.shape[1]
+    i0 = int(pos)
+    if i0 >= n:
+        i0 = n - 1
+    frac = pos - i0
+    i1 = i0 + 1 if i0 + 1 < n else 0
+    k_a, k_b = _lerp(tab, 0, i0, i1, frac), _lerp(tab, 1, i0, i1, frac)
+    g_a, g_b = _lerp(tab, 2, i0, i1, frac), _lerp(tab, 3, i0, i1, frac)
+    l_a, l_b = _lerp(tab, 4, i0, i1, frac), _lerp(tab, 5, i0, i1, frac)
+    k_c, g_c, l_c = 0.0, 0.0, 0.0
+    if da != 0.0:
+        # in the pinion's roll frame the exit (pinion tip) stays put and the entry (gear tip)
+        # moves by d(a sin aw')/da = 1/sin aw' per unit centre distance: pairs enter later
+        # when the centres part, earlier (the next pair ahead of time) when they close
+        n_per = par[14]
+        start = pos - (pos % n_per)
+        u_in = da * par[16]  # entry shift in table cells
+        if u_in > 0.0 and pos - start < u_in:
+            k_a = 0.0
+        elif u_in < 0.0 and pos - start >= n_per + u_in:
+            j = int(start + n_per) % n
+            k_c, g_c, l_c = tab[0, j], tab[2, j], tab[4, j]
+    c_v = par[1] * v / (k_a + k_b + k_c)
+    f_a = _contact(k_a, x - g_a, par[3], k_a * c_v)
+    f_b = _contact(k_b, x - g_b, par[3], k_b * c_v)
+    if k_c > 0.0:
+        f_a += _contact(k_c, x - g_c, par[3], k_c * c_v) * l_c / l_a
+    return l_a, l_b, f_a, f_b
+
+
+@numba.njit(cache=True, fastmath=True)
+def _accel(par, tab, pos, x, v, e_dd, w, da):
+    """x'' of the reduced model at mesh phase ``pos``, given e'', the static force w and the
+    centre-distance change da there.
+
+    Each pair's force enters with its factor (1, or the sliding-friction moment factor).
+    """
+    l_a, l_b, f_a, f_b = _mesh(par, tab, pos, x, v, da)
+    return (w - par[0] * e_dd - l_a * f_a - l_b * f_b) / par[0]
+
+
+@numba.njit(cache=True, fastmath=True, inline="always")
+def _extra(par, t):
+    """The effect library's time terms at t: the gear run-out's e'' on the line of action and
+    its centre-distance change (the eccentricity's other component), and the static force."""
+    e_dd, da = 0.0, 0.0
+    if par[10] != 0.0:
+        e_dd = -par[10] * par[11] ** 2 * math.sin(par[11] * t)
+        da = par[15] * math.cos(par[11] * t)
+    w = par[2]
+    if par[12] != 0.0:
+        w += par[12] * math.sin(par[13] * t)
+    return e_dd, w, da
+
+
+@numba.njit(cache=True, fastmath=True, inline="always")
+def _wrap(pos, n):
+    return pos - n if pos >= n else pos
+
+
+@numba.njit(cache=True, parallel=True, fastmath=True)
+def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins):
+    n = par.shape[0]
+    dte = np.empty((n, n_out))
+    force = np.empty((n, n_out))
+    load_a = np.empty((n, n_out))
+    load_b = np.empty((n, n_out))
+    phase_sum = np.zeros((n, n_bins))
+    phase_count = np.zeros((n, n_bins))
+    n_phase = tables.shape[2]
+    for j in numba.prange(n):
+        p, tab = par[j], tables[j]
+        x, v = x0[j], 0.0
+        n_tab = float(n_phase)
+        n_per = p[14]  # table cells per mesh period
+        inc = p[8] * dt / p[9] * n_per  # mesh phase advance per step, in table cells
+        pos = 0.0
+        # e''(t) = -E_l w1^2 sin(w1 t) - E_s wm^2 sin(wm t): sines advanced by exact rotations
+        a_l, a_s = p[4] * p[6] ** 2, p[5] * p[7] ** 2
+        cl, sl = math.cos(0.5 * p[6] * dt), math.sin(0.5 * p[6] * dt)
+        cs, ss = math.cos(0.5 * p[7] * dt), math.sin(0.5 * p[7] * dt)
+        s1, c1, s2, c2 = 0.0, 1.0, 0.0, 1.0  # sin, cos of w1 t and wm t
+        total = n_transient + n_out * n_sub
+        da0 = _extra(p, 0.0)[2]
+        for step in range(total + 1):
+            # the mesh at (t, x) serves both the record of the state reached and stage 1 of RK4
+            l_a, l_b, f_a, f_b = _mesh(p, tab, pos, x, v, da0)
+            if step > n_transient:
+                f = f_a + f_b
+                b = int((pos % n_per) / n_per * n_bins)
+                if b >= n_bins:
+                    b = n_bins - 1
+                phase_sum[j, b] += f
+                phase_count[j, b] += 1.0
+                k = step - n_transient
+                if k % n_sub == 0:
+                    i = k // n_sub - 1
+                    dte[j, i] = x
+                    force[j, i] = f
+                    load_a[j, i] = f_a
+                    load_b[j, i] = f_b
+            if step == total:
+                break
+            s1h, c1h = s1 * cl + c1 * sl, c1 * cl - s1 * sl  # at t + dt/2
+            s2h, c2h = s2 * cs + c2 * ss, c2 * cs - s2 * ss
+            s1n, c1n = s1h * cl + c1h * sl, c1h * cl - s1h * sl  # at t + dt
+            s2n, c2n = s2h * cs + c2h * ss, c2h * cs - s2h * ss
+            t = step * dt
+            x0e, w0, _ = _extra(p, t)
+            xhe, wh, dah = _extra(p, t + 0.5 * dt)
+            x1e, w1, da1 = _extra(p, t + dt)
+            e0 = x0e - (a_l * s1 + a_s * s2)
+            eh = xhe - (a_l * s1h + a_s * s2h)
+            e1 = x1e - (a_l * s1n + a_s * s2n)
+            a1 = (w0 - p[0] * e0 - l_a * f_a - l_b * f_b) / p[0]
+            pos_h = _wrap(pos + 0.5 * inc, n_tab)
+            pos_1 = _wrap(pos + inc, n_tab)
+            a2 = _accel(p, tab, pos_h, x + 0.5 * dt * v, v + 0.5 * dt * a1, eh, wh, dah)
+            a3 = _accel(p, tab, pos_h, x + 0.5 * dt * (v + 0.5 * dt * a1), v + 0.5 * dt * a2,
+                        eh, wh, dah)
+            a4 = _accel(p, tab, pos_1, x + dt * (v + 0.5 * dt * a2), v + dt * a3, e1, w1, da1)
+            x += dt * (v + dt * (a1 + a2 + a3) / 6.0)
+            v += dt * (a1 + 2.0 * a2 + 2.0 * a3 + a4) / 6.0
+            pos = pos_1
+            da0 = da1
+            s1, c1, s2, c2 = s1n, c1n, s2n, c2n
+            if step % 4096 == 0:  # keep the rotations on the unit circle
+                r1, r2 = math.hypot(s1, c1), math.hypot(s2, c2)
+                s1, c1, s2, c2 = s1 / r1, c1 / r1, s2 / r2, c2 / r2
+    return dte, force, load_a, load_b, phase_sum, phase_count
+
+
+def force_per_position(model: PairModel, response_force_by_phase: np.ndarray,
+                       s: np.ndarray) -> np.ndarray:
+    """Mean dynamic mesh force at the instant a pair is at roll coordinate ``s`` [N].
+
+    A pair at ``s`` is at phase ``(s - s_start) mod p_b`` of the mesh period (as pair A in the
+    first base pitch of its path, as pair B after it); the force is periodic in that phase.
+    """
+    geom = model.geometry
+    n_bins = len(response_force_by_phase)
+    frac = np.mod(np.asarray(s) - geom.s_start, geom.base_pitch) / geom.base_pitch
+    centres = (np.arange(n_bins) + 0.5) / n_bins
+    return np.interp(frac, centres, response_force_by_phase, period=1.0)
+
+
+def simulate_two_dof(model: PairModel, t_eval: np.ndarray, rtol: float = 1e-9,
+                     atol: float = 1e-13) -> tuple[np.ndarray, np.ndarray]:
+    """Reference: the unreduced two-inertia equations of thesis 3.3 by ``solve_ivp`` (DOP853).
+
+    States ``theta1, theta2`` and their rates, with ``T1 = W0 r_b1`` and ``T2 = W0 r_b2``;
+    returns the DTE ``x = r_b1 theta1 - r_b2 theta2 - e(t)`` and the mesh force at ``t_eval``.
+    Slow (pure Python right-hand side); it exists to check the reduced, compiled integrator,
+    for the declared model (no effect of :mod:`physics.effects`).
+    """
+    from scipy.integrate import solve_ivp
+
+    geom, m = model.geometry, model
+    if (m.periods != 1 or m.lam_a is not None or m.lam_b is not None or m.gear_error
+            or m.ripple_force or m.centre_runout):
+        raise ValueError("simulate_two_dof checks the declared model only; this one carries "
+                         "effects of physics.effects")
+    j1, j2 = m.inertias
+    rb1, rb2, n = geom.rb1, geom.rb2, len(m.k_a)
+    cells = np.arange(n + 1)
+    tables = [np.append(a, a[0]) for a in (m.k_a, m.k_b, m.g_a, m.g_b)]
+
+    def error(t):
+        return (m.long_error * np.sin(m.omega1 * t), m.long_error * m.omega1
+                * np.cos(m.omega1 * t)), (m.short_error * np.sin(m.omega_mesh * t),
+                                          m.short_error * m.omega_mesh * np.cos(m.omega_mesh * t))
+
+    def mesh_force(t, th1, th2, w1, w2):
+        (el, eld), (es, esd) = error(t)
+        x = rb1 * th1 - rb2 * th2 - el - es
+        v = rb1 * w1 - rb2 * w2 - eld - esd
+        pos = np.mod(m.roll_speed * t, geom.base_pitch) / geom.base_pitch * n
+        k_a, k_b, g_a, g_b = (np.interp(pos, cells, tab) for tab in tables)
+        dz, k_sum = m.half_backlash, k_a + k_b
+
+        def pair(k, u):
+            c_v = m.damping * v * k / k_sum
+            return np.where(u > dz, np.maximum(k * (u - dz) + c_v, 0.0),
+                            np.where(u < -dz, np.minimum(k * (u + dz) + c_v, 0.0), 0.0))
+
+        return x, pair(k_a, x - g_a) + pair(k_b, x - g_b)
+
+    def rhs(t, y):
+        th1, th2, w1, w2 = y
+        _, force = mesh_force(t, th1, th2, w1, w2)
+        return [w1, w2, (m.static_force * rb1 - rb1 * force) / j1,
+                (-m.static_force * rb2 + rb2 * force) / j2]
+
+    x0 = m.half_backlash + m.static_force / (m.k_a[0] + m.k_b[0])
+    (_, el_dot), (_, es_dot) = error(0.0)
+    w1_0 = (el_dot + es_dot) / rb1  # x'(0) = 0, as in the reduced integrator
+    sol = solve_ivp(rhs, (0.0, float(t_eval[-1])), [x0 / rb1, 0.0, w1_0, 0.0],
+                    method="DOP853", t_eval=t_eval, rtol=rtol, atol=atol)
+    if not sol.success:
+        raise RuntimeError(f"solve_ivp failed: {sol.message}")
+    x, force = mesh_force(sol.t, *sol.y)
+    return x, force

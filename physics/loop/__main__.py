@@ -1,0 +1,92 @@
+"""``python -m physics.loop data=BUNDLE|TABLE.csv``: close the loop with measured data (schema
+:class:`LoopConfig`, choices ``conf/loop/loop.yaml``; method in :mod:`physics.loop.bundle_loop`
+and :mod:`physics.loop.table_loop`)."""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import hydra
+import pandas as pd
+from hydra.core.hydra_config import HydraConfig
+from omegaconf import MISSING, DictConfig, OmegaConf
+
+from physics.command import register_schema, run_command
+from physics.dataset.generation import DATASET_TRIBOLOGY
+from physics.loop.bundle import Bundle, read_measurements
+from physics.loop.bundle_loop import LoopSettings, run_loop
+from physics.loop.report import write_report
+from physics.loop.table_loop import run_feature_table
+from physics.params import (
+    Dynamics,
+    GearPair,
+    Lubricant,
+    Material,
+    Operating,
+    Scenario,
+    Tribology,
+    WearSolver,
+    scenario_from_config,
+)
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class LoopConfig:
+    """Schema of ``python -m physics.loop``."""
+
+    gear: GearPair = field(default_factory=GearPair)
+    material: Material = field(default_factory=Material)
+    lubricant: Lubricant = field(default_factory=Lubricant)
+    tribology: Tribology = field(default_factory=lambda: DATASET_TRIBOLOGY)  # as the dataset
+    operating: Operating = field(default_factory=Operating)
+    solver: WearSolver = field(default_factory=WearSolver)
+    dynamics: Dynamics = field(default_factory=Dynamics)
+    data: str = MISSING  # a bundle folder (shared/specs/measured-bundle.md) or a feature table
+    case: int | None = None  # 1-5: operating point and lubricant of Table 11 (feature tables)
+    progress: bool = True
+    loop: LoopSettings = field(default_factory=LoopSettings)
+
+
+register_schema("loop_schema", LoopConfig)
+
+
+@dataclass(frozen=True)
+class LoopJob:
+    data: Bundle | pd.DataFrame
+    scenario: Scenario
+    settings: LoopSettings
+    progress: bool
+    out: Path
+
+
+def prepare(cfg: DictConfig) -> LoopJob:
+    opts = OmegaConf.to_container(cfg.loop, resolve=True)
+    settings = LoopSettings(**opts)
+    data, scn = read_measurements(cfg.data, scenario_from_config(cfg))
+    return LoopJob(data, scn, settings, bool(cfg.progress),
+                   Path(HydraConfig.get().runtime.output_dir))
+
+
+def execute(job: LoopJob) -> None:
+    if isinstance(job.data, Bundle):
+        report = run_loop(job.data, job.scenario, job.settings, progress=job.progress)
+    else:
+        report = run_feature_table(job.data, job.scenario, job.settings)
+    write_report(report, job.out)
+    log.info("chosen effect: %s; held-out error %.3f -> %.3f; report in %s",
+             report["chosen_effect"], report["error_before"], report["error_after"], job.out)
+
+
+@hydra.main(version_base="1.3", config_path="pkg://gearwear_conf.loop", config_name="loop")
+def main(cfg: DictConfig) -> None:
+    run_command(cfg, prepare, execute,
+                kept=lambda job: "nothing is kept (the loop writes its report at the end); "
+                                 "run the command again")
+
+
+if __name__ == "__main__":
+    main()

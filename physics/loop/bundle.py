@@ -1,0 +1,245 @@
+"""Measured-data bundles (``shared/specs/measured-bundle.md``): read, validate, write.
+
+A bundle is a folder with ``manifest.csv`` (one row per record), ``signals/<record>.npy`` and
+optionally ``gear.yaml`` (overrides of ``conf/physics/gear``). :func:`read_bundle` refuses a
+bundle that breaks a rule with one message naming the record and the rule, before anything is
+computed;
+:func:`write_bundle` writes a complete bundle or nothing (a temporary folder renamed into place).
+A feature table (a CSV with ``wear_mm`` and feature columns, like thesis Table 15) is the other
+accepted form (:func:`read_feature_table`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import re
+import shutil
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import yaml
+from omegaconf import OmegaConf
+from omegaconf.errors import OmegaConfBaseException
+
+from physics.params import GearPair, Scenario
+from physics.scope import check_scope
+
+REQUIRED = ("record", "quantity", "fs_hz", "n1_rpm", "torque_Nm", "wear_mm", "cycles", "split")
+QUANTITIES = ("dte_m", "accel_m_s2")
+#: optional columns that set a record's lubricant or roughness
+OPTIONAL_NUMERIC = ("eta0_Pa_s", "sigma_um")
+_NAME = re.compile(r"^[A-Za-z0-9_-]+$")
+
+
+@dataclass(frozen=True)
+class Bundle:
+    path: Path
+    manifest: pd.DataFrame
+    signals: dict[str, np.ndarray]
+    gear: dict
+
+    @property
+    def records(self) -> list[str]:
+        return self.manifest.record.tolist()
+
+
+def _fail(path: Path, record: str | None, rule: str) -> ValueError:
+    where = f"record {record!r}" if record is not None else "manifest.csv"
+    return ValueError(f"bundle {path}: {where}: {rule}")
+
+
+def read_bundle(path: str | Path, gear: GearPair | None = None) -> Bundle:
+    """Read and validate a bundle; ``gear`` is the configured pair, to which the bundle's
+    ``gear.yaml`` applies its overrides (its ``z1`` sets the sampling-rate rule fs >= 4 x the
+    third mesh harmonic). ``Bundle.gear`` holds the overrides."""
+    path = Path(path)
+    gear = gear if gear is not None else GearPair()
+    if not path.is_dir():
+        raise ValueError(f"bundle {path}: no such folder (see shared/specs/measured-bundle.md)")
+    man = _read_manifest(path)
+    overrides = _read_gear(path, gear)
+    z1 = dataclasses.replace(gear, **overrides).z1
+    signals = {}
+    for row in man.itertuples(index=False):
+        rec = row.record
+        x = _read_signal(path, rec)
+        revs = x.size / row.fs_hz * row.n1_rpm / 60
+        if revs < 10:
+            raise _fail(path, rec, f"{revs:.1f} pinion revolutions; at least 10 are needed")
+        f_need = 4 * 3 * z1 * row.n1_rpm / 60
+        if row.fs_hz < f_need:
+            raise _fail(path, rec, f"fs_hz = {row.fs_hz:g} is below 4 x the third mesh "
+                                   f"harmonic ({f_need:g} Hz)")
+        signals[rec] = x
+    return Bundle(path, man, signals, overrides)
+
+
+def _read_manifest(path: Path) -> pd.DataFrame:
+    """manifest.csv with every cell checked; a bad cell is reported against its own record."""
+    f = path / "manifest.csv"
+    if not f.is_file():
+        raise ValueError(f"bundle {path}: manifest.csv is missing (see "
+                         "shared/specs/measured-bundle.md)")
+    try:
+        man = pd.read_csv(f, dtype=str, keep_default_na=False)
+    except (pd.errors.EmptyDataError, pd.errors.ParserError, UnicodeDecodeError) as err:
+        raise _fail(path, None, f"not a readable CSV table ({err}); one header line and one "
+                                "row per record are needed") from None
+    missing = [c for c in REQUIRED if c not in man.columns]
+    if missing:
+        raise _fail(path, None, f"column(s) {missing} missing; required: {list(REQUIRED)}")
+    if man.empty:
+        raise _fail(path, None, "no records; add one row per record")
+    man["record"] = man.record.str.strip()
+    dup = man.record[man.record.duplicated()].tolist()
+    if dup:
+        raise _fail(path, dup[0], "record names must be unique")
+    for rec in man.record:
+        if not _NAME.match(rec):
+            raise _fail(path, rec, "names use letters, digits, '_' and '-' only")
+    numeric = {"fs_hz": False, "n1_rpm": False, "torque_Nm": False, "wear_mm": True,
+               "cycles": True} | {c: True for c in OPTIONAL_NUMERIC if c in man.columns}
+    for col, may_be_empty in numeric.items():
+        text = man[col].str.strip()
+        values = pd.to_numeric(text.where(text != ""), errors="coerce")
+        for rec, s, v in zip(man.record, text, values, strict=True):
+            if s == "" and may_be_empty:
+                continue
+            shown = repr(float(v)) if np.isfinite(v) else repr(s)
+            if may_be_empty:
+                if not (np.isfinite(v) and v >= 0):
+                    raise _fail(path, rec, f"{col} = {shown} must be empty or a number >= 0")
+            elif not (np.isfinite(v) and v > 0):
+                raise _fail(path, rec, f"{col} = {shown} must be a positive number")
+        man[col] = values
+    for rec, q, s in zip(man.record, man.quantity.str.strip(), man.split.str.strip(),
+                         strict=True):
+        if q not in QUANTITIES:
+            raise _fail(path, rec, f"quantity {q!r} is not one of {QUANTITIES}")
+        if s not in ("train", "test", ""):
+            raise _fail(path, rec, f"split {s!r} must be train, test or empty")
+    man["quantity"] = man.quantity.str.strip()
+    man["split"] = man.split.str.strip().replace("", np.nan)
+    return man
+
+
+def _read_gear(path: Path, gear: GearPair) -> dict:
+    """The overrides of ``gear.yaml``, checked by building the pair they give."""
+    f = path / "gear.yaml"
+    if not f.is_file():
+        return {}
+    try:  # OmegaConf's YAML reads 4.9e4 as a number (PyYAML's YAML 1.1 reads a string)
+        overrides = OmegaConf.to_container(OmegaConf.create(f.read_text() or "{}"))
+    except (yaml.YAMLError, UnicodeDecodeError, OmegaConfBaseException) as err:
+        raise _fail(path, None, f"gear.yaml is not readable YAML ({err})") from None
+    if not isinstance(overrides, dict):
+        raise _fail(path, None, "gear.yaml must map gear keys (conf/physics/gear) to values")
+    known = {f.name for f in dataclasses.fields(GearPair)}
+    unknown = sorted(set(overrides) - known)
+    if unknown:
+        raise ValueError(f"bundle {path}: gear.yaml: unknown key(s) {unknown}; allowed: "
+                         f"{sorted(known)}")
+    try:
+        dataclasses.replace(gear, **overrides)
+    except ValueError as err:
+        raise ValueError(f"bundle {path}: gear.yaml: {err}") from None
+    return overrides
+
+
+def _read_signal(path: Path, rec: str) -> np.ndarray:
+    f = path / "signals" / f"{rec}.npy"
+    if not f.is_file():
+        raise _fail(path, rec, f"signals/{rec}.npy is missing")
+    try:
+        x = np.load(f, allow_pickle=False)
+    except (ValueError, OSError, EOFError) as err:
+        raise _fail(path, rec, f"signals/{rec}.npy is not a numpy .npy array of numbers "
+                               f"({err}); save it with numpy.save") from None
+    if x.dtype.kind not in "iuf":
+        raise _fail(path, rec, f"signals/{rec}.npy holds {x.dtype} values; numbers are needed")
+    if x.ndim != 1:
+        raise _fail(path, rec, f"the signal must be 1-D, not of shape {x.shape}")
+    if not np.all(np.isfinite(x)):
+        raise _fail(path, rec, f"non-finite sample at index {int(np.argmin(np.isfinite(x)))}")
+    return x.astype(float)
+
+
+def record_scenario(base: Scenario, row) -> Scenario:
+    """The scenario of one manifest row: its speed, torque and, where given, lubricant
+    viscosity and roughness."""
+    op = dataclasses.replace(base.operating, n1_rpm=float(row.n1_rpm),
+                             torque_Nm=float(row.torque_Nm))
+    lub, tri = base.lubricant, base.tribology
+    if "eta0_Pa_s" in row._fields and not pd.isna(row.eta0_Pa_s):
+        lub = dataclasses.replace(lub, eta0_Pa_s=float(row.eta0_Pa_s))
+    if "sigma_um" in row._fields and not pd.isna(row.sigma_um):
+        tri = dataclasses.replace(tri, sigma_um=float(row.sigma_um))
+    return dataclasses.replace(base, operating=op, lubricant=lub, tribology=tri)
+
+
+def read_measurements(path: str | Path, base: Scenario) -> tuple[Bundle | pd.DataFrame, Scenario]:
+    """The bundle (a folder) or feature table (a .csv file) at ``path`` and the scenario with
+    the bundle's gear overrides; every record's scenario is checked against the model's scope.
+    Refuses a bad input before any work."""
+    path = Path(path)
+    if path.is_dir():
+        bundle = read_bundle(path, base.gear)
+        scn = dataclasses.replace(base, gear=dataclasses.replace(base.gear, **bundle.gear))
+        for row in bundle.manifest.itertuples(index=False):
+            try:
+                check_scope(record_scenario(scn, row))
+            except ValueError as err:
+                raise _fail(path, row.record, str(err)) from None
+        return bundle, scn
+    if path.is_file() and path.suffix == ".csv":
+        return read_feature_table(path), check_scope(base)
+    raise ValueError(f"data = {str(path)!r} is neither a bundle folder nor a feature-table .csv "
+                     "file; see shared/specs/measured-bundle.md")
+
+
+def write_bundle(path: str | Path, manifest: pd.DataFrame, signals: dict[str, np.ndarray],
+                 gear: dict | None = None) -> Path:
+    """Write a complete bundle at ``path`` (replacing one there) or nothing."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.", dir=path.parent))
+    try:
+        (tmp / "signals").mkdir()
+        manifest.to_csv(tmp / "manifest.csv", index=False)
+        for name, x in signals.items():
+            np.save(tmp / "signals" / f"{name}.npy", np.asarray(x, float))
+        if gear:
+            (tmp / "gear.yaml").write_text(yaml.safe_dump(gear))
+        if path.exists():
+            shutil.rmtree(path)
+        os.replace(tmp, path)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return path
+
+
+def read_feature_table(path: str | Path) -> pd.DataFrame:
+    """A feature table: ``wear_mm`` plus feature columns (units in the names, as Table 15);
+    a bad cell is reported with its row and column."""
+    path = Path(path)
+    try:
+        df = pd.read_csv(path)
+    except (pd.errors.EmptyDataError, pd.errors.ParserError, UnicodeDecodeError) as err:
+        raise ValueError(f"feature table {path}: not a readable CSV table ({err})") from None
+    if "wear_mm" not in df.columns or df.shape[1] < 2 or df.empty:
+        raise ValueError(f"feature table {path}: needs a wear_mm column, feature columns and "
+                         "at least one row")
+    for col in df.columns:
+        values = pd.to_numeric(df[col], errors="coerce")
+        bad = ~np.isfinite(values.to_numpy(float))
+        if bad.any():
+            row = int(np.argmax(bad))
+            raise ValueError(f"feature table {path}: row {row + 1}, column {col!r}: "
+                             f"{df[col].iloc[row]!r} is not a finite number")
+        df[col] = values
+    return df

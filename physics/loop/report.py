@@ -1,0 +1,132 @@
+"""Markdown and figures of a measured-data loop report (:mod:`physics.loop`)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from physics.files import atomic_write, pyplot
+from physics.signals.order_analysis import line_amplitudes
+
+
+def markdown(r: dict) -> str:
+    lines = ["# Measured-data loop", ""]
+    chosen = r["chosen_effect"]
+    lines.append(f"**Chosen effect:** {chosen or 'none (no candidate passes the null test)'}")
+    if chosen:
+        params = ", ".join(f"{k} = {v:.4g}" for k, v in r["chosen_parameters"].items()
+                           if isinstance(v, float))
+        lines.append(f"  fitted: {params}")
+    table = r.get("mode") == "feature_table"
+    lead = ("features [RMS log ratio, leave-one-row-out]" if table
+            else "signature [RMS standardised residual]")
+    lines += ["", "| held-out error | before | after |", "|---|---|---|",
+              f"| {lead} | {r['error_before']:.3f} | {r['error_after']:.3f} |",
+              f"| Table 13 features [% mean rel.] | {r['feature_error_before_pct']:.2f} | "
+              f"{r['feature_error_after_pct']:.2f} |"]
+    if not table:
+        lines.append(f"| signature [dB RMS] | {r['error_before_db']:.2f} | "
+                     f"{r['error_after_db']:.2f} |")
+    if r.get("wear_error_before_pct") is not None:
+        lines.append(f"| wear estimate [% mean rel.] | {r['wear_error_before_pct']:.2f} | "
+                     f"{r['wear_error_after_pct']:.2f} |")
+    cal = ", ".join(f"{k} = {v:.4g}" for k, v in r["calibration"].items())
+    lines += ["", f"Calibrated nuisance parameters ({r['calibrated_on']}): {cal}."]
+    if r.get("not_identifiable"):
+        lines.append(f"Not identifiable from these records (held at the declared value): "
+                     f"{', '.join(r['not_identifiable'])}.")
+    if chosen and r.get("nuisance_after"):
+        after = ", ".join(f"{k} = {v:.4g}" for k, v in r["nuisance_after"].items())
+        lines.append(f"Refitted with the chosen effect: {after}.")
+    staged = any("refined" in c for c in r["ranking"])  # bundles: screened, then refined
+    lines += ["", "## Ranking (held-out error; BIC relative to the calibrated model)", "",
+              "| effect | option | held-out error | dBIC | parameters |" + (" fit |" * staged),
+              "|---|---|---|---|---|" + ("---|" * staged)]
+    for c in r["ranking"]:
+        p = ", ".join(f"{k}={v:.3g}" for k, v in c["parameters"].items() if isinstance(v, float))
+        fit = (" refined |" if c["refined"] else " screened |") if staged else ""
+        lines.append(f"| {c['effect']} | {c['option'] or ''} | {c['heldout_error']:.3f} | "
+                     f"{c['delta_bic']:.1f} | {p} |{fit}")
+    rule = r["decision_rule"]
+    lines += ["", f"Decision rule: adopt the best candidate only if it cuts the held-out error "
+              f"by at least {rule['min_gain']:.0%} and the BIC by at least "
+              f"{rule['min_delta_bic']:g}."]
+    if table:
+        lines += ["", "## Rise of each feature from the first to the last row", "",
+                  "| feature | measured | model before | model after |", "|---|---|---|---|"]
+        lines += [f"| {k} | {v:.3g} | {r['rise_before'][k]:.3g} | {r['rise_after'][k]:.3g} |"
+                  for k, v in r["rise_measured"].items()]
+    else:
+        lines += ["", "## Largest residuals before (measured minus model, dB, mean over "
+                  "held-out records)", ""]
+        res = sorted(r["residual_before"].items(), key=lambda kv: -abs(kv[1]))[:10]
+        lines += [f"- {k}: {v:+.2f} dB (after: {r['residual_after'][k]:+.2f})" for k, v in res]
+    return "\n".join(lines) + "\n"
+
+
+def figures(report: dict, out: Path) -> None:
+    """order_spectra.png (one held-out record) and residuals.png (per signature entry), or
+    feature_trends.png for a feature table."""
+    plt = pyplot()
+    if report.get("mode") == "feature_table":
+        _feature_trends(report, out)
+        return
+    sig = report["_signals"]
+    rec, i = sig["rec"], int(sig["test"][0])
+    man = rec.bundle.manifest
+    fs = float(man.fs_hz.iloc[i])
+    f1 = float(man.n1_rpm.iloc[i]) / 60
+    z1 = rec.scenarios[i].gear.z1
+    orders = np.arange(0.25, 3.5 * z1, 0.25)
+    fig, ax = plt.subplots(figsize=(10, 4.5))
+    n = int(rec.settings.segment_s * fs)
+    meas = rec.bundle.signals[rec.bundle.records[i]][:n]
+    for x, label in ((meas, "measured"), (sig["before"][0], "calibrated model"),
+                     (sig["after"][0], "extended model")):
+        ax.semilogy(orders, line_amplitudes(x, fs, orders * f1) + 1e-30, label=label, lw=0.9)
+    ax.set(xlabel="pinion order", ylabel=f"amplitude [{man.quantity.iloc[i]}]",
+           title=f"order spectrum of held-out record {rec.bundle.records[i]}")
+    ax.legend()
+    atomic_write(out / "order_spectra.png", lambda p: fig.savefig(p, dpi=110, format="png"))
+    plt.close(fig)
+    names = list(report["residual_before"])
+    fig, ax = plt.subplots(figsize=(12, 4.5))
+    pos = np.arange(len(names))
+    ax.bar(pos - 0.2, [report["residual_before"][k] for k in names], 0.4, label="before")
+    ax.bar(pos + 0.2, [report["residual_after"][k] for k in names], 0.4, label="after")
+    ax.set_xticks(pos, names, rotation=90, fontsize=6)
+    ax.set(ylabel="measured - model [dB]", title="signature residual, held-out records")
+    ax.legend()
+    fig.tight_layout()
+    atomic_write(out / "residuals.png", lambda p: fig.savefig(p, dpi=110, format="png"))
+    plt.close(fig)
+
+
+def _feature_trends(report: dict, out: Path) -> None:
+    plt = pyplot()
+    wear = np.array(report["wear_mm"])
+    names = list(report["features_measured"])
+    fig, axes = plt.subplots(1, len(names), figsize=(2.6 * len(names), 3.2))
+    for ax, n in zip(np.atleast_1d(axes), names, strict=True):
+        for key, style, label in (("features_measured", "ko-", "measured"),
+                                  ("features_before", "C0s--", "calibrated model"),
+                                  ("features_after", "C1^-", "extended model")):
+            ax.plot(wear * 1e3, report[key][n], style, label=label, ms=4, lw=1)
+        ax.set(title=n, xlabel="root wear [um]")
+        ax.set_yscale("log")
+    np.atleast_1d(axes)[0].legend(fontsize=7)
+    fig.suptitle(f"features against wear; chosen effect: {report['chosen_effect']}")
+    fig.tight_layout()
+    atomic_write(out / "feature_trends.png", lambda p: fig.savefig(p, dpi=110, format="png"))
+    plt.close(fig)
+
+
+def write_report(report: dict, out: Path) -> None:
+    """report.json, report.md and the figures into ``out``."""
+    plain = {k: v for k, v in report.items() if not k.startswith("_")}
+    text = json.dumps(plain, indent=2, default=float)
+    atomic_write(out / "report.json", lambda p: p.write_text(text + "\n"))
+    atomic_write(out / "report.md", lambda p: p.write_text(markdown(plain)))
+    figures(report, out)

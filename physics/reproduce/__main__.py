@@ -1,0 +1,23 @@
+"""``python -m physics.reproduce``: the thesis tables and figures (schema
+:class:`physics.reproduce.thesis.ReproduceConfig`, choices ``conf/reproduce/reproduce.yaml``)."""
+
+from __future__ import annotations
+
+import hydra
+from omegaconf import DictConfig
+
+from physics.command import register_schema, run_command
+from physics.reproduce.thesis import ReproduceConfig, prepare, run
+
+register_schema("reproduce_schema", ReproduceConfig)
+
+
+@hydra.main(version_base="1.3", config_path="pkg://gearwear_conf.reproduce",
+            config_name="reproduce")
+def main(cfg: DictConfig) -> None:
+    run_command(cfg, prepare, run, kept=lambda plan: f"the tables written so far are in "
+                f"{plan.out}; run the command again to compute them all")
+
+
+if __name__ == "__main__":
+    main()

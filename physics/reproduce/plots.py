@@ -1,0 +1,104 @@
+"""Figures of the reproduction (``python -m physics.reproduce``): mesh stiffness, DTE spectrum,
+wear evolution, feature trends and wear profile, each from the table it shows."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from physics.files import pyplot, save_figure
+from physics.tribology.wear import WearResult
+
+
+def plot_tvms(tvms: pd.DataFrame, path: Path) -> None:
+    plt = pyplot()
+    fig, (ax, ax2) = plt.subplots(2, 1, figsize=(7, 6), sharex=True,
+                                  gridspec_kw={"height_ratios": [2, 1]})
+    healthy = tvms[tvms.cycles == tvms.cycles.min()]
+    for n, df in tvms.groupby("cycles"):
+        ax.plot(df.roll_mm, df.k_total_N_per_m / 1e8, label=f"{n:.3g} cycles")
+        ax2.plot(df.roll_mm, (df.k_total_N_per_m.to_numpy()
+                              / healthy.k_total_N_per_m.to_numpy() - 1) * 100)
+    ax.plot(healthy.roll_mm, healthy.k_pair1_N_per_m / 1e8, "k:", lw=0.8, label="pair 1 (healthy)")
+    ax.plot(healthy.roll_mm, healthy.k_pair2_N_per_m / 1e8, "k--", lw=0.8,
+            label="pair 2 (healthy)")
+    ax.set_ylabel("mesh stiffness [1e8 N/m]")
+    ax.set_title("Time-varying mesh stiffness over one mesh period (potential energy method)")
+    ax.legend(fontsize=8)
+    ax2.set_ylabel("change vs healthy [%]")
+    ax2.set_xlabel("roll coordinate of pair 1 [mm] (start of contact = pinion root)")
+    save_figure(fig, path)
+    plt.close(fig)
+
+
+def plot_dte_spectrum(dte: pd.DataFrame, mesh_hz: float, fs: float, path: Path) -> None:
+    plt = pyplot()
+    fig, (ax, ax2) = plt.subplots(2, 1, figsize=(7, 6))
+    for n, df in dte.groupby("cycles"):
+        x = df.dte_m.to_numpy()
+        spec = np.abs(np.fft.rfft((x - x.mean()) * np.hanning(len(x)))) * 4 / len(x)
+        f = np.fft.rfftfreq(len(x), 1 / fs)
+        ax.semilogy(f, spec * 1e6, lw=0.8, label=f"{n:.3g} cycles")
+        ax2.plot(df.time_s * 1e3, x * 1e6, lw=0.8, label=f"{n:.3g} cycles")
+    for h in range(1, 6):
+        ax.axvline(h * mesh_hz, color="k", ls=":", lw=0.6)
+    ax.set_xlim(0, 8 * mesh_hz)
+    ax.set_xlabel("frequency [Hz] (dotted: mesh harmonics)")
+    ax.set_ylabel("DTE amplitude [um]")
+    ax.legend(fontsize=8)
+    ax2.set_xlim(0, 10 * 1e3 / mesh_hz)
+    ax2.set_xlabel("time [ms]")
+    ax2.set_ylabel("DTE [um]")
+    fig.suptitle("Dynamic transmission error, healthy and worn")
+    fig.tight_layout()
+    save_figure(fig, path)
+    plt.close(fig)
+
+
+def plot_wear_evolution(curves: pd.DataFrame, path: Path) -> None:
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for case, df in curves.groupby("case"):
+        ax.plot(df.cycles, df.root_wear_mm * 1e3, label=f"case {case}")
+    ax.set_xlabel("pinion cycles")
+    ax.set_ylabel("pinion root wear [um]")
+    ax.set_title("Pinion root wear under dynamic load (thesis Table 11 cases)")
+    ax.legend()
+    save_figure(fig, path)
+    plt.close(fig)
+
+
+def plot_feature_trends(table14: pd.DataFrame, path: Path) -> None:
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(7, 4))
+    cols = ["rms_1e-5_m", "peak_to_peak_1e-5_m", "kurtosis", "crest", "margin", "impulse"]
+    for c in cols:
+        v = table14[c].to_numpy()
+        span = np.ptp(v)
+        ax.plot(table14.wear_mm * 1e3, (v - v.min()) / span if span > 0 else 0 * v, "o-",
+                label=f"{c.replace('_1e-5_m', '')} (span {span:.3g})")
+    ax.set_xlabel("pinion root wear [um]")
+    ax.set_ylabel("feature, min-max normalised")
+    ax.set_title("DTE features against wear (case 3)")
+    ax.legend(fontsize=7)
+    save_figure(fig, path)
+    plt.close(fig)
+
+
+def plot_wear_profile(res: WearResult, path: Path) -> None:
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(7, 4))
+    ax.plot(res.s * 1e3, res.pinion * 1e6, label="pinion")
+    ax.plot(res.s * 1e3, res.gear * 1e6, label="gear")
+    lo, hi = res.geometry.single_zone
+    ax.axvspan(lo * 1e3, hi * 1e3, color="0.9", label="single-tooth zone")
+    ax.axvline(0.0, color="k", lw=0.6, ls=":")
+    ax.set_xlabel("roll distance from pitch point along line of action [mm]\n"
+                  "(pinion root / gear tip  <-  ->  pinion tip / gear root)")
+    ax.set_ylabel("wear depth [um]")
+    ax.set_title(f"Flank wear after {res.cycles:.3g} pinion cycles")
+    ax.legend()
+    save_figure(fig, path)
+    plt.close(fig)

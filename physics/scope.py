@@ -1,0 +1,82 @@
+"""The operating scope of the model: a scenario outside it is refused before any work.
+
+Each parameter class of :mod:`physics.params` checks its own fields; the limits here combine
+several of them and so need the geometry (:mod:`physics.gear`). The model is elastic, so the
+contact must stay below the static capacity of the flank; its sampled dynamics must resolve the
+mesh harmonics that its features and order analysis read; and a record must hold enough mesh
+periods to give features at all.
+
+- Static contact capacity: ``Z_NT = 1.6`` (static life factor of case-carburised steel, ISO
+  6336-2:2019, Table 2) times ``sigma_Hlim = 1500 MPa`` (case-carburised steel of quality MQ,
+  ISO 6336-5:2016, Fig. 9) gives 2.4 GPa for the largest Hertz pressure of the single-tooth
+  zone at the pitch point. Above it the case yields and neither Hertz nor Archard applies.
+- Sampling: the sample rate must be at least 4 times the third mesh harmonic (the measured-data
+  rule of ``shared/specs/measured-bundle.md``), i.e. ``f_s >= 12 f_mesh``.
+- Record length: at least 10 mesh periods after the transient.
+"""
+
+from __future__ import annotations
+
+import math
+
+from physics.gear.contact import (
+    equivalent_radius,
+    hertz_half_width,
+    hertz_max_pressure,
+    reduced_modulus,
+)
+from physics.gear.geometry import mesh_geometry
+from physics.params import Scenario
+
+#: largest Hertz pressure of the model's scope [Pa] (see the module text)
+STATIC_CONTACT_LIMIT = 1.6 * 1500e6
+#: least sample rate per mesh frequency
+SAMPLES_PER_MESH = 12.0
+#: least mesh periods in a simulated record
+MESH_PERIODS = 10
+
+
+def pitch_point_pressure(scn: Scenario) -> float:
+    """Hertz pressure of one pair carrying the whole nominal load at the pitch point [Pa]."""
+    g = scn.gear
+    geom = mesh_geometry(g)
+    R1, R2 = geom.curvature_radii(0.0)
+    force = scn.operating.torque_Nm / geom.rb2
+    w = force / g.face_width
+    R = equivalent_radius(R1, R2)
+    e_star = reduced_modulus(scn.material, scn.material)
+    return float(hertz_max_pressure(w, hertz_half_width(w, R, e_star)))
+
+
+def mesh_frequency_hz(scn: Scenario) -> float:
+    return scn.operating.n1_rpm / 60 * scn.gear.z1
+
+
+def check_scope(scn: Scenario) -> Scenario:
+    """Return ``scn`` if it lies in the model's scope; raise ``ValueError`` naming the value,
+    the rule and the fix otherwise."""
+    op, dyn = scn.operating, scn.dynamics
+    p = pitch_point_pressure(scn)
+    if p > STATIC_CONTACT_LIMIT:
+        t_max = op.torque_Nm * (STATIC_CONTACT_LIMIT / p) ** 2
+        raise ValueError(
+            f"operating.torque_Nm = {op.torque_Nm:g} gives a Hertz pressure of {p / 1e9:.2f} GPa "
+            f"at the pitch point, above the {STATIC_CONTACT_LIMIT / 1e9:.1f} GPa static capacity "
+            f"of case-carburised steel (the model is elastic); use at most {t_max:.0f} N m or a "
+            "wider face (gear.face_width_mm)")
+    f_mesh = mesh_frequency_hz(scn)
+    if dyn.sample_rate_hz < SAMPLES_PER_MESH * f_mesh:
+        n_max = dyn.sample_rate_hz / SAMPLES_PER_MESH * 60 / scn.gear.z1
+        raise ValueError(
+            f"operating.n1_rpm = {op.n1_rpm:g} puts the mesh frequency at {f_mesh:.0f} Hz; the "
+            f"sample rate {dyn.sample_rate_hz:g} Hz must be at least {SAMPLES_PER_MESH:g} times "
+            f"that to resolve three mesh harmonics; use at most {n_max:.0f} r/min or raise "
+            "dynamics.sample_rate_hz")
+    periods = (dyn.duration_s) * f_mesh
+    if periods < MESH_PERIODS:
+        need = MESH_PERIODS / f_mesh
+        raise ValueError(
+            f"dynamics.duration_s = {dyn.duration_s:g} holds {periods:.1f} mesh periods at "
+            f"n1_rpm = {op.n1_rpm:g}; the features need at least {MESH_PERIODS}: set "
+            f"dynamics.duration_s to {math.ceil(need * 100) / 100:g} or more")
+    return scn

@@ -1,0 +1,138 @@
+"""Dataset generator: rows, determinism, chunking, resume and refusal of bad input."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pyarrow.parquet as pq
+import pytest
+
+from physics.dataset.generation import (
+    DATASET_TRIBOLOGY,
+    DatasetSpec,
+    build_dataset,
+    chunk_folder,
+    chunk_path,
+    plan_dataset,
+    spec_from_config,
+    units,
+)
+from physics.params import Dynamics, Scenario, WearSolver, case_values
+from physics.signals.measurement import add_noise, housing_acceleration
+
+BASE = Scenario(tribology=DATASET_TRIBOLOGY, solver=WearSolver(n_points=51),
+                dynamics=Dynamics(duration_s=0.02, transient_s=0.005, phase_bins=64))
+SMALL = {"cases": [2, 3], "wear_states": 3, "replicates": 2, "cycles_max": 1e6}
+
+
+def generate(out: Path, chunk: int | None = None, jobs: int = 1, store_signals: bool = False,
+             **spec):
+    """The dataset API as ``python -m physics.dataset`` runs it (small sizes)."""
+    job = plan_dataset(BASE, spec_from_config({**SMALL, **spec}), out, chunk=chunk, jobs=jobs,
+                       store_signals=store_signals, progress=False)
+    return build_dataset(job)
+
+
+@pytest.fixture(scope="module")
+def single(tmp_path_factory):
+    out = tmp_path_factory.mktemp("single")
+    return generate(out, chunks=1)
+
+
+def test_rows_columns_and_sidecar(single):
+    df = pd.read_parquet(single)
+    assert len(df) == 2 * 2 * 3
+    assert list(df.columns) == list(units())
+    assert df.select_dtypes("number").notna().all().all()
+    side = json.loads(single.with_suffix(".json").read_text())
+    assert side["rows"] == len(df) and side["schema_version"] == 1
+    assert side["units"]["dte_rms"] == "m" and side["units"]["acc_rms"] == "m/s^2"
+    assert side["config"]["data"]["seed"] == 0 and side["config"]["scenario"]["tribology"]["regime"] == "dry" and "package_version" in side
+    for _, traj in df.groupby(["case", "replicate"]):
+        assert np.all(np.diff(traj.root_wear_mm) > 0)  # wear only grows
+        assert traj.root_wear_mm.iloc[0] == 0.0
+        assert traj.n1_rpm.nunique() == 1  # one operating point per replicate
+
+
+def test_jitter_stays_within_its_band(single):
+    df = pd.read_parquet(single)
+    for case in (2, 3):
+        rows = df[df.case == case]
+        table = case_values(case)
+        assert np.all(np.abs(rows.n1_rpm / table["n1_rpm"] - 1) <= 0.01)
+        assert np.all(np.abs(rows.torque_Nm / table["torque_Nm"] - 1) <= 0.02)
+        assert rows.n1_rpm.nunique() == 2
+
+
+def test_chunked_equals_single_and_rerun_is_byte_identical(tmp_path, single):
+    path = generate(tmp_path / "a", chunks=3, jobs=2)
+    pd.testing.assert_frame_equal(pd.read_parquet(path), pd.read_parquet(single))
+    again = generate(tmp_path / "b", chunks=3)
+    assert again.read_bytes() == path.read_bytes()
+    assert again.with_suffix(".json").read_text() == path.with_suffix(".json").read_text()
+
+
+def test_killed_run_resumes_and_keeps_finished_chunks(tmp_path, single):
+    out = tmp_path / "resume"
+    assert generate(out, chunks=2, chunk=0) is None  # one job of a multirun
+    done = chunk_path(chunk_folder(out, "dataset"), 0)
+    stamp = done.stat().st_mtime_ns
+    # a killed job's leftover is unreadable, so it is computed again
+    chunk_path(chunk_folder(out, "dataset"), 1).write_bytes(b"half-written by a killed job")
+    path = generate(out, chunks=2)
+    assert done.stat().st_mtime_ns == stamp
+    pd.testing.assert_frame_equal(pd.read_parquet(path), pd.read_parquet(single))
+    assert not list(out.rglob("*.tmp"))
+
+
+def test_changed_config_recomputes_finished_chunks(tmp_path):
+    out = tmp_path / "hash"
+    generate(out, chunks=1)
+    path = chunk_path(chunk_folder(out, "dataset"), 0)
+    first = pq.read_schema(path).metadata[b"gearwear_hash"]
+    generate(out, chunks=1, snr_db=20)
+    assert pq.read_schema(path).metadata[b"gearwear_hash"] != first
+
+
+def test_signals_are_stored_beside_the_table(tmp_path):
+    path = generate(tmp_path, chunks=2, store_signals=True, cases=[3])
+    sig = np.load(path.parent / "dataset_signals.npy")
+    df = pd.read_parquet(path)
+    assert sig.shape[:2] == (len(df), 2) and sig.dtype == np.float32
+    rms = np.sqrt(np.mean((sig[:, 1] - sig[:, 1].mean(-1, keepdims=True)) ** 2, axis=-1))
+    assert np.allclose(rms, df.acc_rms, rtol=1e-4)  # the rows and records line up
+
+
+def test_noise_has_the_stated_snr_and_housing_acceleration_is_force_over_mass():
+    rng = np.random.default_rng(1)
+    x = np.sin(np.linspace(0, 200 * np.pi, 200_000)) + 5.0
+    noisy = add_noise(x, 20.0, rng)
+    snr = 10 * np.log10(np.mean((x - 5) ** 2) / np.mean((noisy - x) ** 2))
+    assert snr == pytest.approx(20.0, abs=0.1)
+    assert add_noise(x, np.inf, rng) is x
+    f = np.array([[100.0, 300.0, 200.0]])
+    assert np.allclose(housing_acceleration(f, 20.0), [[-5.0, 5.0, 0.0]])
+    with pytest.raises(ValueError, match="housing_mass_kg"):
+        housing_acceleration(f, 0.0)
+
+
+@pytest.mark.parametrize(("override", "message"), [
+    ({"cases": [3, 9]}, r"case.*9.*1, 2, 3, 4, 5"),
+    ({"chunk": 7}, r"chunk = 7 must lie in \[0, 0\]"),
+    ({"bogus": 1}, r"unknown key.*bogus"),
+    ({"wear_states": 1}, r"wear_states = 1 must be a whole number in \[2, "),
+    ({"jobs": 0}, r"jobs = 0 must be a whole number >= 1"),
+    ({"snr_db": float("nan")}, r"snr_db = nan must be a number > -20"),
+])
+def test_bad_input_is_refused_before_work(tmp_path, override, message):
+    with pytest.raises(ValueError, match=message):
+        generate(tmp_path, chunks=1, **override)
+    assert not chunk_folder(tmp_path, "dataset").exists()
+
+
+def test_spec_rejects_more_chunks_than_units():
+    with pytest.raises(ValueError, match="chunks = 9"):
+        DatasetSpec(cases=(3,), replicates=2, chunks=9)

@@ -1,0 +1,162 @@
+"""Torsional dynamics with backlash (thesis 3.3-3.4) and the dynamic-load coupling (3.5)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from physics.dynamics.model import (
+    build_model,
+    force_per_position,
+    simulate,
+    simulate_two_dof,
+    time_step,
+)
+from physics.gear.stiffness import MeshStiffness
+from physics.params import Dynamics, Operating, Scenario
+
+QUIET = Dynamics(eccentricity1_um=0.0, profile_error_um=0.0)
+
+
+@pytest.fixture(scope="module")
+def ms():
+    return MeshStiffness(Scenario().gear, Scenario().material)
+
+
+def _scn(**dyn):
+    return Scenario(dynamics=dataclasses.replace(Dynamics(), **dyn))
+
+
+def test_spectrum_peaks_at_mesh_frequency_and_harmonics(ms):
+    scn = _scn(duration_s=0.5)
+    resp = simulate(build_model(scn, ms), scn.dynamics)
+    x = resp.dte[0] - resp.dte[0].mean()
+    f = np.fft.rfftfreq(len(x), 1 / scn.dynamics.sample_rate_hz)
+    spec = np.abs(np.fft.rfft(x * np.hanning(len(x))))
+    f_mesh = 2000 * 18 / 60
+    assert f[np.argmax(spec)] == pytest.approx(f_mesh, rel=0.01)
+    for h in (1, 2, 3):
+        band = (f > 0.9 * h * f_mesh) & (f < 1.1 * h * f_mesh)
+        assert f[band][np.argmax(spec[band])] == pytest.approx(h * f_mesh, rel=0.01)
+
+
+def test_static_limit_returns_the_static_transmission_error(ms):
+    scn = Scenario(operating=Operating(n1_rpm=5.0),
+                   dynamics=dataclasses.replace(QUIET, duration_s=1.0, transient_s=0.01,
+                                                sample_rate_hz=4096.0))
+    model = build_model(scn, ms)
+    resp = simulate(model, scn.dynamics)
+    idx = model.phase_index(resp.time)
+    static = model.half_backlash + model.static_force / (model.k_a[idx] + model.k_b[idx])
+    rel = np.abs(resp.dte[0] - static) / (static - model.half_backlash)
+    assert np.median(rel) < 2e-3
+    assert np.percentile(rel, 98) < 2e-2  # but for the ringing right after a stiffness jump
+
+
+def test_dead_zone_inert_without_contact_loss(ms):
+    a, b = _scn(half_backlash_um=47.5), _scn(half_backlash_um=0.0)
+    ra = simulate(build_model(a, ms), a.dynamics)
+    rb = simulate(build_model(b, ms), b.dynamics)
+    assert ra.force.min() > 0  # contact never lost
+    assert np.allclose(ra.dte - rb.dte, 47.5e-6, atol=1e-12)
+    assert np.allclose(ra.force, rb.force, rtol=1e-9)
+
+
+def test_contact_loss_enters_the_dead_zone(ms):
+    """Mesh resonance at a light load throws the teeth apart: x < Delta_n, no elastic force."""
+    j1, j2 = build_model(Scenario(), ms).inertias
+    dyn = dataclasses.replace(Dynamics(), inertia1_kg_m2=100 * j1, inertia2_kg_m2=100 * j2,
+                              damping_ratio=0.02)
+    f_n = build_model(Scenario(dynamics=dyn), ms).omega_max / (2 * np.pi)
+    scn = Scenario(operating=Operating(n1_rpm=f_n * 60 / 18, torque_Nm=50.0), dynamics=dyn)
+    model = build_model(scn, ms)
+    resp = simulate(model, dyn)
+    apart = resp.dte[0] < model.half_backlash
+    assert apart.mean() > 0.05
+    # while apart the teeth transmit nothing, and the mesh force never pulls
+    assert np.all(resp.force[0][apart] == 0.0)
+    assert resp.force.min() >= 0.0
+    assert resp.force.max() > 2 * model.static_force  # and the impacts that follow are hard
+
+
+def test_two_dof_and_reduced_forms_agree(ms):
+    scn = _scn(duration_s=0.004, transient_s=0.0)
+    model = build_model(scn, ms)
+    resp = simulate(model, scn.dynamics)
+    x, force = simulate_two_dof(model, resp.time)
+    assert np.max(np.abs(x - resp.dte[0])) < 0.01 * np.ptp(resp.dte[0])
+    assert np.max(np.abs(force - resp.force[0])) < 0.01 * np.ptp(resp.force[0])
+
+
+def test_step_halving_converges(ms):
+    peaks = []
+    for factor in (0.5, 0.25, 0.125):
+        scn = _scn(step_factor=factor, duration_s=0.02)
+        resp = simulate(build_model(scn, ms), scn.dynamics)
+        peaks.append(resp.dte[0])
+    d1 = np.max(np.abs(peaks[0] - peaks[1]))
+    d2 = np.max(np.abs(peaks[1] - peaks[2]))
+    assert d2 < 0.25 * d1 or d2 < 1e-9
+    assert d2 < 1e-3 * np.ptp(peaks[2])
+
+
+def test_step_is_chosen_from_the_highest_natural_frequency(ms):
+    model = build_model(Scenario(), ms)
+    dt, n_sub = time_step([model], Dynamics())
+    assert dt * model.omega_max <= 0.25
+    assert n_sub * dt == pytest.approx(1 / 40960)
+
+
+def test_batch_equals_single_runs(ms):
+    a = build_model(Scenario(), ms)
+    b = build_model(Scenario(operating=Operating(n1_rpm=1800.0, torque_Nm=290.0)), ms)
+    dyn = dataclasses.replace(Dynamics(), duration_s=0.01)
+    both = simulate([a, b], dyn)
+    assert np.array_equal(both.dte[1], simulate(b, dyn).dte[0])
+    assert np.array_equal(both.force[0], simulate(a, dyn).force[0])
+
+
+def test_mean_dynamic_force_is_the_static_load(ms):
+    """Over whole mesh periods the mean mesh force balances the torque (momentum balance)."""
+    scn = _scn(duration_s=0.5)
+    model = build_model(scn, ms)
+    resp = simulate(model, scn.dynamics)
+    assert resp.force.mean() == pytest.approx(model.static_force, rel=5e-3)
+    s = model.geometry.grid(401)
+    per_position = force_per_position(model, resp.force_by_phase[0], s)
+    assert per_position.min() < model.static_force < per_position.max()
+
+
+def test_wear_gap_unloads_the_worn_pair(ms):
+    g = ms.geometry
+    s = g.grid(401)
+    wear = np.where(s < g.single_zone[0], 5e-6, 0.0)  # the approach flank worn by 5 um
+    scn = Scenario(dynamics=QUIET)
+    worn = simulate(build_model(scn, ms, s, wear, np.zeros_like(s)), scn.dynamics)
+    healthy = simulate(build_model(scn, ms), scn.dynamics)
+    share = worn.load_a / (worn.load_a + worn.load_b)
+    share0 = healthy.load_a / (healthy.load_a + healthy.load_b)
+    double = healthy.load_b > 100
+    assert np.mean(share[double]) < np.mean(share0[double]) - 0.05
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"half_backlash_um": -1.0}, r"half_backlash_um = -1.0 must lie in \[0, "),
+        ({"damping_ratio": 1.0}, r"damping_ratio = 1.0 must lie in \[0, 1\)"),
+        ({"step_factor": 3.0}, "unstable"),
+    ],
+)
+def test_bad_dynamics_input(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        Dynamics(**kwargs)
+
+
+def test_speed_and_torque_scope(ms):
+    with pytest.raises(ValueError, match="n1_rpm = 12000 is outside the dynamic model's scope"):
+        build_model(Scenario(operating=Operating(n1_rpm=12000.0)), ms)
+    with pytest.raises(ValueError, match=r"torque_Nm = 2000 .* beyond the model's scope"):
+        build_model(Scenario(operating=Operating(torque_Nm=2000.0)), ms)

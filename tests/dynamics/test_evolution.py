@@ -1,0 +1,42 @@
+"""Dynamic-load coupling of wear and the evolution of pinion root wear (thesis 3.5, 4.1)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from physics.dynamics.evolution import fit_evolution_models, root_wear_evolution
+from physics.params import Scenario, WearSolver
+
+
+def test_fits_recover_the_thesis_empirical_law():
+    n = np.linspace(0, 1.5e7, 31)
+    h = 0.001042 * np.exp(1.638e-7 * n) - 0.001174 * np.exp(-2.644e-7 * n)
+    rows = {r["model"]: r for r in fit_evolution_models(n, h)}
+    assert rows["empirical"]["rmse"] < 1e-12
+    assert np.allclose(rows["empirical"]["params"], [0.001042, 1.638e-7, -0.001174, -2.644e-7],
+                       rtol=1e-6)
+    assert rows["quadratic"]["max_relative_error_pct"] > 1  # the others cannot follow it
+
+
+def test_fits_of_each_law_on_its_own_data():
+    n = np.linspace(0, 1.5e7, 31)
+    laws = {"quadratic": 2e-17 * n**2 + 1e-10 * n, "power": 3e-9 * n**0.8,
+            "exponential": 1e-3 * np.exp(5e-8 * n) - 1e-3}
+    for name, h in laws.items():
+        row = next(r for r in fit_evolution_models(n, h) if r["model"] == name)
+        assert row["max_relative_error_pct"] < 1e-4, name
+
+
+def test_fit_needs_points_on_both_sides():
+    with pytest.raises(ValueError, match="need >= 5 points"):
+        fit_evolution_models(np.linspace(0, 1e7, 10), np.ones(10))
+
+
+def test_dynamic_load_wears_the_root_faster_than_static():
+    scn = Scenario(solver=WearSolver(n_points=201))
+    cycles = np.linspace(0, 1.5e7, 4)
+    dyn, res = root_wear_evolution(scn, cycles, dynamic=True)
+    static, _ = root_wear_evolution(scn, cycles, dynamic=False)
+    assert np.all(np.diff(dyn) > 0) and dyn[-1] > static[-1]
+    assert res.blocks >= len(cycles) - 1  # the dynamics rerun at every profile update

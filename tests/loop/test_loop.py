@@ -1,0 +1,390 @@
+"""The measured-data loop: bundles, order analysis, the effect library's signatures, the loop."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from physics.dynamics.model import build_model, simulate
+from physics.loop.bundle import read_bundle, read_feature_table, write_bundle
+from physics.loop.bundle_loop import (
+    DYNAMIC_NUISANCE,
+    Candidate,
+    LoopSettings,
+    candidates_for,
+    declared_nuisance,
+    identifiable,
+    model_signals,
+    prepare,
+    residuals,
+    responses,
+    rms,
+    run_loop,
+    search,
+    split_records,
+    train_cost,
+    with_level,
+)
+from physics.loop.effects import EFFECTS, effect
+from physics.loop.synthetic import make_bundle
+from physics.loop.table_loop import parse_columns
+from physics.params import scenario_from_config
+from physics.signals.order_analysis import (
+    line_amplitudes,
+    synchronous_average,
+    white_noise_std,
+)
+
+ROOT = Path(__file__).resolve().parents[2]
+FS = 40960.0
+
+
+@pytest.fixture(scope="module")
+def scn():
+    return scenario_from_config({"case": 3, "tribology": {"regime": "dry"}})
+
+
+@pytest.fixture(scope="module")
+def healthy(scn):
+    return build_model(scn)
+
+
+def response(models, scn, seconds=0.25):
+    dyn = dataclasses.replace(scn.dynamics, duration_s=seconds, transient_s=0.05, phase_bins=16)
+    return simulate(models, dyn)
+
+
+# --- bundles ---------------------------------------------------------------------------------
+
+def manifest(n=3, **over):
+    d = {"record": [f"r{i}" for i in range(n)], "quantity": "accel_m_s2", "fs_hz": FS,
+         "n1_rpm": 2000.0, "torque_Nm": 300.0, "wear_mm": 0.0, "cycles": 0.0, "split": ""}
+    d.update(over)
+    return pd.DataFrame(d)
+
+
+def good_signals(n=3, seconds=0.5):
+    rng = np.random.default_rng(0)
+    return {f"r{i}": rng.standard_normal(int(seconds * FS)) for i in range(n)}
+
+
+def test_bundle_round_trip(tmp_path):
+    path = write_bundle(tmp_path / "b", manifest(), good_signals(), gear={"z1": 18})
+    b = read_bundle(path)
+    assert b.records == ["r0", "r1", "r2"] and b.gear == {"z1": 18}
+    np.testing.assert_array_equal(b.signals["r1"], good_signals()["r1"])
+
+
+def _drop_signal(m, s):
+    del s["r2"]
+    return m
+
+
+def _nan_sample(m, s):
+    s["r0"][5] = np.nan
+    return m
+
+
+def _short(m, s):
+    s["r1"] = s["r1"][:1000]
+    return m
+
+
+@pytest.mark.parametrize("change, rule", [
+    (lambda m, s: m.drop(columns="fs_hz"), "column(s) ['fs_hz'] missing"),
+    (lambda m, s: m.assign(quantity=["accel_m_s2", "velocity", "accel_m_s2"]),
+     "record 'r1': quantity 'velocity'"),
+    (_drop_signal, "record 'r2': signals/r2.npy is missing"),
+    (_nan_sample, "record 'r0': non-finite sample at index 5"),
+    (_short, "record 'r1': 0.8 pinion revolutions"),
+    (lambda m, s: m.assign(fs_hz=[FS, FS, 5000.0]), "record 'r2': fs_hz = 5000 is below 4 x"),
+    (lambda m, s: m.assign(record=["r0", "r0", "r2"]), "record 'r0': record names must be unique"),
+    (lambda m, s: m.assign(split=["train", "valid", ""]), "record 'r1': split 'valid'"),
+    (lambda m, s: m.assign(wear_mm=[0.0, -1.0, 0.0]), "record 'r1': wear_mm = -1.0"),
+])
+def test_bad_bundle_is_refused_naming_record_and_rule(tmp_path, change, rule):
+    sig = good_signals()
+    man = change(manifest(), sig)
+    path = write_bundle(tmp_path / "b", man, sig)
+    with pytest.raises(ValueError) as err:
+        read_bundle(path)
+    assert rule in str(err.value)
+
+
+def test_write_bundle_leaves_nothing_on_failure(tmp_path):
+    with pytest.raises(ValueError):
+        write_bundle(tmp_path / "b", manifest(), {"r0": np.zeros(10), "r1": "not a signal"})
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_split_is_by_record_and_honours_the_manifest():
+    man = manifest(10, split=["test"] + [""] * 8 + ["train"])
+    train, test = split_records(man, 0.3, seed=1)
+    assert 0 in test and 9 in train
+    assert set(train).isdisjoint(test) and len(train) + len(test) == 10
+    with pytest.raises(ValueError, match="at least one train and one test"):
+        split_records(manifest(2, split=["train", "train"]), 0.3, 0)
+
+
+def test_feature_tables_of_the_thesis_parse(tmp_path):
+    # the headers of thesis Tables 15 (housing acceleration) and 14 (DTE, in 1e-5 m)
+    table15 = tmp_path / "t15.csv"
+    table15.write_text("wear_mm,rms_m_per_s2,peak_to_peak_m_per_s2,kurtosis,crest,margin,impulse\n"
+                       "0,1.0,16.0,4.3,8.9,14.0,11.6\n")
+    q, cols = parse_columns(read_feature_table(table15))
+    assert q == "accel_m_s2" and cols["peak_to_peak_m_per_s2"] == ("peak_to_peak", 1.0)
+    table14 = pd.DataFrame(columns=["cycles_1e6", "wear_mm", "rms_1e-5_m", "peak_to_peak_1e-5_m",
+                                    "kurtosis", "crest", "margin", "impulse"])
+    q, cols = parse_columns(table14)
+    assert q == "dte_m" and cols["rms_1e-5_m"] == ("rms", 1e-5)
+    with pytest.raises(ValueError, match="'energy' is not a Table 13 feature"):
+        parse_columns(pd.DataFrame({"wear_mm": [0.0], "energy": [1.0], "rms_m": [1.0]}))
+
+
+# --- order analysis --------------------------------------------------------------------------
+
+@settings(max_examples=25, deadline=None)
+@given(st.floats(20.0, 5000.0), st.floats(0.1, 10.0), st.floats(0.0, 2 * math.pi))
+def test_line_amplitude_of_an_off_bin_sinusoid(f, a, phase):
+    t = np.arange(8192) / FS
+    x = a * np.sin(2 * np.pi * f * t + phase) + 0.5 * a * np.sin(2 * np.pi * 7.3 * f * t)
+    amp = line_amplitudes(x, FS, np.array([f, 7.3 * f]))
+    np.testing.assert_allclose(amp, [a, 0.5 * a], rtol=0.02)
+
+
+def test_noise_floor_under_dense_lines():
+    rng = np.random.default_rng(3)
+    t = np.arange(int(FS)) / FS
+    lines = sum(np.sin(2 * np.pi * 33.3 * k * t + k) * 50 / k for k in range(1, 400))
+    est = white_noise_std(lines + 2.0 * rng.standard_normal(t.size), FS, 300.0)
+    assert est == pytest.approx(2.0, rel=0.1)
+
+
+def test_synchronous_average_keeps_the_periodic_part_and_averages_noise_out():
+    rng = np.random.default_rng(4)
+    f1, t = 25.0, np.arange(int(2 * FS)) / FS
+    periodic = np.sin(2 * np.pi * 18 * f1 * t)
+    avg = synchronous_average(periodic + rng.standard_normal(t.size), FS, f1, bins=256)
+    ref = np.sin(2 * np.pi * 18 * np.arange(256) / 256)
+    assert np.sqrt(np.mean((avg - ref) ** 2)) < 0.25  # noise 1 averaged over 50 revolutions
+
+
+# --- the effect library: each effect's physical signature -------------------------------------
+
+def test_friction_reverses_at_the_pitch_point(healthy):
+    m = effect("friction").model(healthy, {"mu": 0.06})
+    g = healthy.geometry
+    n = len(healthy.k_a)
+    s_a = g.s_start + g.base_pitch * np.arange(n) / n
+    lam = m.lam_a - 1
+    # approach (s < 0): the pinion flank is the slower one, friction aids the pinion and brakes
+    # the gear, so the pair's force counts less in the relative equation; recess: the reverse
+    assert np.all(lam[s_a < -1e-5] < 0) and np.all(lam[s_a > 1e-5] > 0)
+    assert np.abs(lam).max() < 0.2  # a few per cent of the mesh force for mu = 0.06
+
+
+def test_tip_relief_lowers_the_mesh_harmonic_at_design_load(scn, healthy):
+    relieved = effect("tip_relief").model(healthy, {"relief_um": 10.0})
+    r = response([healthy, relieved], scn)
+    fm = healthy.mesh_frequency_hz
+    a = line_amplitudes(r.dte, FS, np.array([fm]))[:, 0]
+    assert a[1] < 0.8 * a[0]
+
+
+def test_gear_runout_raises_the_gear_sidebands(scn, healthy):
+    ran = effect("gear_runout").model(healthy, {"runout_um": 20.0})
+    r = response([healthy, ran], scn, 0.5)
+    f2 = healthy.omega1 * healthy.geometry.rb1 / healthy.geometry.rb2 / (2 * np.pi)
+    fm = healthy.mesh_frequency_hz
+    side = np.array([k * fm + s * f2 for k in range(8, 20) for s in (-1, 1)])
+    a = line_amplitudes(r.force, FS, side).sum(axis=1)
+    assert a[1] > 10 * a[0]
+
+
+def test_torque_ripple_shows_at_its_shaft_order(scn, healthy):
+    rip = effect("torque_ripple").model(healthy, {"ripple_pct": 5.0, "order": 2})
+    r = response([healthy, rip], scn, 0.5)
+    a = line_amplitudes(r.force, FS, np.array([2 * healthy.omega1 / (2 * np.pi)]))[:, 0]
+    assert a[1] > 0.5 * 0.05 * healthy.static_force > 20 * a[0]
+
+
+def test_tooth_defect_is_once_per_revolution(scn, healthy):
+    pit = effect("tooth_defect").model(healthy, EFFECTS["tooth_defect"].defaults())
+    assert pit.periods == 18 and len(pit.k_a) == 18 * len(healthy.k_a)
+    f1, fm = healthy.omega1 / (2 * np.pi), healthy.mesh_frequency_hz
+    # below the mesh resonance the force cannot follow a once-per-revolution event; it shows
+    # as pinion sidebands of the mesh harmonics near the resonance
+    side = np.array([k * fm + j * f1 for k in range(8, 20) for j in (-2, -1, 1, 2)])
+    a = [line_amplitudes(response([m], scn, 0.5).force[0], FS, side).sum()
+         for m in (healthy, pit)]
+    assert a[1] > 3 * a[0]
+
+
+def test_transfer_path_peaks_at_its_mode():
+    fn, zeta = 3000.0, 0.05
+    t = np.arange(int(FS)) / FS
+    amp = []
+    for f in (300.0, fn):
+        y = effect("transfer_path").record(np.sin(2 * np.pi * f * t), FS, {"fn_hz": fn,
+                                                                           "zeta": zeta})
+        amp.append(line_amplitudes(y[4096:], FS, np.array([f]))[0])
+    # base-excited SDOF transmissibility: ~1 well below f_n, sqrt(1 + (2 zeta)^2) / (2 zeta) at f_n
+    assert amp[0] == pytest.approx(1.0, abs=0.02)
+    assert amp[1] == pytest.approx(math.sqrt(1 + (2 * zeta) ** 2) / (2 * zeta), rel=0.03)
+
+
+def test_backlash_growth_and_sensor_gain(healthy):
+    worn = dataclasses.replace(healthy, g_a=healthy.g_a + 10e-6)
+    grown = effect("backlash_growth").model(worn, {"kappa": 2.0})
+    assert grown.half_backlash - worn.half_backlash == pytest.approx(10e-6)
+    x = np.arange(5.0)
+    np.testing.assert_allclose(effect("sensor").record(x, FS, {"gain": 1.3}), 1.3 * x)
+
+
+def test_unknown_effect_and_candidates_are_refused():
+    with pytest.raises(ValueError, match="'rust' is not in the library"):
+        effect("rust")
+    with pytest.raises(ValueError, match=r"loop.candidates = \['rust'\]"):
+        candidates_for({"accel_m_s2"}, LoopSettings(candidates=("rust",)))
+    names = {e.name for e, _ in candidates_for({"accel_m_s2"}, LoopSettings())}
+    assert "sensor" not in names and "transfer_path" in names
+
+
+# --- calibration and search ------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def clean_records(tmp_path_factory, scn):
+    """A clean acceleration bundle (nuisance off its defaults) prepared for the loop."""
+    path, truth = make_bundle(tmp_path_factory.mktemp("clean") / "b", scn, None, seed=3,
+                              records=4, duration_s=0.5)
+    return prepare(read_bundle(path), scn, LoopSettings(seed=3)), truth
+
+
+def test_shaft_rate_error_on_the_line_of_action_is_not_identifiable(clean_records, scn):
+    # far below the mesh resonance the gears follow a once-per-revolution error as rigid
+    # bodies: it makes no force, so the calibration must hold it, not fit noise into it
+    rec, _ = clean_records
+    free = identifiable(rec, declared_nuisance(scn), DYNAMIC_NUISANCE)
+    assert free == ["damping_ratio", "profile_error_um"]
+
+
+def test_level_step_recovers_the_housing_mass(clean_records):
+    # m_h only scales the record: one level step from a factor of 4 off lands within 30 % of
+    # the truth (the model's noise does not scale with it: a start, not the fit)
+    rec, truth = clean_records
+    m_h = truth["nuisance"]["housing_mass_kg"]
+    for factor in (0.25, 4.0):
+        levelled = with_level(rec, truth["nuisance"] | {"housing_mass_kg": factor * m_h}, None,
+                              {})
+        assert 1 / 1.3 < levelled["housing_mass_kg"] / m_h < 1.3
+
+
+def test_chain_parameters_reuse_the_simulation(clean_records):
+    rec, truth = clean_records
+    nui = truth["nuisance"]
+    rec.cache.clear()
+    first = responses(rec, rec.train, nui, None, {})
+    assert len(rec.cache) == 1
+    again = responses(rec, rec.train, nui | {"housing_mass_kg": 3.0}, None, {})
+    assert again is first  # m_h acts after the dynamics: no new simulation
+    moved = responses(rec, rec.train, nui | {"damping_ratio": 0.5 * nui["damping_ratio"]},
+                      None, {})
+    assert moved is not first
+    # the held-out residual is smallest at the true nuisance
+    def held_out(n):
+        return rms(residuals(rec, rec.test, model_signals(rec, rec.test, n, None, {})))
+
+    assert held_out(nui) < held_out(nui | {"damping_ratio": 0.5 * nui["damping_ratio"]})
+    assert held_out(nui) < held_out(nui | {"housing_mass_kg": 2 * nui["housing_mass_kg"]})
+
+
+def test_search_never_ends_above_its_start(clean_records, scn):
+    # the declared model from a start off the truth: exploration keeps the best point, least
+    # squares only accepts steps that lower the cost
+    rec, truth = clean_records
+    rec = dataclasses.replace(rec, settings=LoopSettings(seed=3, explore=4, max_nfev=3))
+    start = truth["nuisance"] | {"damping_ratio": 2.5 * truth["nuisance"]["damping_ratio"]}
+    c = Candidate("declared", {}, {}, start, train_cost(rec, start, None, {}), 0)
+    fitted = search(rec, None, c, ["damping_ratio", "housing_mass_kg"])
+    assert fitted.refined and fitted.train_rss <= c.train_rss
+    assert train_cost(rec, fitted.nuisance, None, {}) == pytest.approx(fitted.train_rss)
+    assert fitted.nuisance["profile_error_um"] == start["profile_error_um"]  # not free: kept
+
+
+@pytest.mark.parametrize("explore, refine", [(24, 3), (-2, 3), (16, 0)])
+def test_bad_search_settings_are_refused(explore, refine):
+    with pytest.raises(ValueError, match=r"loop\.(explore|refine) = "):
+        LoopSettings(explore=explore, refine=refine)
+
+
+def test_backlash_growth_leaves_records_without_contact_loss_unchanged(tmp_path, scn):
+    # the flanks never separate at the Table 11 loads: the dead zone's width does not matter
+    _, truth = make_bundle(tmp_path / "b", scn, "backlash_growth", seed=0, records=3,
+                           duration_s=0.3, cycles_max=1e7)
+    assert truth["effect_to_noise_db"] < -100
+    _, truth = make_bundle(tmp_path / "t", scn, "tip_relief", seed=0, records=3,
+                           duration_s=0.3, cycles_max=1e7)
+    assert truth["effect_to_noise_db"] > 10
+
+
+# --- the loop --------------------------------------------------------------------------------
+
+FAST = ["loop.max_nfev=6", "loop.explore=8", "loop.refine=1",
+        "loop.candidates=[transfer_path,friction]", "progress=false"]
+
+
+def run_app(tmp: Path, data: Path, *extra: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "physics.loop", f"data={data}",
+                           f"hydra.run.dir={tmp / 'run'}", *extra], cwd=ROOT,
+                          capture_output=True, text=True, timeout=600)
+
+
+def test_loop_app_finds_an_undeclared_transfer_path(tmp_path, scn):
+    path, truth = make_bundle(tmp_path / "bundle", scn, "transfer_path", seed=2, records=6,
+                              duration_s=0.75)
+    run = run_app(tmp_path, path, *FAST)
+    assert run.returncode == 0, run.stderr[-2000:]
+    report = json.loads((tmp_path / "run" / "report.json").read_text())
+    assert report["chosen_effect"] == "transfer_path"
+    assert report["error_after"] < 0.5 * report["error_before"]
+    assert report["not_identifiable"] == ["eccentricity1_um"]
+    assert set(report["nuisance_after"]) == set(report["calibration"])
+    fitted = report["chosen_parameters"]["fn_hz"]
+    assert fitted == pytest.approx(truth["values"]["fn_hz"], rel=0.15)
+    for name in ("report.md", "order_spectra.png", "residuals.png"):
+        assert (tmp_path / "run" / name).stat().st_size > 0
+
+
+def test_loop_app_refuses_bad_data_before_work(tmp_path):
+    run = run_app(tmp_path, tmp_path / "nowhere")
+    assert run.returncode != 0
+    assert "is neither a bundle folder nor a feature-table .csv" in run.stderr
+    assert not (tmp_path / "run" / "report.json").exists()
+
+
+@pytest.mark.slow
+def test_loop_adds_nothing_to_a_clean_bundle(tmp_path, scn):
+    path, _ = make_bundle(tmp_path / "clean", scn, None, seed=5, records=8)
+    report = run_loop(read_bundle(path), scn, LoopSettings(max_nfev=10))
+    assert report["chosen_effect"] is None
+    assert report["error_before"] < 1.6  # the calibrated model is at the noise
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["gear_runout", "friction", "tip_relief", "tooth_defect",
+                                  "torque_ripple"])
+def test_loop_names_the_undeclared_effect(tmp_path, scn, name):
+    path, _ = make_bundle(tmp_path / name, scn, name, seed=7, records=10)
+    report = run_loop(read_bundle(path), scn, LoopSettings(max_nfev=15))
+    assert report["chosen_effect"] == name
+    assert report["error_after"] <= 0.5 * report["error_before"]

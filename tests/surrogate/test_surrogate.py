@@ -1,0 +1,219 @@
+"""Surrogate: configs, trajectory split, training, sweeps, safe checkpoints, checked inference."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import torch
+from hydra import compose, initialize_config_module
+from hydra.utils import get_class, instantiate
+
+from physics.dataset.generation import (
+    DATASET_TRIBOLOGY,
+    DatasetSpec,
+    build_dataset,
+    plan_dataset,
+)
+from physics.params import Dynamics, Scenario, WearSolver
+from surrogate import settings
+from surrogate.data import DEFAULT_INPUTS, split_trajectories
+from surrogate.inference import Surrogate, export
+from surrogate.model import EnsembleMLP, WearRegressor, mixture
+from surrogate.predict import predict_file
+from surrogate.summarise import summarise
+from surrogate.training import train
+
+ROOT = Path(__file__).resolve().parents[2]
+TINY_BASE = Scenario(tribology=DATASET_TRIBOLOGY, solver=WearSolver(n_points=51),
+                     dynamics=Dynamics(duration_s=0.02, transient_s=0.005, phase_bins=64))
+TINY = DatasetSpec(cases=(3, 4), wear_states=5, replicates=4, chunks=1)
+
+
+def groups(name: str) -> list[str]:
+    return sorted(p.stem for p in (ROOT / "conf" / "train" / name).glob("*.yaml"))
+
+
+def train_cfg(tmp: Path, dataset: Path, *overrides: str):
+    settings.register()
+    with initialize_config_module("gearwear_conf.train", version_base="1.3"):
+        return compose("train", overrides=[
+            f"paths.root_dir={tmp}", f"paths.output_dir={tmp / 'run'}", f"data.dataset={dataset}",
+            "trainer.enable_progress_bar=false", *overrides])
+
+
+@pytest.fixture(scope="module")
+def dataset(tmp_path_factory) -> Path:
+    path = tmp_path_factory.mktemp("data") / "tiny.parquet"
+    build_dataset(plan_dataset(TINY_BASE, TINY, path.parent, path.stem, progress=False))
+    return path
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory, dataset) -> Path:
+    tmp = tmp_path_factory.mktemp("train")
+    value = train(train_cfg(tmp, dataset, "case=3", "data.test_replicates=1",
+                            "trainer.max_epochs=40", "model.members=3", "logger=csv"))
+    assert np.isfinite(value)
+    return tmp / "run"
+
+
+@pytest.mark.parametrize(("group", "choice"), [(g, c) for g in
+                         ("model", "trainer", "callbacks", "logger", "data", "paths")
+                         for c in groups(g)])
+def test_every_config_group_composes_and_instantiates(tmp_path, group, choice):
+    cfg = train_cfg(tmp_path, tmp_path / "none.parquet", f"{group}={choice}")
+    instantiate(cfg.data)
+    instantiate(cfg.model, n_inputs=3, schema={"target_scale": 1.0})
+    for c in (cfg.callbacks or {}).values():
+        instantiate(c)
+    for c in (cfg.logger or {}).values():
+        instantiate(c)
+    instantiate(cfg.trainer, logger=False)
+
+
+@pytest.mark.parametrize("experiment", groups("experiment"))
+def test_experiments_compose(tmp_path, experiment):
+    cfg = train_cfg(tmp_path, tmp_path / "x.parquet", f"experiment={experiment}")
+    assert cfg.case == "all" and cfg.data.case == "all"
+
+
+def test_optuna_search_composes_with_a_failure_budget(tmp_path):
+    settings.register()
+    with initialize_config_module("gearwear_conf.train", version_base="1.3"):
+        cfg = compose("train", overrides=["hparams_search=optuna"], return_hydra_config=True)
+    sweeper = cfg.hydra.sweeper
+    assert get_class(sweeper._target_).__name__ == "OptunaSweeper"
+    assert 0 < sweeper.max_failure_rate < 1 and set(sweeper.params) >= {"model.lr"}
+
+
+def test_split_is_by_trajectory_and_the_scaling_uses_training_rows(dataset):
+    df = pd.read_parquet(dataset)
+    parts = split_trajectories(df, 1, 2, seed=0)
+    keys = {k: set(map(tuple, v[["case", "replicate"]].drop_duplicates().to_numpy()))
+            for k, v in parts.items()}
+    assert not (keys["train"] & keys["val"] or keys["train"] & keys["test"]
+                or keys["val"] & keys["test"])
+    assert sum(len(v) for v in parts.values()) == len(df)
+    loco = split_trajectories(df, 1, 2, seed=0, holdout_case=4)
+    assert set(loco["test"].case) == {4} and 4 not in set(loco["train"].case)
+    with pytest.raises(ValueError, match="replicates"):
+        split_trajectories(df, 2, 2, seed=0)
+
+
+def test_ensemble_members_differ_and_the_mixture_is_right():
+    torch.manual_seed(0)
+    net = EnsembleMLP(4, [8, 8], members=3)
+    with torch.no_grad():
+        out = net(torch.randn(5, 4))
+    assert out.shape == (3, 5, 2) and not torch.allclose(out[0], out[1])
+    mean, var = mixture(out)
+    mu, v = out[..., 0].numpy(), np.exp(out[..., 1].numpy())
+    assert np.allclose(mean.detach(), mu.mean(0), atol=1e-6)
+    assert np.allclose(var.detach(), (v + mu**2).mean(0) - mu.mean(0) ** 2, atol=1e-5)
+
+
+def test_fast_dev_run(tmp_path, dataset):
+    value = train(train_cfg(tmp_path, dataset, "case=3", "data.test_replicates=1",
+                            "+trainer.fast_dev_run=true", "logger=csv"))
+    assert np.isfinite(value) and (tmp_path / "run" / "wear_surrogate.pt").is_file()
+
+
+def test_training_writes_its_outputs_and_learns(trained):
+    for name in ("wear_surrogate.pt", "metrics.json", "parity.png", "test_predictions.csv",
+                 "config.yaml"):
+        assert (trained / name).is_file(), name
+    assert list((trained / "checkpoints").glob("*.ckpt"))
+    assert (trained / "csv").is_dir()
+    rows = pd.read_csv(trained / "test_predictions.csv")
+    # better than predicting the mean wear of the test rows for every row
+    err = np.mean(np.abs(rows.root_wear_mm_pred - rows.root_wear_mm))
+    assert err < 0.5 * np.mean(np.abs(rows.root_wear_mm - rows.root_wear_mm.mean()))
+
+
+def test_predict_round_trip_from_the_saved_checkpoint(trained, dataset, tmp_path):
+    df = pd.read_parquet(dataset)
+    src = tmp_path / "features.csv"
+    df[["case", "cycles", *DEFAULT_INPUTS]].to_csv(src, index=False)
+    out = predict_file(trained / "wear_surrogate.pt", src, tmp_path / "wear.csv")
+    assert len(out) == len(df) and (tmp_path / "wear.csv").is_file()
+    s = Surrogate.load(trained / "wear_surrogate.pt")
+    mean, _ = s.predict_array(df[DEFAULT_INPUTS].to_numpy(float))
+    assert np.allclose(out.root_wear_mm_pred, np.maximum(mean, 0), rtol=1e-5, atol=1e-9)
+    single = s.predict(df[DEFAULT_INPUTS].iloc[[7]])
+    assert single.root_wear_mm_pred.iloc[0] == pytest.approx(out.root_wear_mm_pred.iloc[7],
+                                                             rel=1e-5, abs=1e-9)
+    assert np.all(out.root_wear_mm_lower <= out.root_wear_mm_pred)
+    assert np.all(out.root_wear_mm_pred <= out.root_wear_mm_upper)
+    far = df[DEFAULT_INPUTS].iloc[[0]].copy()
+    j = s.schema.inputs.index("dte_kurtosis")
+    lo, hi = s.schema.low[j], s.schema.high[j]
+    far["dte_kurtosis"] = hi + 0.5 * (hi - lo)  # inside the unit check, outside the envelope
+    assert bool(s.predict(far).out_of_range.iloc[0])
+
+
+def test_predict_cli(trained, dataset, tmp_path):
+    src = tmp_path / "f.parquet"
+    pd.read_parquet(dataset).head(5).to_parquet(src)
+    subprocess.run([sys.executable, "-m", "surrogate.predict",
+                    f"ckpt={trained / 'wear_surrogate.pt'}", f"input={src}",
+                    f"output={tmp_path / 'w.csv'}", f"hydra.run.dir={tmp_path / 'h'}"],
+                   check=True, cwd=ROOT, capture_output=True)
+    assert len(pd.read_csv(tmp_path / "w.csv")) == 5
+
+
+@pytest.mark.parametrize(("change", "message"), [
+    (lambda d: d.drop(columns="dte_kurtosis"), r"lacks column.*dte_kurtosis"),
+    (lambda d: d.assign(oil_temp=1.0), r"oil_temp.*not trained on"),
+    (lambda d: d.assign(dte_rms=np.where(d.index == 2, np.nan, d.dte_rms)),
+     r"row 2 column dte_rms is nan"),
+    (lambda d: d.assign(dte_rms=d.dte_rms * 1e6), r"dte_rms.*another unit.*expects m"),
+    (lambda d: d.iloc[:0], r"no rows"),
+])
+def test_bad_input_is_refused(trained, dataset, change, message):
+    df = pd.read_parquet(dataset)[DEFAULT_INPUTS].reset_index(drop=True)
+    with pytest.raises(ValueError, match=message):
+        Surrogate.load(trained / "wear_surrogate.pt").predict(change(df))
+
+
+def test_foreign_and_unsafe_checkpoints_are_refused(trained, tmp_path):
+    payload = torch.load(trained / "wear_surrogate.pt", weights_only=True)
+    payload["hparams"]["schema"]["version"] = 99
+    torch.save(payload, tmp_path / "other.pt")
+    with pytest.raises(ValueError, match="schema version 99"):
+        Surrogate.load(tmp_path / "other.pt")
+    lightning_ckpt = next((trained / "checkpoints").glob("*.ckpt"))
+    with pytest.raises(ValueError, match="not a"):
+        Surrogate.load(lightning_ckpt)
+    with pytest.raises(ValueError, match="does not exist"):
+        Surrogate.load(tmp_path / "missing.pt")
+
+
+def test_model_rejects_bad_settings():
+    with pytest.raises(ValueError, match="interval"):
+        WearRegressor(3, {}, interval=1.5)
+    with pytest.raises(ValueError, match="width"):
+        WearRegressor(3, {}, width=0)
+
+
+def test_export_is_atomic_and_loadable_without_pickle(trained, tmp_path):
+    s = Surrogate.load(trained / "wear_surrogate.pt")
+    path = export(s.model, tmp_path / "copy.pt")
+    torch.load(path, weights_only=True)
+    assert not list(tmp_path.glob("*.tmp"))
+
+
+def test_two_job_joblib_multirun_and_its_summary(tmp_path, dataset):
+    sweep = tmp_path / "sweep"
+    subprocess.run([sys.executable, "train.py", "-m", "case=3,4", f"data.dataset={dataset}",
+                    "data.test_replicates=1", "trainer.max_epochs=3", "logger=csv",
+                    "model.members=2", "trainer.enable_progress_bar=false",
+                    f"hydra.sweep.dir={sweep}"], check=True, cwd=ROOT, capture_output=True)
+    table = summarise(sweep)
+    assert len(table) == 2 and set(table.status) == {"ok"}
+    assert {"overrides", "val/mre_pct"} <= set(table.columns)
+    assert (sweep / "multirun.yaml").is_file()
