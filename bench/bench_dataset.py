@@ -2,7 +2,7 @@
 
 Prints:
 - wall time and peak memory (this process and its workers) of the default dataset of
-  ``conf/generate.yaml`` (5 cases x 8 replicates x 32 wear states; issue target: <= 2 min and
+  ``python -m physics.dataset`` (5 cases x 8 replicates x 32 wear states; issue target: <= 2 min and
   <= 2 GB on this 2-core machine), written to a temporary folder, with 2 worker processes and,
   as the reference measured in the same run, one chunk of it with one process;
 - the analytic empirical-inverse estimator's throughput in rows per second, vectorised over a
@@ -18,12 +18,15 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from hydra import compose, initialize_config_dir
 
-from physics.dataset.__main__ import generate
+from physics.dataset.generation import (
+    DATASET_TRIBOLOGY,
+    DatasetSpec,
+    build_dataset,
+    plan_dataset,
+)
 from physics.estimators.empirical_inverse import EmpiricalInverse
-
-CONF = str(Path(__file__).resolve().parents[1] / "conf")
+from physics.params import Scenario
 
 
 def peak_mb() -> float:
@@ -33,11 +36,13 @@ def peak_mb() -> float:
     return max(own, children) / 1024
 
 
-def timed_generation(out: Path, *overrides: str) -> tuple[float, Path | None]:
-    with initialize_config_dir(config_dir=CONF, version_base="1.3"):
-        cfg = compose("generate", overrides=[f"out_dir={out}", "progress=false", *overrides])
+def timed_generation(out: Path, chunk: int | None = None, jobs: int = 2
+                     ) -> tuple[float, Path | None]:
+    """The default dataset (``python -m physics.dataset``) into ``out``, timed."""
+    job = plan_dataset(Scenario(tribology=DATASET_TRIBOLOGY), DatasetSpec(), out, chunk=chunk,
+                       jobs=jobs, progress=False)
     t = time.perf_counter()
-    path = generate(cfg)
+    path = build_dataset(job)
     return time.perf_counter() - t, path
 
 
@@ -45,7 +50,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         t_full, path = timed_generation(Path(tmp) / "full")
         df = pd.read_parquet(path)
-        t_one, _ = timed_generation(Path(tmp) / "one", "chunk=0", "jobs=1")
+        t_one, _ = timed_generation(Path(tmp) / "one", chunk=0, jobs=1)
     print(f"default dataset: {len(df)} rows ({df.case.nunique()} cases, "
           f"{df.groupby('case').replicate.nunique().min()} replicates, "
           f"{df.groupby(['case', 'replicate']).size().min()} wear states) "
