@@ -107,7 +107,7 @@ def test_frozen():
 @pytest.mark.parametrize(
     ("make", "message"),
     [
-        (lambda: Tribology(regime="wet"), r"tribology\.regime = 'wet' must be one of \['mixed', 'dry'\]"),
+        (lambda: Tribology(regime="wet"), r"tribology\.regime = 'wet' must be one of"),
         (lambda: WearSolver(n_points=10), r"solver\.n_points = 10 must be a whole number"),
         (lambda: WearSolver(max_iterations=0), r"solver\.max_iterations = 0"),
         (lambda: Operating(torque_Nm=True), r"operating\.torque_Nm = True must be a finite number"),

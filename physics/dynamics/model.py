@@ -40,6 +40,7 @@ import numpy as np
 from physics.gear.geometry import MeshGeometry
 from physics.gear.stiffness import MeshStiffness
 from physics.params import Dynamics, Scenario
+from physics.scope import check_scope
 
 
 @dataclass(frozen=True)
@@ -112,19 +113,10 @@ def build_model(scn: Scenario, stiffness: MeshStiffness | None = None,
                 s_grid: np.ndarray | None = None, wear1: np.ndarray | None = None,
                 wear2: np.ndarray | None = None, n_phase: int = 1024) -> PairModel:
     """The reduced model of ``scn`` for the teeth worn by ``wear1, wear2`` on ``s_grid``."""
-    dyn, g, op = scn.dynamics, scn.gear, scn.operating
-    if op.n1_rpm > 10000:
-        raise ValueError(f"operating.n1_rpm = {op.n1_rpm:g} is outside the dynamic model's scope "
-                         "(<= 10000 r/min: rigid shafts and bearings, no centrifugal effects)")
+    dyn, g, op = check_scope(scn).dynamics, scn.gear, scn.operating
     ms = stiffness or MeshStiffness(g, scn.material)
     geom = ms.geometry
     w0 = op.torque_Nm / geom.rb2
-    p_max = 2 * w0 / g.face_width / (math.pi * _pitch_half_width(scn, geom, w0))
-    if p_max > 3.5e9:
-        raise ValueError(
-            f"operating.torque_Nm = {op.torque_Nm:g} gives a single-pair pitch-point Hertz "
-            f"pressure of {p_max / 1e9:.2f} GPa, beyond the model's scope (<= 3.5 GPa, elastic "
-            "contact of case-hardened steel); lower the torque or widen the face")
     tau = geom.base_pitch * np.arange(n_phase) / n_phase
     s_a = geom.s_start + tau
     s_b = s_a + geom.base_pitch
@@ -153,15 +145,6 @@ def build_model(scn: Scenario, stiffness: MeshStiffness | None = None,
         short_error=dyn.profile_error_um * 1e-6, omega1=omega1, omega_mesh=omega1 * g.z1,
         roll_speed=geom.rb1 * omega1, k_a=k_a, k_b=k_b, g_a=g_a, g_b=g_b, inertias=(j1, j2),
     )
-
-
-def _pitch_half_width(scn: Scenario, geom: MeshGeometry, force: float) -> float:
-    from physics.gear.contact import equivalent_radius, hertz_half_width, reduced_modulus
-
-    R1, R2 = geom.curvature_radii(np.array([0.0]))
-    e_star = reduced_modulus(scn.material, scn.material)
-    return float(hertz_half_width(force / scn.gear.face_width, equivalent_radius(R1, R2),
-                                  e_star)[0])
 
 
 @dataclass(frozen=True)

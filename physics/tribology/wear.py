@@ -29,6 +29,7 @@ from physics.gear.geometry import MeshGeometry, mesh_geometry
 from physics.gear.load_sharing import PairStiffness, pair_loads
 from physics.gear.stiffness import MeshStiffness
 from physics.params import R_GAS, Lubricant, Scenario
+from physics.scope import check_scope
 from physics.tribology.contact_state import ContactState, solve_contact_state
 
 #: ``force(s, wear1, wear2) -> F [N]`` on the grid s: the total normal mesh force per mesh
@@ -154,6 +155,7 @@ def simulate_wear(
     marks = sorted({float(c) for c in snapshots})
     if marks and (marks[0] < 0 or marks[-1] > cycles):
         raise ValueError(f"snapshots {marks} must lie in [0, cycles = {cycles:g}]")
+    check_scope(scn)
     geom = mesh_geometry(scn.gear)
     s = geom.grid(scn.solver.n_points)
     if force is None:

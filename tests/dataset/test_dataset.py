@@ -50,7 +50,8 @@ def test_rows_columns_and_sidecar(single):
     side = json.loads(single.with_suffix(".json").read_text())
     assert side["rows"] == len(df) and side["schema_version"] == 1
     assert side["units"]["dte_rms"] == "m" and side["units"]["acc_rms"] == "m/s^2"
-    assert side["config"]["data"]["seed"] == 0 and side["config"]["scenario"]["tribology"]["regime"] == "dry" and "package_version" in side
+    assert side["config"]["data"]["seed"] == 0 and "package_version" in side
+    assert side["config"]["scenario"]["tribology"]["regime"] == "dry"
     for _, traj in df.groupby(["case", "replicate"]):
         assert np.all(np.diff(traj.root_wear_mm) > 0)  # wear only grows
         assert traj.root_wear_mm.iloc[0] == 0.0
