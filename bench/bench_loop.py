@@ -48,7 +48,7 @@ def one(job: tuple[str | None, int, int, str]) -> dict:
     r = run_loop(read_bundle(path), base, LoopSettings(seed=seed))
     seconds = time.perf_counter() - t
     # the floor: the data-generating model's own held-out error (noise, scatter estimate)
-    rec = r["_signals"]["rec"]
+    rec = r.signals["rec"]
     true_signals = model_signals(rec, rec.test, truth["nuisance"], EFFECTS.get(name),
                                  truth["values"])
     return {"truth": name or "none", "seed": seed, "chosen": r["chosen_effect"] or "none",

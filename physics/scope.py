@@ -12,7 +12,8 @@ periods to give features at all.
   zone at the pitch point. Above it the case yields and neither Hertz nor Archard applies.
 - Sampling: the sample rate must be at least 4 times the third mesh harmonic (the measured-data
   rule of ``shared/specs/measured-bundle.md``), i.e. ``f_s >= 12 f_mesh``.
-- Record length: at least 10 mesh periods after the transient.
+- Record length (:func:`check_record`, for the apps that take features of the records): at
+  least 10 mesh periods.
 """
 
 from __future__ import annotations
@@ -72,11 +73,19 @@ def check_scope(scn: Scenario) -> Scenario:
             f"sample rate {dyn.sample_rate_hz:g} Hz must be at least {SAMPLES_PER_MESH:g} times "
             f"that to resolve three mesh harmonics; use at most {n_max:.0f} r/min or raise "
             "dynamics.sample_rate_hz")
-    periods = (dyn.duration_s) * f_mesh
+    return scn
+
+
+def check_record(scn: Scenario) -> Scenario:
+    """:func:`check_scope`, and a simulated record long enough for features (10 mesh periods);
+    for the apps that take features of the records."""
+    check_scope(scn)
+    f_mesh, dyn = mesh_frequency_hz(scn), scn.dynamics
+    periods = dyn.duration_s * f_mesh
     if periods < MESH_PERIODS:
         need = MESH_PERIODS / f_mesh
         raise ValueError(
             f"dynamics.duration_s = {dyn.duration_s:g} holds {periods:.1f} mesh periods at "
-            f"n1_rpm = {op.n1_rpm:g}; the features need at least {MESH_PERIODS}: set "
+            f"n1_rpm = {scn.operating.n1_rpm:g}; the features need at least {MESH_PERIODS}: set "
             f"dynamics.duration_s to {math.ceil(need * 100) / 100:g} or more")
     return scn

@@ -14,6 +14,7 @@ from physics.params import Dynamics, Operating, Scenario
 from physics.scope import (
     SAMPLES_PER_MESH,
     STATIC_CONTACT_LIMIT,
+    check_record,
     check_scope,
     mesh_frequency_hz,
     pitch_point_pressure,
@@ -66,7 +67,8 @@ def test_short_record_is_refused_with_the_length_it_needs():
     scn = Scenario(dynamics=Dynamics(duration_s=0.005))
     with pytest.raises(ValueError, match=r"duration_s = 0.005 .* set dynamics.duration_s to "
                                          r"0.02 or more"):
-        check_scope(scn)
+        check_record(scn)
+    assert check_scope(scn) is scn  # the model itself runs at any length
 
 
 def test_numpy_scalars_are_accepted():

@@ -20,8 +20,10 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
+import logging
 import numbers
 import re
+import signal
 import warnings
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
@@ -55,10 +57,11 @@ from physics.params import (
     scenario_from_config,
     validate_fields,
 )
-from physics.scope import check_scope
+from physics.scope import check_record
 from physics.signals.features import FEATURES, feature_units, features
 from physics.signals.measurement import add_noise, housing_acceleration
 
+log = logging.getLogger(__name__)
 SCHEMA_VERSION = 1
 #: columns besides the features, with their units
 BASE_COLUMNS = {
@@ -338,7 +341,7 @@ def plan_dataset(base: Scenario, spec: DatasetSpec, out_dir: str | Path, name: s
         spec.chunk_units(int(chunk))  # raises for a chunk outside the spec
     for c in chunks:
         for case, rep in spec.chunk_units(c):
-            check_scope(unit_scenario(base, spec, case, rep))
+            check_record(unit_scenario(base, spec, case, rep))
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise ValueError(f"out_dir = {str(out_dir)!r} is a file; give a folder")
@@ -362,12 +365,20 @@ def build_dataset(job: DatasetJob) -> Path | None:
                 run_chunk(*args, c, job.folder, job.digest, job.store_signals)
                 bar.update(1)
         else:
-            with ProcessPoolExecutor(jobs, mp_context=get_context("spawn")) as pool:
+            pool = ProcessPoolExecutor(jobs, mp_context=get_context("spawn"),
+                                       initializer=_ignore_interrupt)
+            try:
                 futures = [pool.submit(run_chunk, *args, c, job.folder, job.digest,
                                        job.store_signals) for c in job.todo]
                 for f in as_completed(futures):
                     f.result()
                     bar.update(1)
+            except KeyboardInterrupt:
+                # Ctrl-C: start no further chunk, let the running ones finish and be kept
+                log.warning("interrupted: finishing the chunks that are running, then stopping")
+                pool.shutdown(wait=True, cancel_futures=True)
+                raise
+            pool.shutdown()
     if not job.merge:
         return None
     sidecar = {"config": {"scenario": dataclasses.asdict(job.base),
@@ -376,6 +387,11 @@ def build_dataset(job: DatasetJob) -> Path | None:
                "description": "one row per (case, replicate, cycles); features of the DTE and "
                               "the housing acceleration after noise"}
     return merge(job.spec, job.out, job.name, job.digest, sidecar, job.store_signals)
+
+
+def _ignore_interrupt() -> None:
+    """Workers ignore Ctrl-C: the parent decides (it lets running chunks finish)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def chunks_kept(job: DatasetJob) -> str:

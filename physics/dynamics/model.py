@@ -164,6 +164,28 @@ class Response:
     time_step: float  # RK4 step [s]
 
 
+#: positions of the kernel's per-scenario parameters (numba reads module constants as literals)
+(MASS, DAMPING, STATIC_FORCE, HALF_BACKLASH, LONG_ERROR, SHORT_ERROR, OMEGA1, OMEGA_MESH,
+ ROLL_SPEED, BASE_PITCH, GEAR_ERROR, OMEGA2, RIPPLE_FORCE, OMEGA_RIPPLE, CELLS_PER_PERIOD,
+ CENTRE_RUNOUT, CELLS_PER_METRE, N_PARAMETERS) = range(18)
+
+
+def kernel_parameters(m: PairModel) -> np.ndarray:
+    """The parameter row of ``m`` for the compiled kernel, filled by name."""
+    row = np.empty(N_PARAMETERS)
+    row[MASS], row[DAMPING], row[STATIC_FORCE] = m.mass, m.damping, m.static_force
+    row[HALF_BACKLASH], row[LONG_ERROR], row[SHORT_ERROR] = (m.half_backlash, m.long_error,
+                                                              m.short_error)
+    row[OMEGA1], row[OMEGA_MESH], row[OMEGA2] = m.omega1, m.omega_mesh, m.omega2
+    row[ROLL_SPEED], row[BASE_PITCH] = m.roll_speed, m.geometry.base_pitch
+    row[GEAR_ERROR], row[CENTRE_RUNOUT] = m.gear_error, m.centre_runout
+    row[RIPPLE_FORCE], row[OMEGA_RIPPLE] = m.ripple_force, m.omega_ripple
+    row[CELLS_PER_PERIOD] = len(m.k_a) / m.periods
+    row[CELLS_PER_METRE] = row[CELLS_PER_PERIOD] / (m.geometry.base_pitch
+                                                    * math.sin(m.geometry.alpha_w))
+    return row
+
+
 def time_step(models: Sequence[PairModel], dyn: Dynamics) -> tuple[float, int]:
     """RK4 step and sub-steps per output sample: ``dt <= step_factor / omega_max``."""
     dt_max = dyn.step_factor / max(m.omega_max for m in models)
@@ -183,13 +205,7 @@ def simulate(models: Sequence[PairModel] | PairModel, dyn: Dynamics) -> Response
     dt, n_sub = time_step(models, dyn)
     n_transient = round(dyn.transient_s / dt)
     n_out = round(dyn.duration_s * dyn.sample_rate_hz)
-    par = np.array([[m.mass, m.damping, m.static_force, m.half_backlash, m.long_error,
-                     m.short_error, m.omega1, m.omega_mesh, m.roll_speed,
-                     m.geometry.base_pitch, m.gear_error, m.omega2, m.ripple_force,
-                     m.omega_ripple, len(m.k_a) / m.periods, m.centre_runout,
-                     len(m.k_a) / m.periods / (m.geometry.base_pitch
-                                               * math.sin(m.geometry.alpha_w))]
-                    for m in models])
+    par = np.stack([kernel_parameters(m) for m in models])
     tables = np.stack([np.stack([m.k_a, m.k_b, m.g_a, m.g_b, *m.force_factors()])
                        for m in models])
     x0 = np.array([m.half_backlash + m.static_force / (m.k_a[0] + m.k_b[0]) for m in models])
@@ -245,19 +261,19 @@ def _mesh(par, tab, pos, x, v, da):
         # in the pinion's roll frame the exit (pinion tip) stays put and the entry (gear tip)
         # moves by d(a sin aw')/da = 1/sin aw' per unit centre distance: pairs enter later
         # when the centres part, earlier (the next pair ahead of time) when they close
-        n_per = par[14]
+        n_per = par[CELLS_PER_PERIOD]
         start = pos - (pos % n_per)
-        u_in = da * par[16]  # entry shift in table cells
+        u_in = da * par[CELLS_PER_METRE]  # entry shift in table cells
         if u_in > 0.0 and pos - start < u_in:
             k_a = 0.0
         elif u_in < 0.0 and pos - start >= n_per + u_in:
             j = int(start + n_per) % n
             k_c, g_c, l_c = tab[0, j], tab[2, j], tab[4, j]
-    c_v = par[1] * v / (k_a + k_b + k_c)
-    f_a = _contact(k_a, x - g_a, par[3], k_a * c_v)
-    f_b = _contact(k_b, x - g_b, par[3], k_b * c_v)
+    c_v = par[DAMPING] * v / (k_a + k_b + k_c)
+    f_a = _contact(k_a, x - g_a, par[HALF_BACKLASH], k_a * c_v)
+    f_b = _contact(k_b, x - g_b, par[HALF_BACKLASH], k_b * c_v)
     if k_c > 0.0:
-        f_a += _contact(k_c, x - g_c, par[3], k_c * c_v) * l_c / l_a
+        f_a += _contact(k_c, x - g_c, par[HALF_BACKLASH], k_c * c_v) * l_c / l_a
     return l_a, l_b, f_a, f_b
 
 
@@ -269,7 +285,7 @@ def _accel(par, tab, pos, x, v, e_dd, w, da):
     Each pair's force enters with its factor (1, or the sliding-friction moment factor).
     """
     l_a, l_b, f_a, f_b = _mesh(par, tab, pos, x, v, da)
-    return (w - par[0] * e_dd - l_a * f_a - l_b * f_b) / par[0]
+    return (w - par[MASS] * e_dd - l_a * f_a - l_b * f_b) / par[MASS]
 
 
 @numba.njit(cache=True, fastmath=True, inline="always")
@@ -277,12 +293,12 @@ def _extra(par, t):
     """The effect library's time terms at t: the gear run-out's e'' on the line of action and
     its centre-distance change (the eccentricity's other component), and the static force."""
     e_dd, da = 0.0, 0.0
-    if par[10] != 0.0:
-        e_dd = -par[10] * par[11] ** 2 * math.sin(par[11] * t)
-        da = par[15] * math.cos(par[11] * t)
-    w = par[2]
-    if par[12] != 0.0:
-        w += par[12] * math.sin(par[13] * t)
+    if par[GEAR_ERROR] != 0.0:
+        e_dd = -par[GEAR_ERROR] * par[OMEGA2] ** 2 * math.sin(par[OMEGA2] * t)
+        da = par[CENTRE_RUNOUT] * math.cos(par[OMEGA2] * t)
+    w = par[STATIC_FORCE]
+    if par[RIPPLE_FORCE] != 0.0:
+        w += par[RIPPLE_FORCE] * math.sin(par[OMEGA_RIPPLE] * t)
     return e_dd, w, da
 
 
@@ -305,13 +321,14 @@ def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins):
         p, tab = par[j], tables[j]
         x, v = x0[j], 0.0
         n_tab = float(n_phase)
-        n_per = p[14]  # table cells per mesh period
-        inc = p[8] * dt / p[9] * n_per  # mesh phase advance per step, in table cells
+        n_per = p[CELLS_PER_PERIOD]  # table cells per mesh period
+        # mesh phase advance per step, in table cells
+        inc = p[ROLL_SPEED] * dt / p[BASE_PITCH] * n_per
         pos = 0.0
         # e''(t) = -E_l w1^2 sin(w1 t) - E_s wm^2 sin(wm t): sines advanced by exact rotations
-        a_l, a_s = p[4] * p[6] ** 2, p[5] * p[7] ** 2
-        cl, sl = math.cos(0.5 * p[6] * dt), math.sin(0.5 * p[6] * dt)
-        cs, ss = math.cos(0.5 * p[7] * dt), math.sin(0.5 * p[7] * dt)
+        a_l, a_s = p[LONG_ERROR] * p[OMEGA1] ** 2, p[SHORT_ERROR] * p[OMEGA_MESH] ** 2
+        cl, sl = math.cos(0.5 * p[OMEGA1] * dt), math.sin(0.5 * p[OMEGA1] * dt)
+        cs, ss = math.cos(0.5 * p[OMEGA_MESH] * dt), math.sin(0.5 * p[OMEGA_MESH] * dt)
         s1, c1, s2, c2 = 0.0, 1.0, 0.0, 1.0  # sin, cos of w1 t and wm t
         total = n_transient + n_out * n_sub
         da0 = _extra(p, 0.0)[2]
@@ -345,7 +362,7 @@ def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins):
             e0 = x0e - (a_l * s1 + a_s * s2)
             eh = xhe - (a_l * s1h + a_s * s2h)
             e1 = x1e - (a_l * s1n + a_s * s2n)
-            a1 = (w0 - p[0] * e0 - l_a * f_a - l_b * f_b) / p[0]
+            a1 = (w0 - p[MASS] * e0 - l_a * f_a - l_b * f_b) / p[MASS]
             pos_h = _wrap(pos + 0.5 * inc, n_tab)
             pos_1 = _wrap(pos + inc, n_tab)
             a2 = _accel(p, tab, pos_h, x + 0.5 * dt * v, v + 0.5 * dt * a1, eh, wh, dah)

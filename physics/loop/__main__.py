@@ -78,7 +78,7 @@ def execute(job: LoopJob) -> None:
         report = run_feature_table(job.data, job.scenario, job.settings)
     write_report(report, job.out)
     log.info("chosen effect: %s; held-out error %.3f -> %.3f; report in %s",
-             report["chosen_effect"], report["error_before"], report["error_after"], job.out)
+             report.chosen_effect, report.error_before, report.error_after, job.out)
 
 
 @hydra.main(version_base="1.3", config_path="pkg://gearwear_conf.loop", config_name="loop")

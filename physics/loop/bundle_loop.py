@@ -62,6 +62,7 @@ from physics.dynamics.model import PairModel, build_model, simulate
 from physics.gear.stiffness import MeshStiffness
 from physics.loop.bundle import Bundle, record_scenario
 from physics.loop.effects import EFFECTS, Effect
+from physics.loop.report import LoopReport, adopts
 from physics.params import Scenario, bounded, validate_fields
 from physics.signals.features import FEATURES, features
 from physics.signals.measurement import declared_chain, sensed
@@ -564,8 +565,8 @@ def candidates_for(quantities: set[str], settings: LoopSettings) -> list[tuple[E
 
 
 def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = None,
-             progress: bool = False) -> dict:
-    """The whole loop on one bundle; returns the report as a dict (see the module text)."""
+             progress: bool = False) -> LoopReport:
+    """The whole loop on one bundle; returns its report (see the module text)."""
     settings = settings or LoopSettings()
     candidates = candidates_for(set(bundle.manifest.quantity), settings)
     rec = prepare(bundle, base, settings)
@@ -590,8 +591,8 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
                  c.heldout, before, c.bic - null_bic, "" if c.refined else " (screened)")
     ranking.sort(key=lambda c: c.heldout)
     best = ranking[0]
-    adopt = (best.heldout <= (1 - settings.min_gain) * before
-             and best.bic - null_bic <= -settings.min_delta_bic)
+    adopt = adopts(best.heldout, before, best.bic - null_bic, settings.min_gain,
+                   settings.min_delta_bic)
     chosen = EFFECTS[best.name] if adopt else None
     after_nui = best.nuisance if adopt else nuisance
     after_vals = best.values if adopt else {}
@@ -610,36 +611,38 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
             wear_err[key] = (float(np.mean(np.abs(est[ok] - true[ok]) / true[ok]) * 100)
                              if ok.any() else float(np.mean(np.abs(est - true))))
     rec.cache.clear()  # the report keeps the records, not the simulations
-    return {
-        "mode": "bundle",
-        "chosen_effect": chosen.name if chosen else None,
-        "chosen_option": best.option if adopt else None,
-        "chosen_parameters": ({k: v for k, v in best.values.items() if k not in best.option}
-                              if adopt else None),
-        "error_before": before,
-        "error_after": rms(residuals(rec, rec.test, after_test)),
-        "error_unit": "RMS of the held-out records' signature residuals, each in units of its "
-                      "own scatter between segments (1: at the noise)",
-        "error_before_db": rms(residuals_db(rec, rec.test, base_test)),
-        "error_after_db": rms(residuals_db(rec, rec.test, after_test)),
-        "feature_error_before_pct": feature_error(rec, rec.test, base_test),
-        "feature_error_after_pct": feature_error(rec, rec.test, after_test),
-        "wear_error_before_pct": wear_err.get("before"),
-        "wear_error_after_pct": wear_err.get("after"),
-        "calibration": nuisance,
-        "calibrated_on": "the train records",
-        "not_identifiable": [n for n in DYNAMIC_NUISANCE if n not in free_nuisance],
-        "nuisance_after": after_nui,
-        "null_bic": null_bic,
-        "ranking": [{"effect": c.name, "option": c.option,
-                     "parameters": {k: v for k, v in c.values.items() if k not in c.option},
-                     "nuisance": c.nuisance, "refined": c.refined,
-                     "heldout_error": c.heldout, "delta_bic": c.bic - null_bic,
-                     "n_params": c.n_params} for c in ranking],
-        "decision_rule": {"min_gain": settings.min_gain, "min_delta_bic": settings.min_delta_bic},
-        "train_records": [bundle.records[i] for i in rec.train],
-        "test_records": [bundle.records[i] for i in rec.test],
-        "residual_before": residual_table(rec, rec.test, base_test).to_dict(),
-        "residual_after": residual_table(rec, rec.test, after_test).to_dict(),
-        "_signals": {"test": rec.test, "before": base_test, "after": after_test, "rec": rec},
-    }
+    return LoopReport(
+        mode="bundle",
+        chosen_effect=chosen.name if chosen else None,
+        chosen_option=best.option if adopt else None,
+        chosen_parameters=({k: v for k, v in best.values.items() if k not in best.option}
+                           if adopt else None),
+        error_before=before,
+        error_after=rms(residuals(rec, rec.test, after_test)),
+        error_unit="RMS of the held-out records' signature residuals, each in units of its "
+                   "own scatter between segments (1: at the noise)",
+        feature_error_before_pct=feature_error(rec, rec.test, base_test),
+        feature_error_after_pct=feature_error(rec, rec.test, after_test),
+        wear_error_before_pct=wear_err.get("before"),
+        wear_error_after_pct=wear_err.get("after"),
+        calibration=nuisance,
+        calibrated_on="the train records",
+        nuisance_after=after_nui,
+        null_bic=null_bic,
+        ranking=[{"effect": c.name, "option": c.option,
+                  "parameters": {k: v for k, v in c.values.items() if k not in c.option},
+                  "nuisance": c.nuisance, "refined": c.refined,
+                  "heldout_error": c.heldout, "delta_bic": c.bic - null_bic,
+                  "n_params": c.n_params} for c in ranking],
+        decision_rule={"min_gain": settings.min_gain, "min_delta_bic": settings.min_delta_bic},
+        details={
+            "error_before_db": rms(residuals_db(rec, rec.test, base_test)),
+            "error_after_db": rms(residuals_db(rec, rec.test, after_test)),
+            "not_identifiable": [n for n in DYNAMIC_NUISANCE if n not in free_nuisance],
+            "train_records": [bundle.records[i] for i in rec.train],
+            "test_records": [bundle.records[i] for i in rec.test],
+            "residual_before": residual_table(rec, rec.test, base_test).to_dict(),
+            "residual_after": residual_table(rec, rec.test, after_test).to_dict(),
+        },
+        signals={"test": rec.test, "before": base_test, "after": after_test, "rec": rec},
+    )

@@ -1,14 +1,64 @@
-"""Markdown and figures of a measured-data loop report (:mod:`physics.loop`)."""
+"""The report of the measured-data loops (:mod:`physics.loop`): one type for bundles and feature
+tables, its null test, its markdown and figures."""
 
 from __future__ import annotations
 
 import json
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from physics.files import atomic_write, pyplot
 from physics.signals.order_analysis import line_amplitudes
+
+#: the keys every report.json leads with, in this order (README: stable keys)
+STABLE_KEYS = ("mode", "chosen_effect", "chosen_option", "chosen_parameters", "error_before",
+               "error_after", "error_unit", "feature_error_before_pct", "feature_error_after_pct",
+               "wear_error_before_pct", "wear_error_after_pct", "calibration", "calibrated_on",
+               "nuisance_after", "null_bic", "ranking", "decision_rule")
+
+
+def adopts(heldout: float, null_heldout: float, delta_bic: float, min_gain: float,
+           min_delta_bic: float) -> bool:
+    """The null test: adopt the best candidate only if it cuts the held-out error by at least
+    ``min_gain`` and the BIC by at least ``min_delta_bic``."""
+    return heldout <= (1 - min_gain) * null_heldout and delta_bic <= -min_delta_bic
+
+
+@dataclass
+class LoopReport:
+    """What a loop found. ``report.json`` holds the stable keys (:data:`STABLE_KEYS`) followed
+    by ``details``, the mode's own entries (records and residuals of a bundle, feature tables
+    of a table); ``signals`` feeds the figures and is not written."""
+
+    mode: str  # "bundle" or "feature_table"
+    chosen_effect: str | None
+    chosen_option: dict | None
+    chosen_parameters: dict | None
+    error_before: float  # held-out error of the calibrated declared model
+    error_after: float  # ... with the chosen effect (the same when none is chosen)
+    error_unit: str
+    feature_error_before_pct: float
+    feature_error_after_pct: float
+    wear_error_before_pct: float | None
+    wear_error_after_pct: float | None
+    calibration: dict
+    calibrated_on: str
+    nuisance_after: dict
+    null_bic: float
+    ranking: list[dict]
+    decision_rule: dict
+    details: dict = field(default_factory=dict)
+    signals: Any = field(default=None, repr=False, compare=False)
+
+    def to_dict(self) -> dict:
+        return {k: getattr(self, k) for k in STABLE_KEYS} | self.details
+
+    def __getitem__(self, key: str) -> Any:
+        """``report[key]`` is the entry ``key`` of report.json."""
+        return self.to_dict()[key]
 
 
 def markdown(r: dict) -> str:
@@ -66,14 +116,14 @@ def markdown(r: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
-def figures(report: dict, out: Path) -> None:
+def figures(report: LoopReport, out: Path) -> None:
     """order_spectra.png (one held-out record) and residuals.png (per signature entry), or
     feature_trends.png for a feature table."""
     plt = pyplot()
-    if report.get("mode") == "feature_table":
-        _feature_trends(report, out)
+    if report.mode == "feature_table":
+        _feature_trends(report.to_dict(), out)
         return
-    sig = report["_signals"]
+    sig = report.signals
     rec, i = sig["rec"], int(sig["test"][0])
     man = rec.bundle.manifest
     fs = float(man.fs_hz.iloc[i])
@@ -123,9 +173,9 @@ def _feature_trends(report: dict, out: Path) -> None:
     plt.close(fig)
 
 
-def write_report(report: dict, out: Path) -> None:
+def write_report(report: LoopReport, out: Path) -> None:
     """report.json, report.md and the figures into ``out``."""
-    plain = {k: v for k, v in report.items() if not k.startswith("_")}
+    plain = report.to_dict()
     text = json.dumps(plain, indent=2, default=float)
     atomic_write(out / "report.json", lambda p: p.write_text(text + "\n"))
     atomic_write(out / "report.md", lambda p: p.write_text(markdown(plain)))

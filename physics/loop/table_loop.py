@@ -45,6 +45,7 @@ from physics.loop.bundle_loop import (
     worn_models,
 )
 from physics.loop.effects import EFFECTS, Effect
+from physics.loop.report import LoopReport, adopts
 from physics.params import Scenario
 from physics.signals.features import FEATURES, features
 from physics.signals.measurement import declared_chain, sensed
@@ -165,8 +166,8 @@ def _noise_bounds(td: TableData) -> tuple[str, float, float, bool]:
 
 
 def run_feature_table(df: pd.DataFrame, base: Scenario,
-                      settings: LoopSettings | None = None) -> dict:
-    """The loop on a feature table; returns the report (keys as :func:`physics.loop.run_loop`)."""
+                      settings: LoopSettings | None = None) -> LoopReport:
+    """The loop on a feature table; returns its report."""
     settings = settings or LoopSettings()
     candidates_for(set(), settings)  # refuses unknown names before any work
     td = prepare_table(df, base, settings)
@@ -199,8 +200,8 @@ def run_feature_table(df: pd.DataFrame, base: Scenario,
     ranking = [judge(e, o) for e, o in candidates_for({td.quantity}, settings)]
     ranking.sort(key=lambda c: c["heldout"])
     best = ranking[0]
-    adopt = (best["heldout"] <= (1 - settings.min_gain) * null["heldout"]
-             and best["bic"] - null["bic"] <= -settings.min_delta_bic)
+    adopt = adopts(best["heldout"], null["heldout"], best["bic"] - null["bic"],
+                   settings.min_gain, settings.min_delta_bic)
     chosen = best if adopt else null
     eff = EFFECTS[chosen["effect"]] if adopt else None
     before = model_features(td, rows, null["nuisance"], None, {})
@@ -218,33 +219,35 @@ def run_feature_table(df: pd.DataFrame, base: Scenario,
     def mre(m: np.ndarray) -> float:
         return float(np.mean(np.abs(m / td.measured - 1)) * 100)
 
-    return {
-        "mode": "feature_table",
-        "chosen_effect": chosen["effect"],
-        "chosen_option": best["option"] if adopt else None,
-        "chosen_parameters": effect_values(chosen) if adopt else None,
-        "error_before": null["heldout"],
-        "error_after": chosen["heldout"],
-        "error_unit": "RMS natural-log ratio of the features, leave-one-row-out",
-        "feature_error_before_pct": mre(before),
-        "feature_error_after_pct": mre(after),
-        "wear_error_before_pct": None,
-        "wear_error_after_pct": None,
-        "calibration": nuisance,
-        "calibrated_on": "the least-worn row",
-        "nuisance_after": chosen["nuisance"],
-        "null_bic": null["bic"],
-        "ranking": [{"effect": c["effect"], "option": c["option"],
-                     "parameters": effect_values(c), "nuisance": c["nuisance"],
-                     "heldout_error": c["heldout"], "delta_bic": c["bic"] - null["bic"],
-                     "n_params": c["n_params"]} for c in ranking],
-        "decision_rule": {"min_gain": settings.min_gain, "min_delta_bic": settings.min_delta_bic},
-        "wear_mm": td.wear.tolist(),
-        "quantity": td.quantity,
-        "features_measured": table(td.measured),
-        "features_before": table(before),
-        "features_after": table(after),
-        "rise_measured": rise(td.measured),
-        "rise_before": rise(before),
-        "rise_after": rise(after),
-    }
+    return LoopReport(
+        mode="feature_table",
+        chosen_effect=chosen["effect"],
+        chosen_option=best["option"] if adopt else None,
+        chosen_parameters=effect_values(chosen) if adopt else None,
+        error_before=null["heldout"],
+        error_after=chosen["heldout"],
+        error_unit="RMS natural-log ratio of the features, leave-one-row-out",
+        feature_error_before_pct=mre(before),
+        feature_error_after_pct=mre(after),
+        wear_error_before_pct=None,
+        wear_error_after_pct=None,
+        calibration=nuisance,
+        calibrated_on="the least-worn row",
+        nuisance_after=chosen["nuisance"],
+        null_bic=null["bic"],
+        ranking=[{"effect": c["effect"], "option": c["option"],
+                  "parameters": effect_values(c), "nuisance": c["nuisance"],
+                  "heldout_error": c["heldout"], "delta_bic": c["bic"] - null["bic"],
+                  "n_params": c["n_params"]} for c in ranking],
+        decision_rule={"min_gain": settings.min_gain, "min_delta_bic": settings.min_delta_bic},
+        details={
+            "wear_mm": td.wear.tolist(),
+            "quantity": td.quantity,
+            "features_measured": table(td.measured),
+            "features_before": table(before),
+            "features_after": table(after),
+            "rise_measured": rise(td.measured),
+            "rise_before": rise(before),
+            "rise_after": rise(after),
+        },
+    )

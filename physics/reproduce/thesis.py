@@ -60,7 +60,7 @@ from physics.params import (
     scenario_from_config,
 )
 from physics.reproduce import plots
-from physics.scope import check_scope
+from physics.scope import check_record, check_scope
 from physics.signals.features import features
 from physics.tribology.wear import WearResult, quasi_static_force, simulate_wear
 
@@ -453,7 +453,7 @@ def _positive(name: str, values: list[float], whole: bool = False) -> None:
 def prepare(cfg: DictConfig) -> ReproducePlan:
     """Check the whole reproduction before any work: every scenario it will run is built and
     checked against the model's scope (:func:`physics.scope.check_scope`)."""
-    scn = check_scope(scenario_from_config(cfg))
+    scn = check_record(scenario_from_config(cfg))
     lubs = {lub.name: lub for lub in map(_lubricant_from_group, cfg.lubricants)}
     st, ev = cfg.stiffness, cfg.evolution
     _positive("cycles", [cfg.cycles])
@@ -483,7 +483,7 @@ def prepare(cfg: DictConfig) -> ReproducePlan:
                          "refinements > 0")
     base = OmegaConf.to_container(cfg, resolve=True)
     for case in ev.cases:
-        check_scope(scenario_from_config({**base, "case": case}))
+        check_record(scenario_from_config({**base, "case": case}))
     return ReproducePlan(cfg, scn, lubs, _thesis_table14(cfg.thesis_tables), Path(cfg.out_dir))
 
 

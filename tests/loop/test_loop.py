@@ -36,6 +36,7 @@ from physics.loop.bundle_loop import (
     with_level,
 )
 from physics.loop.effects import EFFECTS, effect
+from physics.loop.report import STABLE_KEYS
 from physics.loop.synthetic import make_bundle
 from physics.loop.table_loop import parse_columns
 from physics.params import scenario_from_config
@@ -355,6 +356,7 @@ def test_loop_app_finds_an_undeclared_transfer_path(tmp_path, scn):
     run = run_app(tmp_path, path, *FAST)
     assert run.returncode == 0, run.stderr[-2000:]
     report = json.loads((tmp_path / "run" / "report.json").read_text())
+    assert tuple(report)[:len(STABLE_KEYS)] == STABLE_KEYS  # one report type, stable keys
     assert report["chosen_effect"] == "transfer_path"
     assert report["error_after"] < 0.5 * report["error_before"]
     assert report["not_identifiable"] == ["eccentricity1_um"]
