@@ -117,13 +117,10 @@ def build_model(scn: Scenario, stiffness: MeshStiffness | None = None,
     ms = stiffness or MeshStiffness(g, scn.material)
     geom = ms.geometry
     w0 = op.torque_Nm / geom.rb2
-    tau = geom.base_pitch * np.arange(n_phase) / n_phase
-    s_a = geom.s_start + tau
-    s_b = s_a + geom.base_pitch
-    on_b = s_b <= geom.s_end
+    s_a, s_b, on_b = geom.mesh_period(n_phase)
     k_of = ms.pair_function(s_grid, wear1, wear2)
     k_a = k_of(s_a)
-    k_b = np.where(on_b, k_of(np.minimum(s_b, geom.s_end)), 0.0)
+    k_b = np.where(on_b, k_of(s_b), 0.0)
     if wear1 is None and wear2 is None:
         g_a = g_b = np.zeros(n_phase)
     else:
@@ -131,7 +128,7 @@ def build_model(scn: Scenario, stiffness: MeshStiffness | None = None,
         total = (np.zeros_like(s_grid) if wear1 is None else wear1) + (
             np.zeros_like(s_grid) if wear2 is None else wear2)
         g_a = np.interp(s_a, s_grid, total)
-        g_b = np.where(on_b, np.interp(np.minimum(s_b, geom.s_end), s_grid, total), 0.0)
+        g_b = np.where(on_b, np.interp(s_b, s_grid, total), 0.0)
     rho, width = scn.material.density_kg_m3, g.face_width
     j1 = dyn.inertia1_kg_m2 or blank_inertia(geom.r1, g.bore_radius1_mm * 1e-3, width, rho)
     j2 = dyn.inertia2_kg_m2 or blank_inertia(geom.r2, g.bore_radius2_mm * 1e-3, width, rho)

@@ -92,6 +92,14 @@ class MeshGeometry:
         R1, R2 = self.curvature_radii(s)
         return np.hypot(self.rb1, R1), np.hypot(self.rb2, R2)
 
+    def mesh_period(self, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Roll coordinates over one mesh period at ``n`` phases: pair A from the start of
+        contact, pair B one base pitch ahead (clipped to the end of contact), and B's contact
+        mask (B is in contact in the double-tooth zone only)."""
+        s_a = self.s_start + self.base_pitch * np.arange(n) / n
+        ahead = s_a + self.base_pitch
+        return s_a, np.minimum(ahead, self.s_end), ahead <= self.s_end
+
     def grid(self, n: int) -> np.ndarray:
         """``n`` points on the path of contact with the two zone boundaries among them.
 

@@ -263,9 +263,7 @@ class MeshStiffness:
             raise ValueError(f"n = {n} mesh positions is too few; use at least 10 (200 default)")
         g = self.geometry
         k = self.pair_function(s_grid, wear1, wear2)
-        roll = g.s_start + g.base_pitch * np.arange(n) / n
-        ahead = roll + g.base_pitch
-        in_contact = ahead <= g.s_end
+        roll, ahead, in_contact = g.mesh_period(n)
         k1 = k(roll)
-        k2 = np.where(in_contact, k(np.minimum(ahead, g.s_end)), 0.0)
+        k2 = np.where(in_contact, k(ahead), 0.0)
         return {"roll": roll, "k_pair1": k1, "k_pair2": k2, "k_total": k1 + k2}

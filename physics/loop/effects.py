@@ -95,9 +95,7 @@ def _gear_runout(m: PairModel, v: dict) -> PairModel:
 def _roll_positions(m: PairModel) -> tuple[np.ndarray, np.ndarray]:
     """Roll coordinates of pairs A and B over the tables (period-folded), and B's mask."""
     g = m.geometry
-    n = len(m.k_a) // m.periods
-    tau = g.base_pitch * (np.arange(len(m.k_a)) % n) / n
-    s_a = g.s_start + tau
+    s_a = np.tile(g.mesh_period(len(m.k_a) // m.periods)[0], m.periods)
     return s_a, s_a + g.base_pitch
 
 
