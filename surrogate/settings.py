@@ -1,4 +1,4 @@
-"""Structured configs of the surrogate's Hydra groups (``conf/train/data``, ``conf/train/model``).
+"""Structured configs of the surrogate's Hydra groups (``conf/train/data``, ``model``, ``trainer``).
 
 Kept free of torch so that ``python train.py --help`` stays fast. :func:`register` puts them in
 Hydra's ConfigStore; the YAML files name them in their defaults list and only choose values.
@@ -62,7 +62,34 @@ class ModelConfig:
                                  f"{lo:g}, {hi:g})")
 
 
+@dataclass
+class TrainerConfig:
+    """Schema of ``conf/train/trainer/`` (the Lightning Trainer arguments the configs set)."""
+
+    _target_: str = "lightning.pytorch.trainer.Trainer"
+    default_root_dir: str = "${paths.output_dir}"
+    accelerator: str = "cpu"
+    devices: int = 1
+    min_epochs: int = 20
+    max_epochs: int = 600
+    check_val_every_n_epoch: int = 1
+    log_every_n_steps: int = 1
+    deterministic: bool = True
+    enable_model_summary: bool = False
+    enable_progress_bar: bool = True
+    fast_dev_run: bool = False  # one batch of each stage: a smoke test
+
+    def check(self) -> None:
+        """Raise ``ValueError`` for epochs or intervals out of range."""
+        if self.min_epochs < 0:  # above max_epochs it gives way to max_epochs
+            raise ValueError(f"trainer.min_epochs = {self.min_epochs} must be >= 0")
+        for name in ("max_epochs", "devices", "check_val_every_n_epoch", "log_every_n_steps"):
+            if getattr(self, name) < 1:
+                raise ValueError(f"trainer.{name} = {getattr(self, name)} must be >= 1")
+
+
 def register() -> None:
     """Register the schemas (before Hydra composes a train config)."""
     register_schema("wear_schema", DataConfig, group="data")
     register_schema("ensemble_schema", ModelConfig, group="model")
+    register_schema("cpu_schema", TrainerConfig, group="trainer")

@@ -53,6 +53,7 @@ def prepare(cfg: DictConfig) -> TrainJob:
     if cfg.get("threads") is not None and not (isinstance(cfg.threads, int) and cfg.threads > 0):
         raise ValueError(f"threads = {cfg.threads!r} must be a whole number >= 1 or null")
     OmegaConf.to_object(cfg.model).check()
+    OmegaConf.to_object(cfg.trainer).check()
     callbacks = [_instantiate(c, "callbacks") for c in (cfg.get("callbacks") or {}).values()]
     loggers = [_instantiate(c, "logger") for c in (cfg.get("logger") or {}).values()]
     trainer = _instantiate(cfg.trainer, "trainer", callbacks=callbacks, logger=loggers or False)

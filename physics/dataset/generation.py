@@ -23,12 +23,9 @@ import json
 import logging
 import numbers
 import re
-import signal
 import warnings
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from importlib.metadata import version
-from multiprocessing import get_context
 from pathlib import Path
 from typing import Any
 
@@ -36,6 +33,7 @@ import numpy as np
 import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
+from joblib import Parallel, delayed
 from tqdm import tqdm
 
 from physics.dynamics.evolution import simulate_dynamic_wear
@@ -364,21 +362,12 @@ def build_dataset(job: DatasetJob) -> Path | None:
             for c in job.todo:
                 run_chunk(*args, c, job.folder, job.digest, job.store_signals)
                 bar.update(1)
-        else:
-            pool = ProcessPoolExecutor(jobs, mp_context=get_context("spawn"),
-                                       initializer=_ignore_interrupt)
-            try:
-                futures = [pool.submit(run_chunk, *args, c, job.folder, job.digest,
-                                       job.store_signals) for c in job.todo]
-                for f in as_completed(futures):
-                    f.result()
-                    bar.update(1)
-            except KeyboardInterrupt:
-                # Ctrl-C: start no further chunk, let the running ones finish and be kept
-                log.warning("interrupted: finishing the chunks that are running, then stopping")
-                pool.shutdown(wait=True, cancel_futures=True)
-                raise
-            pool.shutdown()
+        else:  # loky processes: they also start inside a joblib-launched multirun job
+            runs = Parallel(n_jobs=jobs, return_as="generator_unordered")(
+                delayed(run_chunk)(*args, c, job.folder, job.digest, job.store_signals)
+                for c in job.todo)
+            for _ in runs:
+                bar.update(1)
     if not job.merge:
         return None
     sidecar = {"config": {"scenario": dataclasses.asdict(job.base),
@@ -387,11 +376,6 @@ def build_dataset(job: DatasetJob) -> Path | None:
                "description": "one row per (case, replicate, cycles); features of the DTE and "
                               "the housing acceleration after noise"}
     return merge(job.spec, job.out, job.name, job.digest, sidecar, job.store_signals)
-
-
-def _ignore_interrupt() -> None:
-    """Workers ignore Ctrl-C: the parent decides (it lets running chunks finish)."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def chunks_kept(job: DatasetJob) -> str:

@@ -119,7 +119,7 @@ def test_ensemble_members_differ_and_the_mixture_is_right():
 
 def test_fast_dev_run(tmp_path, dataset):
     value = train(train_cfg(tmp_path, dataset, "case=3", "data.test_replicates=1",
-                            "+trainer.fast_dev_run=true", "logger=csv"))
+                            "trainer.fast_dev_run=true", "logger=csv"))
     assert np.isfinite(value) and (tmp_path / "run" / "wear_surrogate.pt").is_file()
 
 
