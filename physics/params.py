@@ -320,6 +320,20 @@ class Scenario:
     dynamics: Dynamics = Dynamics()
 
 
+@dataclass
+class PhysicsConfig:
+    """The physics groups of an app's config (``conf/physics/``): the schema every physics app's
+    config extends (structured configs; each group validates itself when built)."""
+
+    gear: GearPair = field(default_factory=GearPair)
+    material: Material = field(default_factory=Material)
+    lubricant: Lubricant = field(default_factory=Lubricant)
+    tribology: Tribology = field(default_factory=Tribology)
+    operating: Operating = field(default_factory=Operating)
+    solver: WearSolver = field(default_factory=WearSolver)
+    dynamics: Dynamics = field(default_factory=Dynamics)
+
+
 _PARTS = {
     "gear": GearPair, "material": Material, "lubricant": Lubricant,
     "tribology": Tribology, "operating": Operating, "solver": WearSolver, "dynamics": Dynamics,

@@ -41,14 +41,9 @@ from physics.dynamics.model import build_model, simulate
 from physics.files import atomic_write
 from physics.gear.stiffness import MeshStiffness, SainsotRangeWarning
 from physics.params import (
-    Dynamics,
-    GearPair,
-    Lubricant,
-    Material,
-    Operating,
+    PhysicsConfig,
     Scenario,
     Tribology,
-    WearSolver,
     bounded,
     case_values,
     operating_cases,
@@ -270,16 +265,10 @@ NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
 
 
 @dataclass
-class DatasetConfig:
+class DatasetConfig(PhysicsConfig):
     """Schema of ``python -m physics.dataset`` (``conf/dataset/dataset.yaml``)."""
 
-    gear: GearPair = field(default_factory=GearPair)
-    material: Material = field(default_factory=Material)
-    lubricant: Lubricant = field(default_factory=Lubricant)
     tribology: Tribology = field(default_factory=lambda: DATASET_TRIBOLOGY)
-    operating: Operating = field(default_factory=Operating)
-    solver: WearSolver = field(default_factory=WearSolver)
-    dynamics: Dynamics = field(default_factory=Dynamics)
     data: DatasetSpec = field(default_factory=DatasetSpec)
     out_dir: str = "data"  # relative to the folder the command runs in
     name: str = "dataset"  # <out_dir>/<name>.parquet, <name>.json (and <name>_signals.npy)

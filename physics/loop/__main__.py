@@ -20,14 +20,9 @@ from physics.loop.bundle_loop import LoopSettings, run_loop
 from physics.loop.report import write_report
 from physics.loop.table_loop import run_feature_table
 from physics.params import (
-    Dynamics,
-    GearPair,
-    Lubricant,
-    Material,
-    Operating,
+    PhysicsConfig,
     Scenario,
     Tribology,
-    WearSolver,
     scenario_from_config,
 )
 
@@ -35,16 +30,10 @@ log = logging.getLogger(__name__)
 
 
 @dataclass
-class LoopConfig:
+class LoopConfig(PhysicsConfig):
     """Schema of ``python -m physics.loop``."""
 
-    gear: GearPair = field(default_factory=GearPair)
-    material: Material = field(default_factory=Material)
-    lubricant: Lubricant = field(default_factory=Lubricant)
     tribology: Tribology = field(default_factory=lambda: DATASET_TRIBOLOGY)  # as the dataset
-    operating: Operating = field(default_factory=Operating)
-    solver: WearSolver = field(default_factory=WearSolver)
-    dynamics: Dynamics = field(default_factory=Dynamics)
     data: str = MISSING  # a bundle folder (shared/specs/measured-bundle.md) or a feature table
     case: int | None = None  # 1-5: operating point and lubricant of Table 11 (feature tables)
     progress: bool = True

@@ -47,14 +47,9 @@ from physics.gear.load_sharing import pair_loads
 from physics.gear.stiffness import MeshStiffness
 from physics.gear.tooth_fem import FEResult, fe_pair_stiffness
 from physics.params import (
-    Dynamics,
-    GearPair,
     Lubricant,
-    Material,
-    Operating,
+    PhysicsConfig,
     Scenario,
-    Tribology,
-    WearSolver,
     config_choices,
     config_file,
     scenario_from_config,
@@ -78,40 +73,39 @@ def pitch_state(res: WearResult) -> dict[str, float]:
             for n in ("h_min", "film_ratio", "asperity_ratio", "p_max", "flash_temperature")}
 
 
-def table_speed(scn: Scenario, cycles: float, speeds: list[float]) -> pd.DataFrame:
+def parameter_sweep(scn: Scenario, cycles: float, part: str, name: str, values: list[float],
+                    shown: dict[str, tuple[str, float]]) -> pd.DataFrame:
+    """Average pinion wear after ``cycles`` and pitch-point contact quantities with
+    ``scn.<part>.<name>`` set to each value (thesis 2.7.2-2.7.4). ``shown`` maps a column to
+    (a key of :func:`pitch_state`, its unit factor)."""
     rows = []
-    for n1 in speeds:
-        s = _with(scn, "operating", n1_rpm=float(n1))
-        res = simulate_wear(s, cycles)
-        ps = pitch_state(res)
-        rows.append({"n1_rpm": n1, "min_film_thickness_nm": ps["h_min"] * 1e9,
-                     "asperity_load_ratio_pct": ps["asperity_ratio"] * 100,
+    for v in values:
+        res = simulate_wear(_with(scn, part, **{name: float(v)}), cycles)
+        state = pitch_state(res)
+        rows.append({name: v, **{col: state[key] * f for col, (key, f) in shown.items()},
                      "avg_wear_um": res.mean_depth() * 1e6})
     return pd.DataFrame(rows)
+
+
+ASPERITY = {"asperity_load_ratio_pct": ("asperity_ratio", 100.0)}
+
+
+def table_speed(scn: Scenario, cycles: float, speeds: list[float]) -> pd.DataFrame:
+    """Table 2 (2.7.2)."""
+    return parameter_sweep(scn, cycles, "operating", "n1_rpm", speeds,
+                           {"min_film_thickness_nm": ("h_min", 1e9), **ASPERITY})
 
 
 def table_torque(scn: Scenario, cycles: float, torques: list[float]) -> pd.DataFrame:
-    rows = []
-    for t in torques:
-        s = _with(scn, "operating", torque_Nm=float(t))
-        res = simulate_wear(s, cycles)
-        ps = pitch_state(res)
-        rows.append({"torque_Nm": t, "max_hertz_pressure_MPa": ps["p_max"] * 1e-6,
-                     "asperity_load_ratio_pct": ps["asperity_ratio"] * 100,
-                     "avg_wear_um": res.mean_depth() * 1e6})
-    return pd.DataFrame(rows)
+    """Table 3 (2.7.3)."""
+    return parameter_sweep(scn, cycles, "operating", "torque_Nm", torques,
+                           {"max_hertz_pressure_MPa": ("p_max", 1e-6), **ASPERITY})
 
 
 def table_roughness(scn: Scenario, cycles: float, sigmas: list[float]) -> pd.DataFrame:
-    rows = []
-    for sig in sigmas:
-        s = _with(scn, "tribology", sigma_um=float(sig))
-        res = simulate_wear(s, cycles)
-        ps = pitch_state(res)
-        rows.append({"sigma_um": sig, "film_thickness_ratio": ps["film_ratio"],
-                     "asperity_load_ratio_pct": ps["asperity_ratio"] * 100,
-                     "avg_wear_um": res.mean_depth() * 1e6})
-    return pd.DataFrame(rows)
+    """Table 4 (2.7.4)."""
+    return parameter_sweep(scn, cycles, "tribology", "sigma_um", sigmas,
+                           {"film_thickness_ratio": ("film_ratio", 1.0), **ASPERITY})
 
 
 def table_lubricant(
@@ -405,16 +399,9 @@ class EvolutionStudy:
 
 
 @dataclass
-class ReproduceConfig:
+class ReproduceConfig(PhysicsConfig):
     """Schema of ``python -m physics.reproduce`` (``conf/reproduce/reproduce.yaml``)."""
 
-    gear: GearPair = field(default_factory=GearPair)
-    material: Material = field(default_factory=Material)
-    lubricant: Lubricant = field(default_factory=Lubricant)
-    tribology: Tribology = field(default_factory=Tribology)
-    operating: Operating = field(default_factory=Operating)
-    solver: WearSolver = field(default_factory=WearSolver)
-    dynamics: Dynamics = field(default_factory=Dynamics)
     #: folder of the thesis's tables, for the check of its estimator (4.4) on its own data
     #: (e.g. ../shared/reference/thesis_tables); null: that check is skipped
     thesis_tables: str | None = None
