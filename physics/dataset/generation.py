@@ -154,6 +154,12 @@ def run_unit(base: Scenario, spec: DatasetSpec, case: int, replicate: int,
         **{f"dte_{k}": dte_f[k] for k in FEATURES},
         **{f"acc_{k}": acc_f[k] for k in FEATURES},
     })
+    numbers = rows.select_dtypes("number")
+    bad = ~np.isfinite(numbers.to_numpy(float))
+    if bad.any():  # a model failure is an error, never a row
+        r, c = np.argwhere(bad)[0]
+        raise FloatingPointError(f"case {case}, replicate {replicate}: the model gave a "
+                                 f"non-finite {numbers.columns[c]} at {cycles[r]:g} cycles")
     signals = np.stack([dte, acc], axis=1).astype(np.float32) if keep_signals else None
     return rows, signals
 

@@ -173,6 +173,8 @@ def test_predict_cli(trained, dataset, tmp_path):
      r"row 2 column dte_rms is nan"),
     (lambda d: d.assign(dte_rms=d.dte_rms * 1e6), r"dte_rms.*another unit.*expects m"),
     (lambda d: d.iloc[:0], r"no rows"),
+    (lambda d: d.assign(dte_rms=np.where(d.index == 3, d.dte_rms * 1e6, d.dte_rms)),
+     r"row 3 column dte_rms .* transcription error"),
 ])
 def test_bad_input_is_refused(trained, dataset, change, message):
     df = pd.read_parquet(dataset)[DEFAULT_INPUTS].reset_index(drop=True)
@@ -191,6 +193,15 @@ def test_foreign_and_unsafe_checkpoints_are_refused(trained, tmp_path):
         Surrogate.load(lightning_ckpt)
     with pytest.raises(ValueError, match="does not exist"):
         Surrogate.load(tmp_path / "missing.pt")
+
+
+def test_non_finite_weights_are_refused_and_nothing_is_predicted(trained, tmp_path):
+    payload = torch.load(trained / "wear_surrogate.pt", weights_only=True)
+    name = next(iter(payload["state_dict"]))
+    payload["state_dict"][name] = payload["state_dict"][name].clone().fill_(float("nan"))
+    torch.save(payload, tmp_path / "nan.pt")
+    with pytest.raises(ValueError, match="non-finite weights"):
+        Surrogate.load(tmp_path / "nan.pt")
 
 
 def test_model_rejects_bad_settings():
