@@ -5,39 +5,25 @@ and :mod:`physics.loop.table_loop`)."""
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import hydra
 import pandas as pd
 from hydra.core.hydra_config import HydraConfig
-from omegaconf import MISSING, DictConfig, OmegaConf
+from omegaconf import DictConfig, OmegaConf
 
 from physics.command import register_schema, run_command
-from physics.dataset.generation import DATASET_TRIBOLOGY
 from physics.loop.bundle import Bundle, read_measurements
-from physics.loop.bundle_loop import LoopSettings, run_loop
+from physics.loop.bundle_loop import LoopConfig, LoopSettings, run_loop
 from physics.loop.report import write_report
 from physics.loop.table_loop import run_feature_table
 from physics.params import (
-    PhysicsConfig,
     Scenario,
-    Tribology,
     scenario_from_config,
 )
 
 log = logging.getLogger(__name__)
-
-
-@dataclass
-class LoopConfig(PhysicsConfig):
-    """Schema of ``python -m physics.loop``."""
-
-    tribology: Tribology = field(default_factory=lambda: DATASET_TRIBOLOGY)  # as the dataset
-    data: str = MISSING  # a bundle folder (shared/specs/measured-bundle.md) or a feature table
-    case: int | None = None  # 1-5: operating point and lubricant of Table 11 (feature tables)
-    progress: bool = True
-    loop: LoopSettings = field(default_factory=LoopSettings)
 
 
 register_schema("loop_schema", LoopConfig)

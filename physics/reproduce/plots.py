@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from scipy.signal import periodogram
 
 from physics.files import pyplot, save_figure
 from physics.tribology.wear import WearResult
@@ -38,8 +39,9 @@ def plot_dte_spectrum(dte: pd.DataFrame, mesh_hz: float, fs: float, path: Path) 
     fig, (ax, ax2) = plt.subplots(2, 1, figsize=(7, 6))
     for n, df in dte.groupby("cycles"):
         x = df.dte_m.to_numpy()
-        spec = np.abs(np.fft.rfft((x - x.mean()) * np.hanning(len(x)))) * 4 / len(x)
-        f = np.fft.rfftfreq(len(x), 1 / fs)
+        # Hann-windowed power of each line (A^2/2): amplitude sqrt(2 P)
+        f, power = periodogram(x, fs, window="hann", detrend="constant", scaling="spectrum")
+        spec = np.sqrt(2 * power)
         ax.semilogy(f, spec * 1e6, lw=0.8, label=f"{n:.3g} cycles")
         ax2.plot(df.time_s * 1e3, x * 1e6, lw=0.8, label=f"{n:.3g} cycles")
     for h in range(1, 6):

@@ -113,8 +113,7 @@ def _segment_signature(x: np.ndarray, fs: float, f1: float, f2: float, z1: int,
                        dte: bool) -> np.ndarray:
     lines = line_frequencies(f1, f2, z1, fs)
     amp = line_amplitudes(x, fs, np.array(list(lines.values())))
-    spec = np.abs(np.fft.rfft((x - x.mean()) * np.hanning(x.size))) ** 2
-    f = np.fft.rfftfreq(x.size, 1 / fs)
+    f, spec = sps.periodogram(x, fs, window="hann", detrend="constant", scaling="spectrum")
     edges = band_edges(z1 * f1, fs)
     bands = [spec[(f >= lo) & (f < hi)].sum() for lo, hi in itertools.pairwise(edges)]
     feat = features(x)

@@ -17,12 +17,15 @@ import os
 import subprocess
 import sys
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 import pandas as pd
 import pytest
 from readme import ROOT, commands, snippets
+
+from physics.loop.bundle_loop import LoopConfig
+from physics.reproduce.thesis import ReproduceConfig
 
 #: run by .ci/run itself, exactly as the README writes them
 BY_CI = {
@@ -141,6 +144,15 @@ SNIPPETS: dict[str, Case] = {
 }
 
 
+#: top-level keys each --help must show: the fields of the app's schema
+HELP_KEYS = {
+    "python -m physics.reproduce --help": [f.name for f in fields(ReproduceConfig)],
+    "python -m physics.loop --help": [f.name for f in fields(LoopConfig)],
+    "python train.py --help": ["case", "seed", "data", "model", "trainer", "callbacks",
+                               "logger", "paths"],
+}
+
+
 def _fill(text: str, folder: Path) -> str:
     """The README's placeholders, filled with what earlier commands wrote in ``folder``."""
     for key, pattern in (("<run>", "logs/train/runs/*"), ("<time>", "logs/train/multiruns/*")):
@@ -200,8 +212,10 @@ def test_readme_command(key, tmp_path):
     if case.needs_shared and not (ROOT.parent / "shared").is_dir():
         pytest.skip("shared/ is not beside this checkout")
     proc = run_step(key, tmp_path)
-    if key.endswith("--help"):
-        assert "Powered by Hydra" in proc.stdout and "==" in proc.stdout
+    if key.endswith("--help"):  # the help shows the config, generated from the app's schema
+        assert "Powered by Hydra" in proc.stdout and "== Config ==" in proc.stdout
+        for name in HELP_KEYS[key]:
+            assert f"\n{name}:" in proc.stdout, f"{name} missing from {key}"
     if case.check is not None:
         case.check(tmp_path)
 
