@@ -33,9 +33,20 @@ from physics.signals.features import FEATURES
 from surrogate.schema import FeatureSchema
 
 log = logging.getLogger(__name__)
+#: the sensors a user may have: DTE (``dte_*`` features) and housing acceleration (``acc_*``)
+SENSORS = ("dte", "acc")
 #: the default inputs: the Table 13 features of the DTE and of the housing acceleration
-DEFAULT_INPUTS = [f"{q}_{f}" for q in ("dte", "acc") for f in FEATURES]
+DEFAULT_INPUTS = [f"{q}_{f}" for q in SENSORS for f in FEATURES]
 CONDITIONS = ["n1_rpm", "torque_Nm"]
+
+
+def input_columns(sensors: list[str], operating_point: bool) -> list[str]:
+    """The network's inputs for the sensors a user has, with or without the operating point."""
+    unknown = sorted(set(sensors) - set(SENSORS))
+    if unknown or not sensors or len(set(sensors)) != len(sensors):
+        raise ValueError(f"data.sensors = {list(sensors)} must name one or both of {SENSORS}")
+    cols = [f"{q}_{f}" for q in SENSORS if q in sensors for f in FEATURES]
+    return cols + (CONDITIONS if operating_point else [])
 
 
 def cases_of(case: str | int) -> list[int]:
@@ -100,20 +111,19 @@ def split_trajectories(df: pd.DataFrame, val_replicates: int, test_replicates: i
 class WearDataModule(L.LightningDataModule):
     """Features -> pinion root wear, from the dataset of the given cases."""
 
-    def __init__(self, dataset: str, case: str | int = 3, inputs: list[str] | None = None,
-                 conditions: bool | None = None, target: str = "root_wear_mm",
+    def __init__(self, dataset: str, case: str | int = 3,
+                 sensors: tuple[str, ...] = SENSORS, operating_point: bool = True,
+                 inputs: list[str] | None = None, target: str = "root_wear_mm",
                  val_replicates: int = 1, test_replicates: int = 2,
                  holdout_case: int | None = None, batch_size: int = 64, seed: int = 0,
                  generate: dict | None = None, jobs: int = 2) -> None:
         super().__init__()
         self.dataset = str(dataset)
         self.cases = cases_of(case)
-        if conditions is None:  # across cases the operating point is an input
-            conditions = len(self.cases) > 1
         if holdout_case is not None and int(holdout_case) not in self.cases:
             raise ValueError(f"data.holdout_case = {holdout_case} must be one of the cases "
                              f"{self.cases}")
-        self.inputs = list(inputs or DEFAULT_INPUTS) + (CONDITIONS if conditions else [])
+        self.inputs = list(inputs) if inputs else input_columns(list(sensors), operating_point)
         self.target = target
         self.val_replicates, self.test_replicates = int(val_replicates), int(test_replicates)
         self.holdout_case = None if holdout_case is None else int(holdout_case)

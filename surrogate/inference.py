@@ -7,6 +7,7 @@ hyperparameters and the :class:`~surrogate.schema.FeatureSchema`; it is read wit
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -18,23 +19,40 @@ from physics.files import atomic_write
 from surrogate.model import WearRegressor, mixture
 from surrogate.schema import FeatureSchema
 
-FORMAT = "gearwear-wear-surrogate"
+FORMAT = "gearwear-wear-surrogate-2"  # 2: with the conformal interval scale
 
 
-def export(model: WearRegressor, path: str | Path) -> Path:
-    """Write the model's weights, hyperparameters and schema to ``path`` (atomically)."""
+def export(model: WearRegressor, path: str | Path, interval_scale: float) -> Path:
+    """Write the model's weights, hyperparameters, schema and the calibrated interval scale
+    (:func:`conformal_scale`) to ``path`` (atomically)."""
+    if not (math.isfinite(interval_scale) and interval_scale > 0):
+        raise ValueError(f"interval_scale = {interval_scale!r} must be a finite number > 0")
     hparams = OmegaConf.to_container(OmegaConf.create(dict(model.hparams)))  # plain values only
-    payload = {"format": FORMAT, "hparams": hparams,
+    payload = {"format": FORMAT, "hparams": hparams, "interval_scale": float(interval_scale),
                "state_dict": {k: v.detach().cpu() for k, v in model.state_dict().items()}}
     return atomic_write(path, lambda p: torch.save(payload, p))
+
+
+def conformal_scale(mean: np.ndarray, std: np.ndarray, true: np.ndarray, level: float) -> float:
+    """Split-conformal interval scale: the ``ceil((n + 1) level) / n`` empirical quantile of the
+    normalised residuals ``|y - mu| / sigma`` on data the network did not train on (the
+    validation trajectories), so that ``mu +- scale sigma`` covers a share ``level`` of new rows
+    (Papadopoulos et al. 2002; Angelopoulos & Bates, "A gentle introduction to conformal
+    prediction", 2021, sec. 2.3)."""
+    scores = np.sort(np.abs(true - mean) / np.maximum(std, 1e-300))
+    n = scores.size
+    if n == 0:
+        raise ValueError("no validation rows to calibrate the interval on")
+    return float(scores[min(math.ceil((n + 1) * level), n) - 1])
 
 
 class Surrogate:
     """A loaded ensemble: ``predict(df)`` returns wear with its interval and flags."""
 
-    def __init__(self, model: WearRegressor) -> None:
+    def __init__(self, model: WearRegressor, interval_scale: float) -> None:
         self.model = model.eval()
         self.schema = FeatureSchema.from_dict(model.hparams["schema"])
+        self.interval_scale = interval_scale  # conformal: mu +- scale sigma at the trained level
 
     @classmethod
     def load(cls, path: str | Path) -> Surrogate:
@@ -54,14 +72,15 @@ class Surrogate:
             FeatureSchema.from_dict(payload["hparams"]["schema"])  # version check first
             model = WearRegressor(**payload["hparams"])
             model.load_state_dict(payload["state_dict"])
-        except (KeyError, TypeError, RuntimeError) as err:
+            scale = float(payload["interval_scale"])
+        except (KeyError, TypeError, RuntimeError, ValueError) as err:
             raise ValueError(f"{path} is incomplete or from another model ({err}); pass the "
                              "wear_surrogate.pt a training run exported") from None
         bad = [k for k, v in payload["state_dict"].items() if not torch.isfinite(v).all()]
         if bad:
             raise ValueError(f"{path} has non-finite weights ({bad[0]}, ...): the training "
                              "diverged; retrain (e.g. with a smaller model.lr)")
-        return cls(model)
+        return cls(model, scale)
 
     def predict_array(self, x: np.ndarray, batch: int = 65536) -> tuple[np.ndarray, np.ndarray]:
         """Mean and standard deviation of wear for an unscaled input matrix (no checks)."""
@@ -82,7 +101,8 @@ class Surrogate:
         """Wear for every row of ``df`` (checked against the schema; see FeatureSchema.check).
 
         Columns: ``<target>_pred`` (clipped at 0: wear depth is not negative), ``<target>_std``,
-        ``<target>_lower`` / ``_upper`` (the interval of the trained level, clipped at 0) and
+        ``<target>_lower`` / ``_upper`` (the conformal interval of the trained level, clipped at
+        0) and
         ``out_of_range`` (an input outside the training envelope: extrapolation).
         """
         x = self.schema.check(df)
@@ -91,7 +111,7 @@ class Surrogate:
         if bad.any():
             raise ValueError(f"the model gives a non-finite wear for row {int(np.argmax(bad))} "
                              f"({int(bad.sum())} of {len(bad)} rows); nothing is written")
-        half = self.model.z * std
+        half = self.interval_scale * std
         t = self.schema.target
         return pd.DataFrame({f"{t}_pred": np.maximum(mean, 0.0), f"{t}_std": std,
                              f"{t}_lower": np.maximum(mean - half, 0.0),

@@ -7,6 +7,8 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import pandas as pd
 
+from physics.dataset.generation import NUISANCE_COLUMNS
+
 SCHEMA_VERSION = 1
 #: a value this many times outside the training envelope (or its inverse) means a wrong unit
 UNIT_FACTOR = 30.0
@@ -108,4 +110,4 @@ class FeatureSchema:
 #: identifying columns a prediction input may carry besides the features (passed through)
 KEEP_COLUMNS = frozenset({"case", "replicate", "cycles", "record", "root_wear_mm",
                           "max_wear_mm", "mean_wear_mm", "eta0_Pa_s", "sigma_um", "n1_rpm",
-                          "torque_Nm"})
+                          "torque_Nm", *NUISANCE_COLUMNS})

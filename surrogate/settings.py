@@ -23,8 +23,9 @@ class DataConfig:
     _target_: str = "surrogate.data.WearDataModule"
     dataset: str = MISSING  # the parquet dataset; built with physics.dataset if missing
     case: str = "3"  # operating case of Table 11 (1-5) or all
-    inputs: list[str] | None = None  # null: the Table 13 features of the DTE and acceleration
-    conditions: bool | None = None  # speed and torque as inputs; null: only with case=all
+    sensors: list[str] = field(default_factory=lambda: ["dte", "acc"])  # dte, acc or both
+    operating_point: bool = True  # speed and torque as inputs (a user knows them)
+    inputs: list[str] | None = None  # explicit input columns instead (a user's own table)
     target: str = "root_wear_mm"
     val_replicates: int = 1  # whole trajectories (case, replicate), never rows of one
     test_replicates: int = 2

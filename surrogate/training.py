@@ -20,7 +20,7 @@ from omegaconf import DictConfig, OmegaConf
 from physics.estimators.empirical_inverse import wear_errors
 from physics.files import atomic_write, pyplot
 from surrogate.data import WearDataModule
-from surrogate.inference import Surrogate, export
+from surrogate.inference import Surrogate, conformal_scale, export
 
 log = logging.getLogger(__name__)
 # lightning 2.6 calls a torch pytree API that torch 2.13 deprecates; harmless, and once per step
@@ -90,10 +90,13 @@ def fit(job: TrainJob) -> float:
     test = ({k: float(v) for k, v in
              trainer.test(model, dm, ckpt_path=ckpt, verbose=False)[0].items()}
             if len(dm.frames["test"]) else {})
-    path = export(model, out / "wear_surrogate.pt")
+    mean, std = Surrogate(model, 1.0).predict_array(dm.frames["val"][dm.inputs].to_numpy(float))
+    scale = conformal_scale(mean, std, dm.frames["val"][dm.target].to_numpy(float),
+                            float(cfg.model.interval))
+    path = export(model, out / "wear_surrogate.pt", scale)
     surrogate = Surrogate.load(path)
     metrics = {**val, **test, "epochs": trainer.current_epoch,
-               "train_rows": len(dm.frames["train"])}
+               "train_rows": len(dm.frames["train"]), "interval_scale": scale}
     if len(dm.frames["test"]):
         metrics.update(report_test(surrogate, dm.frames["test"], out))
     text = json.dumps(metrics, indent=2, sort_keys=True)
@@ -123,7 +126,7 @@ def report_test(surrogate: Surrogate, test: pd.DataFrame, out: Path) -> dict[str
     errors = wear_errors(rows[f"{t}_pred"], rows[t])
     inside = (rows[t] >= rows[f"{t}_lower"]) & (rows[t] <= rows[f"{t}_upper"])
     fig = parity_figure(rows[t].to_numpy(), rows[f"{t}_pred"].to_numpy(),
-                        rows[f"{t}_std"].to_numpy() * surrogate.model.z,
+                        rows[f"{t}_std"].to_numpy() * surrogate.interval_scale,
                         f"held-out trajectories: MRE {errors['mean_relative_error_pct']:.2f} %, "
                         f"R2 {errors['r2']:.4f}, coverage {inside.mean():.2f}", t)
     atomic_write(out / "parity.png", lambda p: fig.savefig(p, dpi=120, format="png"))

@@ -21,13 +21,14 @@ import dataclasses
 import hashlib
 import json
 import logging
+import math
 import numbers
 import re
 import warnings
 from dataclasses import dataclass, field
 from importlib.metadata import version
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 import pandas as pd
@@ -52,7 +53,7 @@ from physics.params import (
 )
 from physics.scope import check_record
 from physics.signals.features import FEATURES, feature_units, features
-from physics.signals.measurement import add_noise, housing_acceleration
+from physics.signals.measurement import add_noise, housing_acceleration, transfer_path
 
 log = logging.getLogger(__name__)
 SCHEMA_VERSION = 1
@@ -62,6 +63,79 @@ BASE_COLUMNS = {
     "eta0_Pa_s": "Pa s", "sigma_um": "um", "root_wear_mm": "mm", "max_wear_mm": "mm",
     "mean_wear_mm": "mm",
 }
+#: the dynamics parameters a trajectory draws (:class:`NuisanceRanges`)
+DYNAMIC_NUISANCE = ("damping_ratio", "eccentricity1_um", "profile_error_um", "half_backlash_um",
+                    "housing_mass_kg")
+#: the drawn nuisance kept as columns (for analysis; not network inputs), with their units
+NUISANCE_COLUMNS = {"damping_ratio": "1", "eccentricity1_um": "um", "profile_error_um": "um",
+                    "half_backlash_um": "um", "housing_mass_kg": "kg", "transfer_fn_hz": "Hz",
+                    "transfer_zeta": "1", "snr_db": "dB", "wear_coeff_factor": "1"}
+
+
+@dataclass(frozen=True)
+class NuisanceRanges:
+    """What a real gearbox never matches exactly, drawn per trajectory (uniform; the wear
+    coefficient's factor log-uniform) so that a network trained on the dataset learns wear, not
+    one gearbox. ``data.nuisance.*`` in the configs; each range ``[low, high]``.
+
+    - operating point: the case's speed and torque of Table 11 times ``U(1 -+ pct/100)``
+      (``speed_pct``, ``torque_pct``): the envelope around Table 11;
+    - ``damping_ratio``: 0.03-0.12 of critical, inside the 0.03-0.17 Kasuba & Evans (ASME J.
+      Mech. Des. 103 (1981) 398) report for spur meshes;
+    - ``eccentricity1_um`` (half the radial run-out) and ``profile_error_um`` (half the profile
+      form tolerance): ISO 1328-1/-2 grades 5 to 8 for m 2, d 36 mm (run-out 10.5-29 um, form
+      3.0-8.5 um);
+    - ``half_backlash_um``: 30-70 um, ISO/TR 10064-2 minimum backlash of a = 45 mm, m 2 and up
+      to its fine-tolerance maximum;
+    - ``housing_mass_kg``: 10-40 kg, effective mass of small single-stage housings;
+    - ``transfer_fn_hz``, ``transfer_zeta``: one housing resonance between mesh and accelerometer
+      (2-8 kHz, 2-10 % damping: the first plate modes of small cast gearboxes);
+    - ``snr_db``: 20-40 dB measurement noise relative to the AC power;
+    - ``wear_coeff_factor``: the wear coefficient of the wear law times 0.5-2 (the spread of
+      Archard coefficients measured for one steel pair; Stachowiak & Batchelor, Engineering
+      Tribology, 4th ed., ch. 12).
+    """
+
+    speed_pct: float = bounded(10.0, 0.0, 50.0, closed=True)
+    torque_pct: float = bounded(10.0, 0.0, 50.0, closed=True)
+    damping_ratio: list[float] = field(default_factory=lambda: [0.03, 0.12])
+    eccentricity1_um: list[float] = field(default_factory=lambda: [5.0, 15.0])
+    profile_error_um: list[float] = field(default_factory=lambda: [1.5, 4.5])
+    half_backlash_um: list[float] = field(default_factory=lambda: [30.0, 70.0])
+    housing_mass_kg: list[float] = field(default_factory=lambda: [10.0, 40.0])
+    transfer_fn_hz: list[float] = field(default_factory=lambda: [2000.0, 8000.0])
+    transfer_zeta: list[float] = field(default_factory=lambda: [0.02, 0.10])
+    snr_db: list[float] = field(default_factory=lambda: [20.0, 40.0])
+    wear_coeff_factor: list[float] = field(default_factory=lambda: [0.5, 2.0])
+
+    #: the physical limits each range must lie in
+    LIMITS: ClassVar[dict[str, tuple[float, float]]] = {
+        "damping_ratio": (0.0, 1.0), "eccentricity1_um": (0.0, 1000.0),
+        "profile_error_um": (0.0, 1000.0), "half_backlash_um": (0.0, 1e4),
+        "housing_mass_kg": (1e-3, 1e5), "transfer_fn_hz": (10.0, 20000.0),
+        "transfer_zeta": (1e-3, 0.9), "snr_db": (-20.0, 200.0), "wear_coeff_factor": (1e-3, 1e3)}
+
+    def __post_init__(self) -> None:
+        validate_fields(self, "data.nuisance")
+        for name, (lo_ok, hi_ok) in self.LIMITS.items():
+            v = getattr(self, name)
+            ok = (len(v) == 2 and all(isinstance(x, numbers.Real) and not isinstance(x, bool)
+                                      and math.isfinite(x) for x in v)
+                  and lo_ok <= v[0] <= v[1] <= hi_ok)
+            if not ok:
+                raise ValueError(f"data.nuisance.{name} = {list(v)!r} must be [low, high] with "
+                                 f"{lo_ok:g} <= low <= high <= {hi_ok:g}")
+            object.__setattr__(self, name, [float(x) for x in v])
+
+    def draw(self, rng: np.random.Generator) -> dict[str, float]:
+        """One trajectory's values: the operating-point factors and every range."""
+        out = {"speed_factor": 1 + rng.uniform(-1, 1) * self.speed_pct / 100,
+               "torque_factor": 1 + rng.uniform(-1, 1) * self.torque_pct / 100}
+        for name in self.LIMITS:
+            lo, hi = getattr(self, name)
+            u = rng.uniform()
+            out[name] = lo * (hi / lo) ** u if name == "wear_coeff_factor" else lo + u * (hi - lo)
+        return out
 
 
 @dataclass(frozen=True)
@@ -72,9 +146,7 @@ class DatasetSpec:
     cycles_max: float = bounded(1.5e7, 0.0, 1e10, "pinion cycles of the last wear state")
     wear_states: int = bounded(32, 2, 100_000, "cycle counts per replicate", whole=True)
     replicates: int = bounded(8, 1, 100_000, whole=True)
-    speed_jitter_pct: float = bounded(1.0, 0.0, 50.0, closed=True)
-    torque_jitter_pct: float = bounded(2.0, 0.0, 50.0, closed=True)
-    snr_db: float = 30.0  # measurement noise (AC power ratio); inf: none
+    nuisance: NuisanceRanges = field(default_factory=NuisanceRanges)
     seed: int = bounded(0, 0, 2**32 - 1, whole=True)
     chunks: int = bounded(5, 1, 100_000, "independent jobs", whole=True)
 
@@ -86,9 +158,8 @@ class DatasetSpec:
         object.__setattr__(self, "cases", tuple(int(c) for c in self.cases))
         if len(set(self.cases)) != len(self.cases) or not self.cases:
             raise ValueError(f"data.cases = {list(self.cases)} must be distinct, from {valid}")
-        snr = self.snr_db
-        if isinstance(snr, bool) or not isinstance(snr, numbers.Real) or not snr > -20:
-            raise ValueError(f"data.snr_db = {snr!r} must be a number > -20 dB (inf: no noise)")
+        if isinstance(self.nuisance, dict):
+            object.__setattr__(self, "nuisance", NuisanceRanges(**self.nuisance))
         if self.chunks > self.units:
             raise ValueError(f"data.chunks = {self.chunks} must lie in [1, {self.units}] (one "
                              "unit is a case-replicate pair)")
@@ -108,19 +179,24 @@ class DatasetSpec:
         return pairs[chunk::self.chunks]
 
 
+def unit_draw(spec: DatasetSpec, case: int, replicate: int) -> dict[str, float]:
+    """The seeded nuisance values of one trajectory (:class:`NuisanceRanges`)."""
+    return spec.nuisance.draw(np.random.default_rng([spec.seed, case, replicate, 0]))
+
+
 def unit_scenario(base: Scenario, spec: DatasetSpec, case: int, replicate: int) -> Scenario:
-    """The case's operating point (Table 11) with this replicate's seeded jitter."""
-    values = case_values(case)
-    rng = np.random.default_rng([spec.seed, case, replicate, 0])
-    speed, torque = rng.uniform(-1, 1, size=2)
-    op = dataclasses.replace(
-        base.operating,
-        n1_rpm=values["n1_rpm"] * (1 + speed * spec.speed_jitter_pct / 100),
-        torque_Nm=values["torque_Nm"] * (1 + torque * spec.torque_jitter_pct / 100))
+    """The case's operating point and lubricant (Table 11) with this trajectory's draws."""
+    values, d = case_values(case), unit_draw(spec, case, replicate)
+    op = dataclasses.replace(base.operating, n1_rpm=values["n1_rpm"] * d["speed_factor"],
+                             torque_Nm=values["torque_Nm"] * d["torque_factor"])
     lub = dataclasses.replace(base.lubricant, eta0_Pa_s=values["eta0_Pa_s"],
                               alpha_m2_per_N=values["alpha_m2_per_N"],
                               limiting_shear_coeff=values["limiting_shear_coeff"])
-    return dataclasses.replace(base, operating=op, lubricant=lub)
+    dyn = dataclasses.replace(base.dynamics, **{k: d[k] for k in DYNAMIC_NUISANCE})
+    tri = dataclasses.replace(
+        base.tribology, wear_coeff=base.tribology.wear_coeff * d["wear_coeff_factor"],
+        dry_wear_coeff=base.tribology.dry_wear_coeff * d["wear_coeff_factor"])
+    return dataclasses.replace(base, operating=op, lubricant=lub, dynamics=dyn, tribology=tri)
 
 
 def run_unit(base: Scenario, spec: DatasetSpec, case: int, replicate: int,
@@ -140,10 +216,12 @@ def run_unit(base: Scenario, spec: DatasetSpec, case: int, replicate: int,
                       else build_model(scn, ms))
         wear.append((w1[0], w1.max(), float(np.trapezoid(w1, res.s) / np.ptp(res.s))))
     response = simulate(models, scn.dynamics)
+    d = unit_draw(spec, case, replicate)
     rng = np.random.default_rng([spec.seed, case, replicate, 1])
-    dte = add_noise(response.dte, spec.snr_db, rng)
-    acc = add_noise(housing_acceleration(response.force, scn.dynamics.housing_mass_kg),
-                    spec.snr_db, rng)
+    dte = add_noise(response.dte, d["snr_db"], rng)
+    acc = transfer_path(housing_acceleration(response.force, scn.dynamics.housing_mass_kg),
+                        scn.dynamics.sample_rate_hz, d["transfer_fn_hz"], d["transfer_zeta"])
+    acc = add_noise(acc, d["snr_db"], rng)
     dte_f, acc_f = features(dte), features(acc)
     wear = np.array(wear) * 1e3
     rows = pd.DataFrame({
@@ -151,6 +229,7 @@ def run_unit(base: Scenario, spec: DatasetSpec, case: int, replicate: int,
         "n1_rpm": scn.operating.n1_rpm, "torque_Nm": scn.operating.torque_Nm,
         "eta0_Pa_s": scn.lubricant.eta0_Pa_s, "sigma_um": scn.tribology.sigma_um,
         "root_wear_mm": wear[:, 0], "max_wear_mm": wear[:, 1], "mean_wear_mm": wear[:, 2],
+        **{k: d[k] for k in NUISANCE_COLUMNS},
         **{f"dte_{k}": dte_f[k] for k in FEATURES},
         **{f"acc_{k}": acc_f[k] for k in FEATURES},
     })
@@ -166,7 +245,7 @@ def run_unit(base: Scenario, spec: DatasetSpec, case: int, replicate: int,
 
 def units() -> dict[str, str]:
     """Unit of every column of the dataset."""
-    out = dict(BASE_COLUMNS)
+    out = dict(BASE_COLUMNS) | NUISANCE_COLUMNS
     out.update({f"dte_{k}": u for k, u in feature_units("m").items()})
     out.update({f"acc_{k}": u for k, u in feature_units("m/s^2").items()})
     return out

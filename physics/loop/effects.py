@@ -46,9 +46,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import signal
 
 from physics.dynamics.model import PairModel
+from physics.signals.measurement import transfer_path
 
 
 @dataclass(frozen=True)
@@ -166,12 +166,7 @@ def _torque_ripple(m: PairModel, v: dict) -> PairModel:
 
 
 def _transfer_path(x: np.ndarray, fs: float, v: dict) -> np.ndarray:
-    """Base-excited SDOF transmissibility (2 zeta wn s + wn^2) / (s^2 + 2 zeta wn s + wn^2),
-    discretised by the bilinear transform pre-warped at f_n."""
-    wn = 2 * fs * math.tan(math.pi * v["fn_hz"] / fs)
-    z = v["zeta"]
-    b, a = signal.bilinear([2 * z * wn, wn**2], [1.0, 2 * z * wn, wn**2], fs)
-    return signal.lfilter(b, a, x, axis=-1)
+    return transfer_path(x, fs, v["fn_hz"], v["zeta"])
 
 
 def _sensor(x: np.ndarray, fs: float, v: dict) -> np.ndarray:

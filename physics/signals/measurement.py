@@ -3,16 +3,19 @@
 - DTE: the relative displacement on the line of action, ``x(t)`` of :mod:`physics.dynamics`.
 - Housing acceleration: a rigid housing of effective mass ``m_h`` driven by the fluctuating mesh
   force, ``a(t) = (F_d(t) - mean F_d) / m_h`` (``dynamics.housing_mass_kg``). Structural
-  resonances of the transfer path are not part of the declared chain; they are an effect of
-  :mod:`physics.effects`.
+  resonances of the transfer path (:func:`transfer_path`) are not part of the declared chain of
+  the loop (there they are an effect of :mod:`physics.loop.effects`); the dataset draws one per
+  trajectory.
 - Measurement noise: white Gaussian at a signal-to-noise ratio relative to the AC power.
 """
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING
 
 import numpy as np
+from scipy import signal
 
 if TYPE_CHECKING:
     from physics.dynamics.model import Response
@@ -35,6 +38,19 @@ def declared_chain(x: np.ndarray, quantity: str, housing_mass_kg: float) -> np.n
     """The declared chain applied to :func:`sensed`: DTE as it is, the force through the rigid
     housing."""
     return x if quantity == "dte_m" else housing_acceleration(x, housing_mass_kg)
+
+
+def transfer_path(x: np.ndarray, fs: float, fn_hz: float, zeta: float) -> np.ndarray:
+    """A housing resonance between the mesh and the sensor: the base-excited single-degree-of-
+    freedom transmissibility ``(2 zeta wn s + wn^2) / (s^2 + 2 zeta wn s + wn^2)`` (e.g. Rao,
+    Mechanical Vibrations, 5th ed., 3.6), discretised by the bilinear transform pre-warped at
+    ``fn_hz``, applied along the last axis of ``x``."""
+    if not 0 < fn_hz < fs / 2 or not 0 < zeta < 1:
+        raise ValueError(f"transfer path fn_hz = {fn_hz!r} must lie in (0, fs/2 = {fs / 2:g}) and "
+                         f"zeta = {zeta!r} in (0, 1)")
+    wn = 2 * fs * math.tan(math.pi * fn_hz / fs)
+    b, a = signal.bilinear([2 * zeta * wn, wn**2], [1.0, 2 * zeta * wn, wn**2], fs)
+    return signal.lfilter(b, a, x, axis=-1)
 
 
 def add_noise(x: np.ndarray, snr_db: float, rng: np.random.Generator) -> np.ndarray:

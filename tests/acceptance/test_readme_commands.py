@@ -120,7 +120,7 @@ CASES: dict[str, Case] = {
     "python train.py --help": Case(),
     "python -m physics.dataset": Case(tuple(SMALL_DATASET), check=_files(
         "data/dataset.parquet", "data/dataset.json")),
-    "python -m physics.dataset out_dir=noisy data.replicates=4 data.snr_db=20 "
+    "python -m physics.dataset out_dir=noisy data.replicates=4 data.nuisance.snr_db=[15,25] "
     "store_signals=true": Case(("data.wear_states=3",), check=_files(
         "noisy/dataset_signals.npy")),
     "python -m physics.dataset -m chunk=0,1,2,3,4 hydra/launcher=joblib": Case(

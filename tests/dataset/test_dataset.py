@@ -13,11 +13,14 @@ import pytest
 from physics.dataset.generation import (
     DATASET_TRIBOLOGY,
     DatasetSpec,
+    NuisanceRanges,
     build_dataset,
     chunk_folder,
     chunk_path,
     plan_dataset,
     spec_from_config,
+    unit_draw,
+    unit_scenario,
     units,
 )
 from physics.params import Dynamics, Scenario, WearSolver, case_values
@@ -58,14 +61,37 @@ def test_rows_columns_and_sidecar(single):
         assert traj.n1_rpm.nunique() == 1  # one operating point per replicate
 
 
-def test_jitter_stays_within_its_band(single):
+def test_draws_stay_within_their_documented_ranges(single):
     df = pd.read_parquet(single)
+    ranges = NuisanceRanges()
     for case in (2, 3):
         rows = df[df.case == case]
         table = case_values(case)
-        assert np.all(np.abs(rows.n1_rpm / table["n1_rpm"] - 1) <= 0.01)
-        assert np.all(np.abs(rows.torque_Nm / table["torque_Nm"] - 1) <= 0.02)
-        assert rows.n1_rpm.nunique() == 2
+        assert np.all(np.abs(rows.n1_rpm / table["n1_rpm"] - 1) <= ranges.speed_pct / 100)
+        assert np.all(np.abs(rows.torque_Nm / table["torque_Nm"] - 1) <= ranges.torque_pct / 100)
+        assert rows.n1_rpm.nunique() == 2  # one draw per trajectory
+    for name in NuisanceRanges.LIMITS:
+        lo, hi = getattr(ranges, name)
+        assert df[name].between(lo, hi).all(), name
+        assert df.groupby(["case", "replicate"])[name].nunique().eq(1).all()  # per trajectory
+
+
+def test_a_trajectorys_draws_reach_its_physics():
+    spec = spec_from_config({**SMALL, "chunks": 1})
+    d = unit_draw(spec, 3, 1)
+    scn = unit_scenario(BASE, spec, 3, 1)
+    assert scn.dynamics.damping_ratio == d["damping_ratio"]
+    assert scn.dynamics.housing_mass_kg == d["housing_mass_kg"]
+    assert scn.tribology.dry_wear_coeff == pytest.approx(
+        BASE.tribology.dry_wear_coeff * d["wear_coeff_factor"])
+    assert scn.operating.n1_rpm == pytest.approx(case_values(3)["n1_rpm"] * d["speed_factor"])
+
+
+def test_ranges_are_refused_outside_their_limits():
+    with pytest.raises(ValueError, match=r"data.nuisance.damping_ratio = \[0.2, 0.1\]"):
+        NuisanceRanges(damping_ratio=[0.2, 0.1])
+    with pytest.raises(ValueError, match=r"data.nuisance.snr_db = \[nan, 30.0\]"):
+        NuisanceRanges(snr_db=[float("nan"), 30.0])
 
 
 def test_chunked_equals_single_and_rerun_is_byte_identical(tmp_path, single):
@@ -94,7 +120,7 @@ def test_changed_config_recomputes_finished_chunks(tmp_path):
     generate(out, chunks=1)
     path = chunk_path(chunk_folder(out, "dataset"), 0)
     first = pq.read_schema(path).metadata[b"gearwear_hash"]
-    generate(out, chunks=1, snr_db=20)
+    generate(out, chunks=1, nuisance={"snr_db": [15.0, 25.0]})
     assert pq.read_schema(path).metadata[b"gearwear_hash"] != first
 
 
@@ -126,7 +152,7 @@ def test_noise_has_the_stated_snr_and_housing_acceleration_is_force_over_mass():
     ({"bogus": 1}, r"unknown key.*bogus"),
     ({"wear_states": 1}, r"wear_states = 1 must be a whole number in \[2, "),
     ({"jobs": 0}, r"jobs = 0 must be a whole number >= 1"),
-    ({"snr_db": float("nan")}, r"snr_db = nan must be a number > -20"),
+    ({"nuisance": {"snr_db": [float("nan"), 30.0]}}, r"snr_db = \[nan, 30.0\] must be"),
 ])
 def test_bad_input_is_refused_before_work(tmp_path, override, message):
     with pytest.raises(ValueError, match=message):

@@ -16,13 +16,14 @@ from hydra.utils import get_class, instantiate
 from physics.dataset.generation import (
     DATASET_TRIBOLOGY,
     DatasetSpec,
+    NuisanceRanges,
     build_dataset,
     plan_dataset,
 )
 from physics.params import Dynamics, Scenario, WearSolver
 from surrogate import settings
 from surrogate.data import DEFAULT_INPUTS, split_trajectories
-from surrogate.inference import Surrogate, export
+from surrogate.inference import Surrogate, conformal_scale, export
 from surrogate.model import EnsembleMLP, WearRegressor, mixture
 from surrogate.predict import predict_file
 from surrogate.summarise import summarise
@@ -31,7 +32,13 @@ from surrogate.training import train
 ROOT = Path(__file__).resolve().parents[2]
 TINY_BASE = Scenario(tribology=DATASET_TRIBOLOGY, solver=WearSolver(n_points=51),
                      dynamics=Dynamics(duration_s=0.02, transient_s=0.005, phase_bins=64))
-TINY = DatasetSpec(cases=(3, 4), wear_states=5, replicates=4, chunks=1)
+#: the plumbing is tested on one gearbox (nuisance fixed at the declared values), not robustness
+ONE_GEARBOX = NuisanceRanges(
+    speed_pct=1.0, torque_pct=2.0, damping_ratio=[0.07, 0.07], eccentricity1_um=[7.5, 7.5],
+    profile_error_um=[3.0, 3.0], half_backlash_um=[47.5, 47.5], housing_mass_kg=[20.0, 20.0],
+    transfer_fn_hz=[4000.0, 4000.0], transfer_zeta=[0.05, 0.05], snr_db=[30.0, 30.0],
+    wear_coeff_factor=[1.0, 1.0])
+TINY = DatasetSpec(cases=(3, 4), wear_states=5, replicates=4, chunks=1, nuisance=ONE_GEARBOX)
 
 
 def groups(name: str) -> list[str]:
@@ -57,7 +64,8 @@ def dataset(tmp_path_factory) -> Path:
 def trained(tmp_path_factory, dataset) -> Path:
     tmp = tmp_path_factory.mktemp("train")
     value = train(train_cfg(tmp, dataset, "case=3", "data.test_replicates=1",
-                            "trainer.max_epochs=40", "model.members=3", "logger=csv"))
+                            "data.operating_point=false", "trainer.max_epochs=100",
+                            "model.members=3", "logger=csv"))
     assert np.isfinite(value)
     return tmp / "run"
 
@@ -204,6 +212,17 @@ def test_non_finite_weights_are_refused_and_nothing_is_predicted(trained, tmp_pa
         Surrogate.load(tmp_path / "nan.pt")
 
 
+def test_conformal_scale_covers_the_level_on_exchangeable_scores():
+    """Split conformal: on fresh draws from the calibration law the interval covers the level
+    (Gaussian scores here, so the scale also approaches the normal quantile)."""
+    rng = np.random.default_rng(0)
+    mean, std = np.zeros(4000), np.full(4000, 2.0)
+    scale = conformal_scale(mean, std, rng.normal(0, 2.0, 4000), 0.9)
+    assert scale == pytest.approx(1.645, abs=0.08)
+    fresh = rng.normal(0, 2.0, 20000)
+    assert np.mean(np.abs(fresh) <= scale * 2.0) == pytest.approx(0.9, abs=0.015)
+
+
 def test_model_rejects_bad_settings():
     with pytest.raises(ValueError, match="interval"):
         WearRegressor(3, {}, interval=1.5)
@@ -213,7 +232,7 @@ def test_model_rejects_bad_settings():
 
 def test_export_is_atomic_and_loadable_without_pickle(trained, tmp_path):
     s = Surrogate.load(trained / "wear_surrogate.pt")
-    path = export(s.model, tmp_path / "copy.pt")
+    path = export(s.model, tmp_path / "copy.pt", s.interval_scale)
     torch.load(path, weights_only=True)
     assert not list(tmp_path.glob("*.tmp"))
 
