@@ -148,8 +148,11 @@ def build_model(scn: Scenario, stiffness: MeshStiffness | None = None,
 class Response:
     """Steady response of a batch of scenarios, sampled at ``sample_rate_hz`` after the transient.
 
-    Arrays are ``(scenario, sample)``; ``force_by_phase`` is the mean dynamic mesh force over the
-    record in each of ``phase_bins`` bins of the mesh period (phase 0 = a pair enters contact).
+    Arrays are ``(scenario, sample)``; ``force_by_phase`` is the mean load of the drive flanks
+    over the record in each of ``phase_bins`` bins of the mesh period (phase 0 = a pair enters
+    contact): where backlash lets the coast flanks strike (a negative mesh force), the drive
+    flanks carry nothing, and only drive-flank load wears the drive flanks the wear model
+    follows.
     """
 
     time: np.ndarray  # [s] since the start of the integration (transient included)
@@ -337,7 +340,7 @@ def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins):
                 b = int((pos % n_per) / n_per * n_bins)
                 if b >= n_bins:
                     b = n_bins - 1
-                phase_sum[j, b] += f
+                phase_sum[j, b] += max(f, 0.0)  # drive flanks only (coast impacts: < 0)
                 phase_count[j, b] += 1.0
                 k = step - n_transient
                 if k % n_sub == 0:

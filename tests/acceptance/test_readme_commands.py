@@ -101,6 +101,7 @@ CASES: dict[str, Case] = {
     "python bench/bench_dynamics.py": Case(slow=True),
     "python bench/bench_dataset.py": Case(slow=True),
     "python bench/bench_mixed_ehl.py": Case(slow=True),
+    "python bench/bench_surrogate.py": Case(slow=True),
     "python train.py -m case=1,2,3,4,5": Case(tuple(TINY_DATA + FAST_TRAIN), check=_files(
         "logs/train/multiruns/*/4/wear_surrogate.pt")),
     "python train.py -m model.width=16,32 model.members=3,5": Case(

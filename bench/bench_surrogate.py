@@ -1,0 +1,78 @@
+"""CPU inference of the wear surrogate: ``python bench/bench_surrogate.py``.
+
+Prints the batch throughput [rows/s] of the default network (width 16, depth 2, 5 members, 16
+inputs: both sensors and the operating point) on 1e6 rows, its single-row latency, the same for
+the public ``Surrogate.predict`` (with the schema checks), and the analytic empirical-inverse
+estimator measured in the same run as the reference (issue target: >= 1e6 rows/s and >= 100
+times the estimator). Timing does not depend on the weights' values, so the network is built
+with its initial weights; the schema is fitted to random rows in the training ranges.
+"""
+
+from __future__ import annotations
+
+import time
+import timeit
+
+import numpy as np
+import pandas as pd
+import torch
+
+from physics.estimators.empirical_inverse import EmpiricalInverse
+from surrogate.data import input_columns
+from surrogate.inference import Surrogate
+from surrogate.model import WearRegressor
+from surrogate.schema import FeatureSchema
+
+
+def rate(fn, n_rows: int, repeat: int = 3) -> float:
+    """Rows per second of ``fn()`` over ``n_rows`` (best of ``repeat``)."""
+    return n_rows / min(timeit.repeat(fn, number=1, repeat=repeat))
+
+
+def latency_us(fn, repeat: int = 300) -> float:
+    """Median time of one call [us]."""
+    times = []
+    for _ in range(repeat):
+        t = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t)
+    return float(np.median(times)) * 1e6
+
+
+def main() -> None:
+    torch.manual_seed(0)
+    cols = input_columns(["dte", "acc"], True)
+    rng = np.random.default_rng(0)
+    train = pd.DataFrame(rng.uniform(1.0, 2.0, (512, len(cols))), columns=cols)
+    train["root_wear_mm"] = rng.uniform(0, 0.03, 512)
+    schema = FeatureSchema.fit(train, cols, dict.fromkeys([*cols, "root_wear_mm"], "1"),
+                               "root_wear_mm")
+    model = WearRegressor(len(cols), schema.to_dict(), width=16, depth=2, members=5)
+    s = Surrogate(model, interval_scale=1.645)
+    n = 1_000_000
+    x = rng.uniform(1.0, 2.0, (n, len(cols)))
+    frame = pd.DataFrame(x, columns=cols)
+    s.predict_array(x[:1000])
+    batch = rate(lambda: s.predict_array(x), n)
+    checked = rate(lambda: s.predict(frame), n, repeat=2)
+    one = latency_us(lambda: s.predict_array(x[:1]))
+    one_checked = latency_us(lambda: s.predict(frame.iloc[:1]), repeat=100)
+
+    est = EmpiricalInverse.from_config("thesis")
+    cycles = rng.uniform(0, est.cycles_max, 200_000)
+    k = cycles / est.cycles_unit
+    p2p, kurt = np.polyval(est.p2p_cubic, k), np.polyval(est.kurtosis_cubic, k)
+    est.predict(p2p[:10], kurt[:10])
+    est_rate = rate(lambda: est.predict(p2p, kurt), p2p.size)
+    est_one = latency_us(lambda: est.predict(p2p[:1], kurt[:1]), repeat=100)
+
+    print(f"threads                             : {torch.get_num_threads()}")
+    print(f"surrogate, batch of {n:,} rows      : {batch:,.0f} rows/s (target >= 1e6)")
+    print(f"surrogate.predict (schema checks)   : {checked:,.0f} rows/s")
+    print(f"surrogate, one row                  : {one:.0f} us ({one_checked:.0f} us checked)")
+    print(f"empirical inverse, batch            : {est_rate:,.0f} rows/s, one row {est_one:.0f} us")
+    print(f"surrogate / estimator (batch)       : {batch / est_rate:.0f} x (target >= 100)")
+
+
+if __name__ == "__main__":
+    main()
