@@ -10,7 +10,6 @@ model in its :class:`~surrogate.schema.FeatureSchema`.
 
 from __future__ import annotations
 
-import json
 import logging
 from pathlib import Path
 
@@ -79,10 +78,40 @@ def load_dataset(path: str | Path, spec: dict | None = None, jobs: int = 2) -> p
     return pd.read_parquet(path)
 
 
-def dataset_units_of(path: str | Path) -> dict[str, str]:
-    """Column units from the dataset's JSON sidecar (the package's table if it has none)."""
-    side = Path(path).with_suffix(".json")
-    return json.loads(side.read_text())["units"] if side.is_file() else dataset_units()
+def user_table(path: str | Path, columns: dict[str, str], group: str | None,
+               needed: list[str]) -> pd.DataFrame:
+    """A user's labelled feature table as the data module's rows: columns renamed by
+    ``columns`` (the table's name -> ours), each ``group`` value one trajectory (``case`` 0,
+    ``replicate`` its index). Features and wear in the dataset's units (``units()``)."""
+    path = Path(path)
+    if path.suffix not in (".csv", ".parquet") or not path.is_file():
+        raise ValueError(f"data.table = {str(path)!r} must be an existing .csv or .parquet file")
+    try:
+        df = pd.read_parquet(path) if path.suffix == ".parquet" else pd.read_csv(path)
+    except (pd.errors.EmptyDataError, pd.errors.ParserError, UnicodeDecodeError,
+            OSError) as err:
+        raise ValueError(f"data.table = {path} is not a readable table ({err})") from None
+    unknown = sorted(set(columns) - set(df.columns))
+    if unknown:
+        raise ValueError(f"data.columns names {unknown}, which {path} does not have")
+    df = df.rename(columns=columns)
+    if group is None or group not in df.columns:
+        raise ValueError(f"data.group = {group!r} must name the column of {path} that tells "
+                         f"the trajectories (gearboxes, test runs) apart; it has {list(df)}")
+    missing = [c for c in needed if c not in df.columns]
+    if missing:
+        raise ValueError(f"{path} lacks column(s) {missing}; map yours with data.columns "
+                         "(units as in the dataset: README, The dataset)")
+    values = df[needed].apply(pd.to_numeric, errors="coerce").to_numpy(float)
+    bad = ~np.isfinite(values)
+    if bad.any():
+        r, c = np.argwhere(bad)[0]
+        raise ValueError(f"{path}: row {r + 1}, column {needed[c]!r} is not a finite number")
+    out = df[needed].astype(float)
+    out["case"] = 0
+    out["replicate"] = pd.factorize(df[group], sort=True)[0]
+    out["cycles"] = np.nan
+    return out
 
 
 def split_trajectories(df: pd.DataFrame, val_replicates: int, test_replicates: int, seed: int,
@@ -116,7 +145,8 @@ class WearDataModule(L.LightningDataModule):
                  inputs: list[str] | None = None, target: str = "root_wear_mm",
                  val_replicates: int = 1, test_replicates: int = 2,
                  holdout_case: int | None = None, batch_size: int = 64, seed: int = 0,
-                 generate: dict | None = None, jobs: int = 2) -> None:
+                 generate: dict | None = None, jobs: int = 2, table: str | None = None,
+                 columns: dict[str, str] | None = None, group: str | None = None) -> None:
         super().__init__()
         self.dataset = str(dataset)
         self.cases = cases_of(case)
@@ -134,18 +164,25 @@ class WearDataModule(L.LightningDataModule):
                             ("test_replicates", self.test_replicates, 0)):
             if v < lo:
                 raise ValueError(f"data.{name} = {v} must be >= {lo}")
-        if not Path(self.dataset).is_file():
+        self.table = None
+        if table is not None:  # a user's own data: read and checked now, before any work
+            self.table = user_table(table, dict(columns or {}), group,
+                                    [*self.inputs, self.target])
+            self.cases = [0]
+        elif not Path(self.dataset).is_file():
             dataset_job(self.dataset, self.generate, self.jobs)  # checks the build's settings
         self.schema: FeatureSchema | None = None
         self.frames: dict[str, pd.DataFrame] = {}
 
     def prepare_data(self) -> None:
-        load_dataset(self.dataset, self.generate, self.jobs)
+        if self.table is None:
+            load_dataset(self.dataset, self.generate, self.jobs)
 
     def setup(self, stage: str | None = None) -> None:
         if self.schema is not None:
             return
-        df = load_dataset(self.dataset, self.generate, self.jobs)
+        df = self.table if self.table is not None else load_dataset(
+            self.dataset, self.generate, self.jobs)
         unknown = sorted(set(self.cases) - set(df.case.unique().tolist()))
         if unknown:
             raise ValueError(f"cases {unknown} are not in {self.dataset} (it holds "
@@ -157,8 +194,8 @@ class WearDataModule(L.LightningDataModule):
         df = df[df.case.isin(self.cases)]
         self.frames = split_trajectories(df, self.val_replicates, self.test_replicates,
                                          self.seed, self.holdout_case)
-        self.schema = FeatureSchema.fit(self.frames["train"], self.inputs,
-                                        dataset_units_of(self.dataset), self.target)
+        self.schema = FeatureSchema.fit(self.frames["train"], self.inputs, dataset_units(),
+                                        self.target)
 
     def tensors(self, split: str) -> TensorDataset:
         rows = self.frames[split]

@@ -34,6 +34,10 @@ class DataConfig:
     seed: int = 0
     generate: dict[str, Any] = field(default_factory=dict)  # DatasetSpec values if built
     jobs: int = 2  # parallel processes when the dataset is built
+    #: a user's own labelled feature table (CSV or parquet) instead of the physics dataset
+    table: str | None = None
+    columns: dict[str, str] = field(default_factory=dict)  # +data.columns.THEIRS=OURS
+    group: str | None = None  # the table's trajectory column (one gearbox or test run)
 
 
 @dataclass

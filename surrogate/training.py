@@ -35,6 +35,7 @@ class TrainJob:
     data: WearDataModule
     trainer: L.Trainer
     out: Path
+    init: Surrogate | None = None  # the network to fine-tune (``init_from``)
 
 
 def _instantiate(node: DictConfig, what: str, **kwargs):
@@ -58,7 +59,12 @@ def prepare(cfg: DictConfig) -> TrainJob:
     loggers = [_instantiate(c, "logger") for c in (cfg.get("logger") or {}).values()]
     trainer = _instantiate(cfg.trainer, "trainer", callbacks=callbacks, logger=loggers or False)
     data = _instantiate(cfg.data, "data")
-    return TrainJob(cfg, data, trainer, Path(cfg.paths.output_dir))
+    init = Surrogate.load(cfg.init_from) if cfg.get("init_from") else None
+    if init is not None and list(init.schema.inputs) != data.inputs:
+        raise ValueError(f"init_from = {cfg.init_from}: that network takes "
+                         f"{list(init.schema.inputs)}, this run's data gives {data.inputs}; "
+                         "choose the same data.sensors and data.operating_point")
+    return TrainJob(cfg, data, trainer, Path(cfg.paths.output_dir), init)
 
 
 def train(cfg: DictConfig) -> float:
@@ -75,8 +81,15 @@ def fit(job: TrainJob) -> float:
         torch.set_num_threads(int(cfg.threads))
     dm.prepare_data()
     dm.setup()
-    model = instantiate(cfg.model, n_inputs=len(dm.inputs), schema=dm.schema.to_dict(),
-                        _convert_="all")
+    if job.init is None:
+        model = instantiate(cfg.model, n_inputs=len(dm.inputs), schema=dm.schema.to_dict(),
+                            _convert_="all")
+    else:  # fine-tune: the pre-trained network, its input scaling and its architecture
+        dm.schema = job.init.schema
+        shape = {k: job.init.model.hparams[k] for k in ("width", "depth", "members")}
+        model = instantiate(cfg.model, n_inputs=len(dm.inputs), schema=dm.schema.to_dict(),
+                            _convert_="all", **shape)
+        model.load_state_dict(job.init.model.state_dict())
     log.info("training on %d rows (%d trajectories), validating on %d, testing on %d",
              len(dm.frames["train"]), dm.frames["train"].groupby(["case", "replicate"]).ngroups,
              len(dm.frames["val"]), len(dm.frames["test"]))

@@ -43,5 +43,8 @@ def commands(text: str | None = None) -> list[str]:
 
 
 def snippets(text: str | None = None) -> dict[str, str]:
-    """The README's python blocks, keyed by their first line."""
-    return {body.splitlines()[0]: body for lang, body in blocks(text) if lang == "python"}
+    """The README's python blocks, keyed by their first line that is not an import."""
+    def key(body: str) -> str:
+        return next(line for line in body.splitlines()
+                    if line.strip() and not line.startswith(("import ", "from ")))
+    return {key(body): body for lang, body in blocks(text) if lang == "python"}

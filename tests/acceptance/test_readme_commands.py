@@ -44,7 +44,9 @@ SMALL_DATASET = ["data.replicates=2", "data.wear_states=3"]
 SMALL_BUNDLE = {"records=10, duration_s=1.0": "records=6, duration_s=0.5",
                 "effect=\"friction\", seed=1)": "effect=\"friction\", seed=1, duration_s=0.4)"}
 TRAIN_CASE3 = "python train.py case=3"
-DEMO = "from physics.loop.synthetic import make_bundle"
+DEMO = 'make_bundle("demo_bundle", Scenario(tribology=Tribology(regime="dry")), "friction", seed=1,'
+USER_TABLE = 'rows = pd.read_parquet("data/dataset.parquet").query("case == 3")'
+TABLE_ARGS = "data.table=my_wear_table.csv data.group=rig +data.columns.p2p=dte_peak_to_peak"
 
 
 def _files(*patterns: str) -> Callable[[Path], None]:
@@ -117,6 +119,11 @@ CASES: dict[str, Case] = {
     "python -m surrogate.predict ckpt=logs/train/runs/<run>/wear_surrogate.pt "
     "input=data/dataset.parquet output=wear.csv": Case(before=(TRAIN_CASE3,),
                                                        check=_files("wear.csv")),
+    f"python train.py {TABLE_ARGS}": Case(tuple(FAST_TRAIN), before=(USER_TABLE,),
+                                          check=_files("logs/train/runs/case3_*/metrics.json")),
+    f"python train.py {TABLE_ARGS} init_from=logs/train/runs/<run>/wear_surrogate.pt "
+    "model.lr=0.0003": Case(("trainer.max_epochs=3", "trainer.min_epochs=1"),
+                             before=(USER_TABLE,)),
     "python -m surrogate.benchmark": Case(("--max-epochs", "3"), slow=True),
     "python train.py --help": Case(),
     "python -m physics.dataset": Case(tuple(SMALL_DATASET), check=_files(
@@ -138,8 +145,10 @@ CASES: dict[str, Case] = {
                                        slow=True),
 }
 SNIPPETS: dict[str, Case] = {
-    "import pandas as pd": Case(before=(TRAIN_CASE3,)),
-    "from physics.params import Scenario, Operating": Case(),
+    's = Surrogate.load("logs/train/runs/<run>/wear_surrogate.pt")': Case(before=(TRAIN_CASE3,)),
+    USER_TABLE: Case(before=(TRAIN_CASE3,), check=_files("my_wear_table.csv")),
+    "res = simulate_wear(Scenario(operating=Operating(n1_rpm=2000, torque_Nm=300)), "
+    "cycles=1e6)": Case(),
     DEMO: Case(replace=SMALL_BUNDLE, check=_files("demo_bundle/manifest.csv",
                                                   "independent_bundle/signals/*.npy")),
 }

@@ -212,6 +212,27 @@ def test_non_finite_weights_are_refused_and_nothing_is_predicted(trained, tmp_pa
         Surrogate.load(tmp_path / "nan.pt")
 
 
+def test_training_on_a_users_table_from_scratch_and_fine_tuned(trained, dataset, tmp_path):
+    """A user's labelled table: own column names mapped, own trajectory column; trained from
+    scratch and fine-tuned from the physics-trained network."""
+    df = pd.read_parquet(dataset)
+    mine = df[df.case == 3].rename(columns={"dte_peak_to_peak": "p2p"})
+    mine = mine.assign(gearbox=["rig" + str(r) for r in mine.replicate])
+    mine.drop(columns=["case", "replicate"]).to_csv(tmp_path / "mine.csv", index=False)
+    common = [f"data.table={tmp_path / 'mine.csv'}", "data.group=gearbox",
+              "+data.columns.p2p=dte_peak_to_peak", "data.operating_point=false",
+              "data.test_replicates=1", "trainer.max_epochs=5", "logger=csv"]
+    assert np.isfinite(train(train_cfg(tmp_path / "a", dataset, "model.members=3", *common)))
+    tuned = train_cfg(tmp_path / "b", dataset, f"init_from={trained / 'wear_surrogate.pt'}",
+                      "model.lr=0.0003", *common)
+    assert np.isfinite(train(tuned))
+    s = Surrogate.load(tmp_path / "b" / "run" / "wear_surrogate.pt")
+    base = Surrogate.load(trained / "wear_surrogate.pt")
+    assert s.schema == base.schema  # fine-tuned in the pre-trained network's scaling
+    with pytest.raises(ValueError, match=r"data\.group"):
+        train(train_cfg(tmp_path / "c", dataset, *common[:1], *common[2:]))
+
+
 def test_conformal_scale_covers_the_level_on_exchangeable_scores():
     """Split conformal: on fresh draws from the calibration law the interval covers the level
     (Gaussian scores here, so the scale also approaches the normal quantile)."""
