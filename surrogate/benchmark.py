@@ -174,9 +174,10 @@ def run(out: Path, root: Path, max_epochs: int | None = None) -> pd.DataFrame:
     fig, axes = plt.subplots(2, 4, figsize=(18, 9))
     for ax, key in zip(axes.flat, plots, strict=False):
         d = plots[key]
-        parity_figure(d["true"], d["estimator"], None, "/".join(key), TARGET, ax)
+        parity_figure(d["true"], d["estimator"], None, "/".join(key), TARGET, ax,
+                      name="empirical inverse")
         parity_figure(d["true"], d["surrogate"], None, "/".join(key), TARGET, ax)
-        ax.legend(["empirical inverse", "identity", "surrogate"], fontsize=7)
+        ax.legend(fontsize=7)
     for ax in axes.flat[len(plots):]:
         ax.set_visible(False)
     fig.tight_layout()

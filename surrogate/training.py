@@ -150,13 +150,16 @@ def report_test(surrogate: Surrogate, test: pd.DataFrame, out: Path) -> dict[str
 
 
 def parity_figure(true: np.ndarray, pred: np.ndarray, half: np.ndarray | None, title: str,
-                  label: str, ax=None):
-    """Predicted against true wear with the identity line (and intervals if given)."""
+                  label: str, ax=None, name: str = "surrogate"):
+    """Predicted against true wear with the identity line (and intervals if given); ``name``
+    labels the points in the legend."""
     fig = None
     if ax is None:
         fig, ax = pyplot().subplots(figsize=(5, 5))
-    ax.errorbar(true, pred, yerr=half, fmt="o", ms=3, alpha=0.6, elinewidth=0.6)
-    lim = [0, max(float(np.max(true)), float(np.max(pred))) * 1.05]
+    ax.errorbar(true, pred, yerr=half, fmt="o", ms=3, alpha=0.6, elinewidth=0.6, label=name)
+    top = max(float(np.max(true)), float(np.max(pred)), ax.get_xlim()[1] / 1.05 if ax.lines
+              else 0.0)
+    lim = [0, top * 1.05]
     ax.plot(lim, lim, "k--", lw=1)
     ax.set(xlim=lim, ylim=lim, xlabel=f"true {label}", ylabel=f"predicted {label}", title=title)
     ax.title.set_fontsize(8)
