@@ -108,6 +108,9 @@ def test_frozen():
     ("make", "message"),
     [
         (lambda: Tribology(regime="wet"), r"tribology\.regime = 'wet' must be one of"),
+        (lambda: Tribology(asperity_model="greenwood"),
+         r"tribology\.asperity_model = 'greenwood' must be one of \['solver', 'regression'\]"),
+        (lambda: Tribology(wear_coeff=0.0), r"tribology\.wear_coeff = 0\.0 must lie in"),
         (lambda: WearSolver(n_points=10), r"solver\.n_points = 10 must be a whole number"),
         (lambda: WearSolver(max_iterations=0), r"solver\.max_iterations = 0"),
         (lambda: Operating(torque_Nm=True), r"operating\.torque_Nm = True must be a finite number"),

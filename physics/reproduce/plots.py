@@ -1,5 +1,6 @@
 """Figures of the reproduction (``python -m physics.reproduce``): mesh stiffness, DTE spectrum,
-wear evolution, feature trends and wear profile, each from the table it shows."""
+wear evolution, feature trends and wear profile, each from the table it shows, and the
+mixed-EHL pressure and film at three mesh positions, from the solver's solutions."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ import pandas as pd
 from scipy.signal import periodogram
 
 from physics.files import pyplot, save_figure
+from physics.tribology.mixed_ehl import EHLSolution
 from physics.tribology.wear import WearResult
 
 
@@ -102,5 +104,45 @@ def plot_wear_profile(res: WearResult, path: Path) -> None:
     ax.set_ylabel("wear depth [um]")
     ax.set_title(f"Flank wear after {res.cycles:.3g} pinion cycles")
     ax.legend()
+    save_figure(fig, path)
+    plt.close(fig)
+
+
+def plot_ehl_pressure_film(solutions: dict[str, EHLSolution], path: Path) -> None:
+    """Total and fluid pressure with the asperity pressure on its own scale (top) and the
+    nominal film with the +-sigma roughness band (bottom) across the contact, one column per
+    mesh position, in Hertz half-widths."""
+    plt = pyplot()
+    fig, axes = plt.subplots(2, len(solutions), figsize=(4 * len(solutions), 6), sharex=True,
+                             squeeze=False)
+    for j, (label, sol) in enumerate(solutions.items()):
+        x = sol.x / sol.hertz_half_width
+        ax, ax2 = axes[0, j], axes[1, j]
+        ax.plot(x, (sol.p_h + sol.p_a) * 1e-9, "k", lw=1.2, label="total")
+        ax.plot(x, sol.p_h * 1e-9, "C0--", lw=1.0, label="fluid")
+        ax.plot(x, sol.hertz_pressure * np.sqrt(np.clip(1 - x * x, 0, None)) * 1e-9, "0.6",
+                lw=0.8, ls=":", label="dry Hertz")
+        axa = ax.twinx()  # the asperity pressure is a small part of the total: its own scale
+        axa.plot(x, sol.p_a * 1e-6, "C3", lw=1.0)
+        axa.tick_params(axis="y", colors="C3", labelsize=8)
+        axa.set_ylim(0.0, max(float(np.max(sol.p_a)) * 1e-6 * 1.15, 1e-3))
+        if j == len(solutions) - 1:
+            axa.set_ylabel("asperity pressure [MPa] (red)", color="C3")
+        ax.set_title(f"{label}\nasperity share {sol.asperity_load_share * 100:.2g} %, "
+                     f"h_min/sigma {sol.film_ratio_min:.2f}", fontsize=9)
+        ax2.plot(x, sol.h * 1e6, "C0", lw=1.2, label="film h (mean planes)")
+        ax2.fill_between(x, sol.h * 1e6 - sol.sigma * 1e6, sol.h * 1e6 + sol.sigma * 1e6,
+                         color="C0", alpha=0.15, lw=0, label="h +- sigma")
+        ax2.axhline(0.0, color="k", lw=0.6)
+        top = float(np.interp(0.0, x, sol.h)) * 1e6
+        ax2.set_ylim(min(-0.1 * top, float(np.min(sol.h - sol.sigma)) * 1e6), 3.0 * top)
+        ax2.set_xlabel("x / b (entrainment to the right)")
+        if j == 0:
+            ax.set_ylabel("pressure [GPa]")
+            ax2.set_ylabel("film [um]")
+            ax.legend(fontsize=7)
+            ax2.legend(fontsize=7)
+    fig.suptitle("Mixed-EHL line contact (numerical solver), unworn pair, bulk temperature")
+    fig.tight_layout()
     save_figure(fig, path)
     plt.close(fig)

@@ -13,8 +13,11 @@ folder), CSV files named and shaped like ``shared/reference/thesis_tables``:
 - ``table14_dte_features_case3.csv``, ``feature_trends.png`` and ``estimator_accuracy.csv``
   (vibration features against wear, and the empirical-inverse estimator of 4.4 fitted to them and
   with the thesis's own coefficients on the thesis's own data),
-- ``wear_profile.csv`` and ``wear_profile.png`` (baseline wear of both flanks, 2.7), and
-  ``contact_state.csv`` (the unworn contact along the path: load, Hertz, film, temperature).
+- ``wear_profile.csv`` and ``wear_profile.png`` (baseline wear of both flanks, 2.7),
+  ``contact_state.csv`` (the unworn contact along the path: load, Hertz, the mixed-EHL solver's
+  films, pressure peak and asperity share beside the Masjedi-Khonsari regression's, flash
+  temperature, wear rates) and ``ehl_pressure_film.png`` (the solver's pressure and film at the
+  pinion root, the pitch point and the pinion tip).
 
 Film thickness, film ratio, asperity load ratio and Hertz pressure are reported at the pitch
 point of the unworn pair (single-tooth zone); average wear is the mean pinion wear depth over the
@@ -42,6 +45,7 @@ from physics.dynamics.evolution import (
 from physics.dynamics.model import build_model, simulate
 from physics.estimators.empirical_inverse import EmpiricalInverse, accuracy
 from physics.files import write_csv
+from physics.gear.contact import reduced_modulus
 from physics.gear.geometry import MeshGeometry
 from physics.gear.load_sharing import pair_loads
 from physics.gear.stiffness import MeshStiffness
@@ -57,6 +61,8 @@ from physics.params import (
 from physics.reproduce import plots
 from physics.scope import check_record, check_scope
 from physics.signals.features import features
+from physics.tribology.asperity_table import check_scenario
+from physics.tribology.mixed_ehl import EHLSolution, solve_line_contact
 from physics.tribology.wear import WearResult, quasi_static_force, simulate_wear
 
 log = logging.getLogger(__name__)
@@ -327,19 +333,48 @@ def table_estimator_accuracy(table14: pd.DataFrame, thesis_data: Path | None) ->
     return pd.DataFrame(rows)
 
 
-def contact_state_frame(res: WearResult) -> pd.DataFrame:
-    """Contact state of the unworn pair along the path of contact (``contact_state.csv``)."""
+def contact_state_frame(res: WearResult, regression: WearResult | None = None) -> pd.DataFrame:
+    """Contact state of the unworn pair along the path of contact (``contact_state.csv``).
+
+    Film, pressure peak and asperity share are those of ``res``'s model (the mixed-EHL solver
+    by default); ``regression``, the same scenario with ``asperity_model = "regression"``, adds
+    the Masjedi-Khonsari film and share beside them.
+    """
     st, rate = res.first_rate.state, res.first_rate
-    return pd.DataFrame({
+    df = pd.DataFrame({
         "roll_mm": res.s * 1e3, "zone": np.where(res.double, "double", "single"),
         "pair_load_N": rate.load, "half_width_um": st.half_width * 1e6,
-        "p_max_MPa": st.p_max * 1e-6, "sliding_velocity_m_s": st.v_s,
-        "entraining_velocity_m_s": st.v_e, "h_min_nm": st.h_min * 1e9,
+        "p_max_MPa": st.p_max * 1e-6, "pressure_peak_MPa": st.p_peak * 1e-6,
+        "sliding_velocity_m_s": st.v_s, "entraining_velocity_m_s": st.v_e,
+        "h_min_nm": st.h_min * 1e9, "h_central_nm": st.h_central * 1e9,
         "film_ratio": st.film_ratio, "asperity_load_ratio_pct": st.asperity_ratio * 100,
         "flash_temperature_K": st.flash_temperature, "lubricant_density_kg_m3": st.density,
         "film_deficiency": rate.psi, "pinion_wear_rate_m_per_cycle": rate.pinion,
         "gear_wear_rate_m_per_cycle": rate.gear,
     })
+    if regression is not None:
+        ref = regression.first_rate.state
+        df["h_min_regression_nm"] = ref.h_min * 1e9
+        df["asperity_load_ratio_regression_pct"] = ref.asperity_ratio * 100
+    return df
+
+
+def ehl_profiles(scn: Scenario, res: WearResult) -> dict[str, EHLSolution]:
+    """The mixed-EHL solver's pressure and film at the pinion root (start of contact), the
+    pitch point and the pinion tip (end of contact) of the unworn pair of ``res``: direct
+    solves at the load, radius and entraining velocity of its contact state."""
+    st, lub, mat = res.first_rate.state, scn.lubricant, scn.material
+    e_prime = 2 * reduced_modulus(mat, mat)
+    out = {}
+    for label, s in (("pinion root", res.s[0]), ("pitch point", 0.0), ("pinion tip", res.s[-1])):
+        def at(x: np.ndarray, s: float = s) -> float:
+            return float(np.interp(s, res.s, x))
+
+        out[label] = solve_line_contact(
+            at(st.load_per_width), at(st.R), at(st.v_e), e_prime, lub.eta0_Pa_s,
+            lub.alpha_m2_per_N, lub.temp_visc_coeff_per_K, lub.rho0_kg_m3,
+            scn.operating.bulk_temperature_K, scn.tribology.sigma_um * 1e-6)
+    return out
 
 
 def wear_profile_frame(res: WearResult) -> pd.DataFrame:
@@ -447,15 +482,18 @@ def prepare(cfg: DictConfig) -> ReproducePlan:
     for name in ("speeds_rpm", "torques_Nm", "roughness_um"):
         if not cfg[name]:
             raise ValueError(f"{name} is empty; give at least one value")
+    check_scenario(scn)
     for n in cfg.speeds_rpm:
-        check_scope(_with(scn, "operating", n1_rpm=n))
+        check_scenario(check_scope(_with(scn, "operating", n1_rpm=n)))
     for t in cfg.torques_Nm:
-        check_scope(_with(scn, "operating", torque_Nm=t))
+        check_scenario(check_scope(_with(scn, "operating", torque_Nm=t)))
     for s in cfg.roughness_um:
-        _with(scn, "tribology", sigma_um=s)
+        check_scenario(_with(scn, "tribology", sigma_um=s))
+    for lub in lubs.values():
+        check_scenario(dataclasses.replace(scn, lubricant=lub))
     for off in cfg.center_distance_offsets_pct:
         a = scn.gear.standard_center_distance_mm * (1 + off / 100)
-        _with(scn, "gear", center_distance_mm=a)
+        check_scenario(_with(scn, "gear", center_distance_mm=a))
     _positive("stiffness.wear_cycles", list(st.wear_cycles))
     _positive("evolution.table9_cycles", list(ev.table9_cycles))
     _positive("evolution.table14_cycles", list(ev.table14_cycles))
@@ -470,7 +508,7 @@ def prepare(cfg: DictConfig) -> ReproducePlan:
                          "refinements > 0")
     base = OmegaConf.to_container(cfg, resolve=True)
     for case in ev.cases:
-        check_record(scenario_from_config({**base, "case": case}))
+        check_scenario(check_record(scenario_from_config({**base, "case": case})))
     return ReproducePlan(cfg, scn, lubs, _thesis_table14(cfg.thesis_tables), Path(cfg.out_dir))
 
 
@@ -513,7 +551,10 @@ def run(plan: ReproducePlan) -> dict[str, pd.DataFrame]:
         tables[f"table12_evolution_fits_case{case}"] = df
     base = simulate_wear(scn, cycles)
     tables["wear_profile"] = wear_profile_frame(base)
-    tables["contact_state"] = contact_state_frame(base)
+    mixed = scn.tribology.regime == "mixed"
+    regression = (simulate_wear(_with(scn, "tribology", asperity_model="regression"), 0.0)
+                  if mixed and scn.tribology.asperity_model == "solver" else None)
+    tables["contact_state"] = contact_state_frame(base, regression)
     for name, df in tables.items():
         write_csv(df, out / f"{name}.csv")
     plots.plot_wear_profile(base, out / "wear_profile.png")
@@ -523,5 +564,7 @@ def run(plan: ReproducePlan) -> dict[str, pd.DataFrame]:
                             scn.dynamics.sample_rate_hz, out / "dte_spectrum.png")
     plots.plot_wear_evolution(tables["wear_evolution"], out / "wear_evolution.png")
     plots.plot_feature_trends(tables["table14_dte_features_case3"], out / "feature_trends.png")
+    if mixed:
+        plots.plot_ehl_pressure_film(ehl_profiles(scn, base), out / "ehl_pressure_film.png")
     log.info("wrote %d tables and wear_profile.png to %s", len(tables), out)
     return tables

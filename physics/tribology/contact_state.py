@@ -1,9 +1,14 @@
 """The mixed-EHL contact state along the path of contact (thesis 2.1-2.5, coupled).
 
 For given pair loads, flank curvatures and velocities this module combines Hertz
-(``physics.contact``), the Masjedi-Khonsari film and asperity share (``physics.lubrication``) and
-the flash temperature (``physics.thermal``). The film forms in the inlet, at the bulk temperature:
-the regressions are isothermal fits, and the flash temperature exists only inside the band. Inside
+(``physics.contact``), the film and asperity load share, and the flash temperature
+(``physics.thermal``). The film and share come from the numerical mixed-EHL line-contact solver
+(``tribology.asperity_model = "solver"``, the default: :mod:`physics.tribology.mixed_ehl`, read
+from its precomputed table :mod:`physics.tribology.asperity_table`) or from the
+Masjedi-Khonsari regressions the thesis prints (``"regression"``: :mod:`physics.tribology.
+lubrication`). The film forms in the inlet, at the bulk temperature: both are isothermal
+(the regressions are fits to isothermal solutions, the solver runs at the inlet temperature),
+and the flash temperature exists only inside the band. Inside
 the band the viscosity and density follow the contact temperature ``T = T0 + Delta T`` (thesis
 2.5): the film's shear stress, and with it the heat and ``Delta T``, depend on ``eta(p, T)``. That
 fixed point is found by damped iteration, vectorised over positions. (The thesis evaluates the
@@ -18,7 +23,7 @@ import numpy as np
 
 from physics.gear import contact, kinematics
 from physics.params import Scenario
-from physics.tribology import lubrication, thermal
+from physics.tribology import asperity_table, lubrication, thermal
 
 
 @dataclass(frozen=True)
@@ -26,7 +31,9 @@ class ContactState:
     """Contact quantities at each mesh position; arrays of the shape of the load array.
 
     Where a pair carries no load (it lost contact to the wear gap) pressures, film and
-    temperature rise are zero and the film ratio is ``inf``.
+    temperature rise are zero and the film ratio is ``inf``. ``h_central`` and ``p_peak`` (the
+    largest fluid plus asperity pressure, the outlet pressure spike included) come from the
+    solver; they are NaN with the regression (which gives neither) and zero in the dry regime.
     """
 
     load_per_width: np.ndarray  # w [N/m]
@@ -39,6 +46,8 @@ class ContactState:
     v_s: np.ndarray
     v_e: np.ndarray
     h_min: np.ndarray  # [m]
+    h_central: np.ndarray  # film at the Hertz centre [m]
+    p_peak: np.ndarray  # peak of fluid + asperity pressure [Pa]
     film_ratio: np.ndarray  # Lambda = h_min / sigma
     asperity_ratio: np.ndarray  # L_a / 100 (fraction of the load on asperities)
     flash_temperature: np.ndarray  # Delta T [K]
@@ -74,12 +83,21 @@ def solve_contact_state(
 
     if dry:
         h_min, la = np.zeros_like(R), np.ones_like(R)
-    else:  # isothermal inlet at the bulk temperature (the regressions are isothermal fits)
+        h_c, p_peak = np.zeros_like(R), np.zeros_like(R)
+    else:  # isothermal inlet at the bulk temperature
         grp = lubrication.dimensionless_groups(
             w, R, v_e, lub.eta0_Pa_s, lub.alpha_m2_per_N, 2 * e_star, mat.hardness, sigma)
-        h_min = R * lubrication.min_film_thickness(grp["W"], grp["U"], grp["G"], grp["sigma_bar"])
-        la = lubrication.asperity_load_ratio_pct(
-            grp["W"], grp["U"], grp["G"], grp["V"], grp["sigma_bar"]) / 100
+        if tri.asperity_model == "regression":
+            h_min = R * lubrication.min_film_thickness(grp["W"], grp["U"], grp["G"],
+                                                       grp["sigma_bar"])
+            la = lubrication.asperity_load_ratio_pct(
+                grp["W"], grp["U"], grp["G"], grp["V"], grp["sigma_bar"]) / 100
+            h_c, p_peak = np.full_like(R, np.nan), np.full_like(R, np.nan)
+        else:
+            ehl = asperity_table.lookup(grp["W"], grp["U"], grp["sigma_bar"],
+                                        lub.alpha_m2_per_N, lub.eta0_Pa_s, 2 * e_star)
+            la, h_min, h_c = ehl.share, ehl.film_ratio_min * sigma, ehl.film_ratio_central * sigma
+            p_peak = ehl.peak_ratio * p_max
     p_h = (1 - la) * p_mean
 
     def rise(delta_t: np.ndarray) -> np.ndarray:
@@ -88,7 +106,9 @@ def solve_contact_state(
             tau = np.zeros_like(R)
         else:
             eta = lubrication.viscosity(p_h, t0 + delta_t, **visc)
-            tau = np.minimum(eta * v_s / h_min, lub.limiting_shear_coeff * p_h)
+            # a nominal film <= 0 (mean planes through each other): the shear is limiting
+            newtonian = np.where(h_min > 0, eta * v_s / np.where(h_min > 0, h_min, 1.0), np.inf)
+            tau = np.minimum(newtonian, lub.limiting_shear_coeff * p_h)
         q = thermal.heat_flux(v_s, la * p_mean, tau, tri.dry_friction_coeff)
         dt = thermal.flash_temperature(q, b, v1, v2, mat.thermal_conductivity_W_mK,
                                        mat.diffusivity)
@@ -102,6 +122,7 @@ def solve_contact_state(
         p_max=np.where(loaded, p_max, 0.0), p_mean=np.where(loaded, p_mean, 0.0),
         v1=v1, v2=v2, v_s=v_s, v_e=v_e,
         h_min=np.where(loaded, h_min, zero),
+        h_central=np.where(loaded, h_c, zero), p_peak=np.where(loaded, p_peak, zero),
         film_ratio=np.where(loaded, h_min / sigma, np.inf),
         asperity_ratio=np.where(loaded, la, 0.0),
         flash_temperature=delta_t, temperature=t0 + delta_t,

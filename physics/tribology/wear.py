@@ -7,9 +7,12 @@ against the gear; integrating the law over the band gives the wear per pass
     dh1 = k psi L_a p_mean L1 / H        (per pinion cycle)
     dh2 = (z1/z2) k psi L_a p_mean L2 / H (a gear tooth meshes z1/z2 times per pinion cycle)
 
-with ``p_mean = w / (2b)``, ``L_a`` the Masjedi-Khonsari asperity load fraction and ``psi`` the
-oil-film deficiency coefficient. The dry mode (thesis 2.7.5) uses ``L_a = psi = 1`` and the dry
-coefficient. Wear is integrated in cycle blocks: each block is as long as it can be without any
+with ``p_mean = w / (2b)``, ``L_a`` the fraction of the load carried by asperities (from the
+numerical mixed-EHL solver by default, or the Masjedi-Khonsari regression: ``tribology.
+asperity_model``, see :mod:`physics.tribology.contact_state`) and ``psi`` the oil-film
+deficiency coefficient; ``k`` is ``tribology.wear_coeff`` (calibrated, see
+:class:`physics.params.Tribology`). The dry mode (thesis 2.7.5) uses ``L_a = psi = 1`` and the
+dry coefficient. Wear is integrated in cycle blocks: each block is as long as it can be without any
 point of either flank wearing more than ``solver.update_um``, after which the profile (radii of
 curvature ``R_new = R_old - h_w`` and the wear gap of the load sharing) and every contact quantity
 are recomputed (thesis 2.6; Flodin & Andersson, Wear 207 (1997) 16-23).
@@ -30,6 +33,7 @@ from physics.gear.load_sharing import PairStiffness, pair_loads
 from physics.gear.stiffness import MeshStiffness
 from physics.params import R_GAS, Lubricant, Scenario
 from physics.scope import check_scope
+from physics.tribology.asperity_table import check_scenario
 from physics.tribology.contact_state import ContactState, solve_contact_state
 
 #: ``force(s, wear1, wear2) -> F [N]`` on the grid s: the total normal mesh force per mesh
@@ -155,7 +159,7 @@ def simulate_wear(
     marks = sorted({float(c) for c in snapshots})
     if marks and (marks[0] < 0 or marks[-1] > cycles):
         raise ValueError(f"snapshots {marks} must lie in [0, cycles = {cycles:g}]")
-    check_scope(scn)
+    check_scenario(check_scope(scn))
     geom = mesh_geometry(scn.gear)
     s = geom.grid(scn.solver.n_points)
     if force is None:
