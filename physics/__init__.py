@@ -1,6 +1,11 @@
 """Physics core of the spur-gear wear model (numpy/scipy only; never imports torch).
 
-Modules follow the thesis: ``geometry`` (2.1), ``load_sharing`` (2.2), ``kinematics`` (2.3),
-``contact`` (Hertz), ``lubrication`` (2.4), ``thermal`` (2.5), ``contact_state`` (2.1-2.5
-coupled), ``wear`` (2.6) and ``reproduce`` (2.7 tables).
+Subpackages in the order of the data flow, each importing only from those before it:
+``gear`` (geometry, kinematics, Hertz, tooth, mesh stiffness, FE check, load sharing; thesis
+2.1-2.3, 3.1-3.2), ``tribology`` (lubrication, mixed-EHL solver and its table, flash
+temperature, contact state, wear; 2.4-2.6), ``dynamics`` (torsional model, wear/dynamics
+coupling; 3.3-4.1), ``signals`` (features, order analysis, measurement chain; 4.2),
+``estimators`` (empirical inverse; 4.4), ``dataset``, ``reproduce`` and ``loop`` (the apps and
+what they run). ``params`` (validated parameters), ``scope`` (the model's operating scope),
+``command`` and ``files`` serve them all.
 """
