@@ -1,8 +1,8 @@
 """Every command and snippet of README.md, run as a subprocess in a fresh folder, as typed.
 
 Only size overrides are added (fewer replicates, wear states, epochs, records, trials); never a
-switch that changes which code path runs (never a single-process job count, never a pre-built dataset). Scripts of the
-checkout (``train.py``, ``bench/*.py``) run by their path in the checkout. A command that
+switch that changes which code path runs (never a single-process job count, never a pre-built
+dataset). Scripts of the checkout (``train.py``, ``bench/*.py``) run by their path in the checkout. A command that
 needs the output of another (``surrogate.predict`` needs a trained model) runs that one first in
 the same folder. Placeholders of the README (``<run>``, ``<time>``) are filled with what those
 earlier commands wrote. ``test_every_readme_command_has_an_acceptance_test`` fails when the README
