@@ -2,12 +2,12 @@
 
 Only size overrides are added (fewer replicates, wear states, epochs, records, trials); never a
 switch that changes which code path runs (never a single-process job count, never a pre-built
-dataset). Scripts of the checkout (``train.py``, ``bench/*.py``) run by their path in the checkout. A command that
-needs the output of another (``surrogate.predict`` needs a trained model) runs that one first in
-the same folder. Placeholders of the README (``<run>``, ``<time>``) are filled with what those
-earlier commands wrote. ``test_every_readme_command_has_an_acceptance_test`` fails when the README
-documents a command that this table does not cover, or when the table names one the README no
-longer has.
+dataset). Scripts of the checkout (``train.py``, ``bench/*.py``) run by their path in the checkout.
+A command that needs the output of another (``surrogate.predict`` needs a trained model) runs that
+one first in the same folder. Placeholders of the README (``<run>``, ``<time>``) are filled with
+what those earlier commands wrote. ``test_every_readme_command_has_an_acceptance_test`` fails when
+the README documents a command that this table does not cover, or when the table names one the
+README no longer has.
 """
 
 from __future__ import annotations

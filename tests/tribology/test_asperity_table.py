@@ -155,8 +155,8 @@ def test_share_rises_with_roughness_falls_with_speed_and_G(p):
 @given(point)
 def test_asperity_load_rises_with_load(p):
     """The load carried by asperities, share x W, rises with the load (checked where the share
-    exceeds 1e-6: below it the interpolation's relative error grows, to tens of per cent at
-    1e-8 and below, and such shares do not matter to the wear). The share itself, a fraction of a larger
+    exceeds 1e-6: below it the interpolation's relative error grows, to tens of per cent at 1e-8 and
+    below, and such shares do not matter to the wear). The share itself, a fraction of a larger
     load, need not: it falls with the load below a film ratio of about 1.8 (the Hertz band
     widens as sqrt(w) while the film thins only as w^-0.1) and mostly rises above 2
     (``docs/reproduction.md``, Table 3). At light loads and film ratios near 3 the asperity load
