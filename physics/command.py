@@ -14,8 +14,6 @@
 
 from __future__ import annotations
 
-import dataclasses
-import logging
 import shutil
 import sys
 from collections.abc import Callable
@@ -24,7 +22,6 @@ from typing import Any, TypeVar
 
 from omegaconf import DictConfig, OmegaConf
 
-log = logging.getLogger(__name__)
 Plan = TypeVar("Plan")
 
 
@@ -48,15 +45,6 @@ def _writable(node: Any) -> None:
             child = node._get_node(key)
             if OmegaConf.is_config(child):
                 _writable(child)
-
-
-def settings(cfg: DictConfig, cls: type, keys: tuple[str, ...] | None = None) -> Any:
-    """An instance of dataclass ``cls`` from the config keys it names (validated on
-    construction); ``keys`` limits which fields are read."""
-    names = [f.name for f in dataclasses.fields(cls) if keys is None or f.name in keys]
-    values = {n: OmegaConf.to_container(cfg[n], resolve=True) if OmegaConf.is_config(cfg[n])
-              else cfg[n] for n in names if n in cfg}
-    return cls(**values)
 
 
 def _run_folder() -> Path | None:
