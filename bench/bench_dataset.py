@@ -20,7 +20,6 @@ import numpy as np
 import pandas as pd
 
 from physics.dataset.generation import (
-    DATASET_TRIBOLOGY,
     DatasetSpec,
     build_dataset,
     plan_dataset,
@@ -39,7 +38,7 @@ def peak_mb() -> float:
 def timed_generation(out: Path, chunk: int | None = None, jobs: int = 2
                      ) -> tuple[float, Path | None]:
     """The default dataset (``python -m physics.dataset``) into ``out``, timed."""
-    job = plan_dataset(Scenario(tribology=DATASET_TRIBOLOGY), DatasetSpec(), out, chunk=chunk,
+    job = plan_dataset(Scenario(), DatasetSpec(), out, chunk=chunk,
                        jobs=jobs, progress=False)
     t = time.perf_counter()
     path = build_dataset(job)

@@ -35,7 +35,7 @@ ABSENT_DB = -100.0
 
 
 def base_scenario():
-    return scenario_from_config({"case": 3, "tribology": {"regime": "dry"}})
+    return scenario_from_config({"case": 3})
 
 
 def one(job: tuple[str | None, int, int, str]) -> dict:

@@ -20,7 +20,6 @@ import torch
 from torch.utils.data import DataLoader, TensorDataset
 
 from physics.dataset.generation import (
-    DATASET_TRIBOLOGY,
     DatasetJob,
     build_dataset,
     plan_dataset,
@@ -65,7 +64,7 @@ def dataset_job(path: str | Path, spec: dict | None = None, jobs: int = 2) -> Da
     path = Path(path)
     if path.suffix != ".parquet":
         raise ValueError(f"data.dataset = {str(path)!r} must name a .parquet file")
-    return plan_dataset(Scenario(tribology=DATASET_TRIBOLOGY), spec_from_config(spec or {}),
+    return plan_dataset(Scenario(), spec_from_config(spec or {}),
                         path.parent, path.stem, jobs=jobs)
 
 

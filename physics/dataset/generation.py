@@ -44,7 +44,6 @@ from physics.gear.stiffness import MeshStiffness, SainsotRangeWarning
 from physics.params import (
     PhysicsConfig,
     Scenario,
-    Tribology,
     bounded,
     case_values,
     operating_cases,
@@ -54,6 +53,7 @@ from physics.params import (
 from physics.scope import check_record
 from physics.signals.features import FEATURES, feature_units, features
 from physics.signals.measurement import add_noise, housing_acceleration, transfer_path
+from physics.tribology.asperity_table import check_scenario
 
 log = logging.getLogger(__name__)
 SCHEMA_VERSION = 1
@@ -341,11 +341,6 @@ def spec_from_config(data: dict[str, Any]) -> DatasetSpec:
     return DatasetSpec(**values)
 
 
-#: The thesis's mixed-lubrication constants wear the pinion root by 0.07 um in 1.5e7 cycles
-#: (docs/reproduction.md, Table 2): the features then change by < 0.1 % over the whole life and
-#: carry no information on wear. The dataset therefore uses the thesis's dry Archard law (2.7.5),
-#: whose wear has the magnitude of the thesis's tables and whose feature trends follow Table 14.
-DATASET_TRIBOLOGY = Tribology(regime="dry")
 NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
 
 
@@ -353,7 +348,6 @@ NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
 class DatasetConfig(PhysicsConfig):
     """Schema of ``python -m physics.dataset`` (``conf/dataset/dataset.yaml``)."""
 
-    tribology: Tribology = field(default_factory=lambda: DATASET_TRIBOLOGY)
     data: DatasetSpec = field(default_factory=DatasetSpec)
     out_dir: str = "data"  # relative to the folder the command runs in
     name: str = "dataset"  # <out_dir>/<name>.parquet, <name>.json (and <name>_signals.npy)
@@ -413,7 +407,7 @@ def plan_dataset(base: Scenario, spec: DatasetSpec, out_dir: str | Path, name: s
         spec.chunk_units(int(chunk))  # raises for a chunk outside the spec
     for c in chunks:
         for case, rep in spec.chunk_units(c):
-            check_record(unit_scenario(base, spec, case, rep))
+            check_scenario(check_record(unit_scenario(base, spec, case, rep)))
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise ValueError(f"out_dir = {str(out_dir)!r} is a file; give a folder")

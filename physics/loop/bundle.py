@@ -27,6 +27,7 @@ from omegaconf.errors import OmegaConfBaseException
 
 from physics.params import GearPair, Scenario
 from physics.scope import check_scope
+from physics.tribology.asperity_table import check_scenario
 
 REQUIRED = ("record", "quantity", "fs_hz", "n1_rpm", "torque_Nm", "wear_mm", "cycles", "split")
 QUANTITIES = ("dte_m", "accel_m_s2")
@@ -191,12 +192,12 @@ def read_measurements(path: str | Path, base: Scenario) -> tuple[Bundle | pd.Dat
         scn = dataclasses.replace(base, gear=dataclasses.replace(base.gear, **bundle.gear))
         for row in bundle.manifest.itertuples(index=False):
             try:
-                check_scope(record_scenario(scn, row))
+                check_scenario(check_scope(record_scenario(scn, row)))
             except ValueError as err:
                 raise _fail(path, row.record, str(err)) from None
         return bundle, scn
     if path.is_file() and path.suffix == ".csv":
-        return read_feature_table(path), check_scope(base)
+        return read_feature_table(path), check_scenario(check_scope(base))
     raise ValueError(f"data = {str(path)!r} is neither a bundle folder nor a feature-table .csv "
                      "file; see shared/specs/measured-bundle.md")
 

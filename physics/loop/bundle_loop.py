@@ -58,14 +58,13 @@ from scipy import optimize
 from scipy.stats import qmc
 from tqdm import tqdm
 
-from physics.dataset.generation import DATASET_TRIBOLOGY
 from physics.dynamics.evolution import root_wear_evolution, simulate_dynamic_wear
 from physics.dynamics.model import PairModel, build_model, simulate
 from physics.gear.stiffness import MeshStiffness
 from physics.loop.bundle import Bundle, record_scenario
 from physics.loop.effects import EFFECTS, Effect
 from physics.loop.report import LoopReport, adopts
-from physics.params import PhysicsConfig, Scenario, Tribology, bounded, validate_fields
+from physics.params import PhysicsConfig, Scenario, bounded, validate_fields
 from physics.signals.features import FEATURES, features
 from physics.signals.measurement import declared_chain, sensed
 from physics.signals.order_analysis import (
@@ -141,7 +140,6 @@ class LoopSettings:
 class LoopConfig(PhysicsConfig):
     """Schema of ``python -m physics.loop``."""
 
-    tribology: Tribology = field(default_factory=lambda: DATASET_TRIBOLOGY)  # as the dataset
     data: str = MISSING  # a bundle folder (shared/specs/measured-bundle.md) or a feature table
     case: int | None = None  # 1-5: operating point and lubricant of Table 11 (feature tables)
     progress: bool = True

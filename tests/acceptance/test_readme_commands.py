@@ -44,7 +44,7 @@ SMALL_DATASET = ["data.replicates=2", "data.wear_states=3"]
 SMALL_BUNDLE = {"records=10, duration_s=1.0": "records=6, duration_s=0.5",
                 "effect=\"friction\", seed=1)": "effect=\"friction\", seed=1, duration_s=0.4)"}
 TRAIN_CASE3 = "python train.py case=3"
-DEMO = 'make_bundle("demo_bundle", Scenario(tribology=Tribology(regime="dry")), "friction", seed=1,'
+DEMO = 'make_bundle("demo_bundle", Scenario(), "friction", seed=1,'
 USER_TABLE = 'rows = pd.read_parquet("data/dataset.parquet").query("case == 3")'
 TABLE_ARGS = "data.table=my_wear_table.csv data.group=rig +data.columns.p2p=dte_peak_to_peak"
 

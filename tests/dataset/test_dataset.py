@@ -11,7 +11,6 @@ import pyarrow.parquet as pq
 import pytest
 
 from physics.dataset.generation import (
-    DATASET_TRIBOLOGY,
     DatasetSpec,
     NuisanceRanges,
     build_dataset,
@@ -26,7 +25,7 @@ from physics.dataset.generation import (
 from physics.params import Dynamics, Scenario, WearSolver, case_values
 from physics.signals.measurement import add_noise, housing_acceleration
 
-BASE = Scenario(tribology=DATASET_TRIBOLOGY, solver=WearSolver(n_points=51),
+BASE = Scenario(solver=WearSolver(n_points=51),
                 dynamics=Dynamics(duration_s=0.02, transient_s=0.005, phase_bins=64))
 SMALL = {"cases": [2, 3], "wear_states": 3, "replicates": 2, "cycles_max": 1e6}
 
@@ -54,7 +53,7 @@ def test_rows_columns_and_sidecar(single):
     assert side["rows"] == len(df) and side["schema_version"] == 1
     assert side["units"]["dte_rms"] == "m" and side["units"]["acc_rms"] == "m/s^2"
     assert side["config"]["data"]["seed"] == 0 and "package_version" in side
-    assert side["config"]["scenario"]["tribology"]["regime"] == "dry"
+    assert side["config"]["scenario"]["tribology"]["regime"] == "mixed"
     for _, traj in df.groupby(["case", "replicate"]):
         assert np.all(np.diff(traj.root_wear_mm) > 0)  # wear only grows
         assert traj.root_wear_mm.iloc[0] == 0.0

@@ -14,7 +14,6 @@ from hydra import compose, initialize_config_module
 from hydra.utils import get_class, instantiate
 
 from physics.dataset.generation import (
-    DATASET_TRIBOLOGY,
     DatasetSpec,
     NuisanceRanges,
     build_dataset,
@@ -30,7 +29,7 @@ from surrogate.summarise import summarise
 from surrogate.training import train
 
 ROOT = Path(__file__).resolve().parents[2]
-TINY_BASE = Scenario(tribology=DATASET_TRIBOLOGY, solver=WearSolver(n_points=51),
+TINY_BASE = Scenario(solver=WearSolver(n_points=51),
                      dynamics=Dynamics(duration_s=0.02, transient_s=0.005, phase_bins=64))
 #: the plumbing is tested on one gearbox (nuisance fixed at the declared values), not robustness
 ONE_GEARBOX = NuisanceRanges(
