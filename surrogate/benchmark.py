@@ -145,7 +145,7 @@ def run(out: Path, root: Path, max_epochs: int | None = None) -> pd.DataFrame:
     """Train the models of :data:`MODELS` and score them and the estimator on the test sets."""
     extra = [f"trainer.max_epochs={max_epochs}"] if max_epochs else []
     shifted = load_dataset(root / "data" / "dataset_shifted.parquet",
-                           {"seed": 1, "replicates": 3, "nuisance": shifted_ranges()})
+                           {"seed": 1, "replicates": 8, "nuisance": shifted_ranges()})
     foreign = independent_rows()
     rows, plots = [], {}
     for name, overrides in MODELS.items():

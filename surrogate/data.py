@@ -27,23 +27,32 @@ from physics.dataset.generation import (
 )
 from physics.dataset.generation import units as dataset_units
 from physics.params import Scenario, operating_cases
-from physics.signals.features import FEATURES
 from surrogate.schema import FeatureSchema
 
 log = logging.getLogger(__name__)
 #: the sensors a user may have: DTE (``dte_*`` features) and housing acceleration (``acc_*``)
 SENSORS = ("dte", "acc")
-#: the default inputs: the Table 13 features of the DTE and of the housing acceleration
-DEFAULT_INPUTS = [f"{q}_{f}" for q in SENSORS for f in FEATURES]
+#: the features of each sensor that a gearbox's unknown offsets and scales leave alone. A DTE
+#: record's mean is the half backlash plus the static deflection (tens of um, set by tolerances
+#: the user does not know; an encoder pair measures the DTE only up to a constant), so of the
+#: DTE only the mean-free peak-to-peak value and kurtosis are used; the housing acceleration's
+#: level scales with the housing's effective mass and the transfer path, so of it only the
+#: dimensionless shape features are used (Table 13 definitions in :mod:`physics.signals.features`;
+#: docs/surrogate.md measures the gain on gearboxes away from the training ones)
+INVARIANT = {"dte": ("peak_to_peak", "kurtosis"),
+             "acc": ("kurtosis", "crest", "margin", "impulse", "shape")}
+#: the default inputs: the invariant features of both sensors
+DEFAULT_INPUTS = [f"{q}_{f}" for q in SENSORS for f in INVARIANT[q]]
 CONDITIONS = ["n1_rpm", "torque_Nm"]
 
 
 def input_columns(sensors: list[str], operating_point: bool) -> list[str]:
-    """The network's inputs for the sensors a user has, with or without the operating point."""
+    """The network's inputs for the sensors a user has (their :data:`INVARIANT` features), with
+    or without the operating point."""
     unknown = sorted(set(sensors) - set(SENSORS))
     if unknown or not sensors or len(set(sensors)) != len(sensors):
         raise ValueError(f"data.sensors = {list(sensors)} must name one or both of {SENSORS}")
-    cols = [f"{q}_{f}" for q in SENSORS if q in sensors for f in FEATURES]
+    cols = [f"{q}_{f}" for q in SENSORS if q in sensors for f in INVARIANT[q]]
     return cols + (CONDITIONS if operating_point else [])
 
 
@@ -125,9 +134,10 @@ def split_trajectories(df: pd.DataFrame, val_replicates: int, test_replicates: i
         n_test = 0 if holdout_case is not None else test_replicates
         if len(reps) < n_test + val_replicates + 1:
             raise ValueError(
-                f"case {case} has {len(reps)} replicates; a split with {val_replicates} "
-                f"validation and {n_test} test replicate(s) needs at least "
-                f"{n_test + val_replicates + 1}: raise data.replicates in the dataset")
+                f"case {case} has {len(reps)} trajectories; a split with {val_replicates} "
+                f"validation and {n_test} test trajectories needs at least "
+                f"{n_test + val_replicates + 1}: lower data.val_replicates and "
+                "data.test_replicates, or add trajectories (data.generate.replicates)")
         perm = np.random.default_rng([seed, int(case)]).permutation(reps)
         groups = {"test": perm[:n_test], "val": perm[n_test:n_test + val_replicates],
                   "train": perm[n_test + val_replicates:]}
@@ -157,7 +167,9 @@ class WearDataModule(L.LightningDataModule):
         self.val_replicates, self.test_replicates = int(val_replicates), int(test_replicates)
         self.holdout_case = None if holdout_case is None else int(holdout_case)
         self.batch_size, self.seed = int(batch_size), int(seed)
-        self.generate, self.jobs = dict(generate or {}), int(jobs)
+        # a dataset built here holds the trained cases only (the main job stays short)
+        self.generate = {"cases": self.cases, **dict(generate or {})}
+        self.jobs = int(jobs)
         for name, v, lo in (("batch_size", self.batch_size, 1), ("jobs", self.jobs, 1),
                             ("val_replicates", self.val_replicates, 1),
                             ("test_replicates", self.test_replicates, 0)):

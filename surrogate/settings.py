@@ -27,8 +27,8 @@ class DataConfig:
     operating_point: bool = True  # speed and torque as inputs (a user knows them)
     inputs: list[str] | None = None  # explicit input columns instead (a user's own table)
     target: str = "root_wear_mm"
-    val_replicates: int = 1  # whole trajectories (case, replicate), never rows of one
-    test_replicates: int = 2
+    val_replicates: int = 8  # whole trajectories (case, replicate), never rows of one;
+    test_replicates: int = 8  # per case (the validation ones calibrate the interval)
     holdout_case: int | None = None  # a case number: leave that case out (test on it alone)
     batch_size: int = 64
     seed: int = 0

@@ -33,9 +33,10 @@ BY_CI = {
     "pytest": "the test run (this suite)",
 }
 #: a smaller dataset for train.py to build (the sizes of the dataset spec)
-TINY_DATA = ["+data.generate.replicates=4", "+data.generate.wear_states=4"]
-#: one case's dataset: 4 replicates in 2 chunks
-CASE3_DATA = ["+data.generate.cases=[3]", "+data.generate.chunks=2"]
+#: a dataset of 4 replicates per case in 2 chunks, one trajectory each to validate and test
+SMALL_SPLIT = ["data.val_replicates=1", "data.test_replicates=1"]
+TINY_DATA = ["+data.generate.replicates=4", "+data.generate.wear_states=4",
+             "+data.generate.chunks=2", *SMALL_SPLIT]
 FAST_TRAIN = ["trainer.max_epochs=3", "trainer.min_epochs=1", "model.members=2"]
 FAST_REPRO = ["solver.n_points=101", "stiffness.fem_refine=1", "stiffness.fem_refines=[1]",
               "stiffness.positions=40", "evolution.cases=[3]", "evolution.points=9",
@@ -45,7 +46,7 @@ SMALL_BUNDLE = {"records=10, duration_s=1.0": "records=6, duration_s=0.5",
                 "effect=\"friction\", seed=1)": "effect=\"friction\", seed=1, duration_s=0.4)"}
 TRAIN_CASE3 = "python train.py case=3"
 DEMO = 'make_bundle("demo_bundle", Scenario(), "friction", seed=1,'
-USER_TABLE = 'rows = pd.read_parquet("data/dataset.parquet").query("case == 3")'
+USER_TABLE = 'rows = pd.read_parquet("data/dataset_case3.parquet")'
 TABLE_ARGS = "data.table=my_wear_table.csv data.group=rig +data.columns.p2p=dte_peak_to_peak"
 
 
@@ -57,7 +58,7 @@ def _files(*patterns: str) -> Callable[[Path], None]:
 
 
 def _trained(folder: Path) -> None:
-    _files("data/dataset.parquet", "logs/train/runs/case3_*/wear_surrogate.pt",
+    _files("data/dataset_case3.parquet", "logs/train/runs/case3_*/wear_surrogate.pt",
            "logs/train/runs/case3_*/parity.png", "logs/train/runs/case3_*/checkpoints/*.ckpt")(
         folder)
     run = next(folder.glob("logs/train/runs/case3_*"))
@@ -87,7 +88,7 @@ class Case:
 
 
 CASES: dict[str, Case] = {
-    TRAIN_CASE3: Case(tuple(TINY_DATA + CASE3_DATA + FAST_TRAIN),
+    TRAIN_CASE3: Case(tuple(TINY_DATA + FAST_TRAIN),
                       check=_trained),
     "python -m physics.reproduce": Case(tuple(FAST_REPRO), check=_files(
         "outputs/*/*/table02_speed.csv", "outputs/*/*/wear_profile.png",
@@ -107,22 +108,22 @@ CASES: dict[str, Case] = {
     "python train.py -m case=1,2,3,4,5": Case(tuple(TINY_DATA + FAST_TRAIN), check=_files(
         "logs/train/multiruns/*/4/wear_surrogate.pt")),
     "python train.py -m model.width=16,32 model.members=3,5": Case(
-        tuple([*TINY_DATA, *CASE3_DATA, "trainer.max_epochs=3", "trainer.min_epochs=1"]),
+        tuple([*TINY_DATA, "trainer.max_epochs=3", "trainer.min_epochs=1"]),
         check=_files("logs/train/multiruns/*/3/metrics.json")),
     "python train.py hparams_search=optuna": Case(
-        tuple([*TINY_DATA, *CASE3_DATA, "hydra.sweeper.n_trials=2", *FAST_TRAIN]),
+        tuple([*TINY_DATA, "hydra.sweeper.n_trials=2", *FAST_TRAIN]),
         check=_files("optuna_case3.db")),
     "python train.py experiment=all_cases": Case(tuple(TINY_DATA + FAST_TRAIN),
                                                  check=_files("logs/train/runs/caseall_*")),
     "python -m surrogate.summarise logs/train/multiruns/<time>": Case(
         before=("python train.py -m case=1,2,3,4,5",), check=_summary),
     "python -m surrogate.predict ckpt=logs/train/runs/<run>/wear_surrogate.pt "
-    "input=data/dataset.parquet output=wear.csv": Case(before=(TRAIN_CASE3,),
+    "input=data/dataset_case3.parquet output=wear.csv": Case(before=(TRAIN_CASE3,),
                                                        check=_files("wear.csv")),
-    f"python train.py {TABLE_ARGS}": Case(tuple(FAST_TRAIN), before=(USER_TABLE,),
+    f"python train.py {TABLE_ARGS}": Case(tuple(FAST_TRAIN + SMALL_SPLIT), before=(USER_TABLE,),
                                           check=_files("logs/train/runs/case3_*/metrics.json")),
     f"python train.py {TABLE_ARGS} init_from=logs/train/runs/<run>/wear_surrogate.pt "
-    "model.lr=0.0003": Case(("trainer.max_epochs=3", "trainer.min_epochs=1"),
+    "model.lr=0.0003": Case(("trainer.max_epochs=3", "trainer.min_epochs=1", *SMALL_SPLIT),
                              before=(USER_TABLE,)),
     "python -m surrogate.benchmark": Case(("--max-epochs", "3"), slow=True),
     "python train.py --help": Case(),

@@ -49,6 +49,7 @@ def train_cfg(tmp: Path, dataset: Path, *overrides: str):
     with initialize_config_module("gearwear_conf.train", version_base="1.3"):
         return compose("train", overrides=[
             f"paths.root_dir={tmp}", f"paths.output_dir={tmp / 'run'}", f"data.dataset={dataset}",
+            "data.val_replicates=1",
             "trainer.enable_progress_bar=false", *overrides])
 
 
@@ -176,12 +177,14 @@ def test_predict_cli(trained, dataset, tmp_path):
 @pytest.mark.parametrize(("change", "message"), [
     (lambda d: d.drop(columns="dte_kurtosis"), r"lacks column.*dte_kurtosis"),
     (lambda d: d.assign(oil_temp=1.0), r"oil_temp.*not trained on"),
-    (lambda d: d.assign(dte_rms=np.where(d.index == 2, np.nan, d.dte_rms)),
-     r"row 2 column dte_rms is nan"),
-    (lambda d: d.assign(dte_rms=d.dte_rms * 1e6), r"dte_rms.*another unit.*expects m"),
+    (lambda d: d.assign(dte_peak_to_peak=np.where(d.index == 2, np.nan, d.dte_peak_to_peak)),
+     r"row 2 column dte_peak_to_peak is nan"),
+    (lambda d: d.assign(dte_peak_to_peak=d.dte_peak_to_peak * 1e6),
+     r"dte_peak_to_peak.*another unit.*expects m"),
     (lambda d: d.iloc[:0], r"no rows"),
-    (lambda d: d.assign(dte_rms=np.where(d.index == 3, d.dte_rms * 1e6, d.dte_rms)),
-     r"row 3 column dte_rms .* transcription error"),
+    (lambda d: d.assign(dte_peak_to_peak=np.where(d.index == 3, d.dte_peak_to_peak * 1e6,
+                                                  d.dte_peak_to_peak)),
+     r"row 3 column dte_peak_to_peak .* transcription error"),
 ])
 def test_bad_input_is_refused(trained, dataset, change, message):
     df = pd.read_parquet(dataset)[DEFAULT_INPUTS].reset_index(drop=True)
@@ -260,8 +263,8 @@ def test_export_is_atomic_and_loadable_without_pickle(trained, tmp_path):
 def test_two_job_joblib_multirun_and_its_summary(tmp_path, dataset):
     sweep = tmp_path / "sweep"
     subprocess.run([sys.executable, "train.py", "-m", "case=3,4", f"data.dataset={dataset}",
-                    "data.test_replicates=1", "trainer.max_epochs=3", "logger=csv",
-                    "model.members=2", "trainer.enable_progress_bar=false",
+                    "data.val_replicates=1", "data.test_replicates=1", "trainer.max_epochs=3",
+                    "logger=csv", "model.members=2", "trainer.enable_progress_bar=false",
                     f"hydra.sweep.dir={sweep}"], check=True, cwd=ROOT, capture_output=True)
     table = summarise(sweep)
     assert len(table) == 2 and set(table.status) == {"ok"}

@@ -94,6 +94,14 @@ def test_band_source_against_direct_integration_of_jaeger_kernel(pe):
                                                              rel=2e-3)
 
 
+@given(st.floats(1e-7, 1e4))
+@settings(max_examples=60, deadline=None)
+def test_tabulated_rise_matches_the_band_scan(pe):
+    # the log-log table of the maximum against scanning the band at this Peclet number
+    direct = thermal._exact_max_rise(np.array([pe]))[0]
+    assert thermal.band_source_max_rise(np.array([pe]))[0] == pytest.approx(direct, rel=3e-5)
+
+
 def test_flash_temperature_is_blok_partition_of_two_single_body_rises():
     q, b, v1, v2, k, kappa = 1e8, 1e-4, 1.0, 3.0, 46.0, 1.25e-5
     single = [q * b / k * thermal.band_source_max_rise(thermal.peclet(v, b, kappa))
