@@ -22,6 +22,12 @@ from typing import Any
 R_GAS = 8.314462618  # J/(mol K), CODATA 2018 molar gas constant
 
 
+class OutOfScope(ValueError):
+    """A run left the model's scope on its own (a tooth worn through, the mixed-EHL table's
+    range exceeded by the worn profile): the physics has stopped, not the code. Scenarios that
+    are out of scope from the start are refused before any work (:mod:`physics.scope`)."""
+
+
 def bounded(default: Any, lo: float, hi: float, hint: str = "", *, closed: bool = False,
             whole: bool = False) -> Any:
     """A numeric field with its allowed range (``lo < v < hi``; ``closed``: ``lo <= v < hi``;

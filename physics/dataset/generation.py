@@ -42,6 +42,7 @@ from physics.dynamics.model import build_model, simulate
 from physics.files import atomic_write
 from physics.gear.stiffness import MeshStiffness, SainsotRangeWarning
 from physics.params import (
+    OutOfScope,
     PhysicsConfig,
     Scenario,
     bounded,
@@ -292,20 +293,31 @@ def run_chunk(base: Scenario, spec: DatasetSpec, chunk: int, folder: Path, diges
     path = chunk_path(folder, chunk)
     if chunk_is_done(path, digest):
         return False
-    frames, signals = [], []
+    frames, signals, left = [], [], []
     with warnings.catch_warnings():
         # the gear's range warning is issued once by the caller (generate), not once per unit
         warnings.simplefilter("ignore", SainsotRangeWarning)
         for case, rep in spec.chunk_units(chunk):
-            rows, sig = run_unit(base, spec, case, rep, keep_signals)
+            try:
+                rows, sig = run_unit(base, spec, case, rep, keep_signals)
+            except OutOfScope as err:  # this gearbox failed: recorded, not a row
+                left.append({"case": case, "replicate": rep, "reason": str(err)})
+                continue
             frames.append(rows)
             if sig is not None:
                 signals.append(sig)
     if keep_signals:
-        stack = np.concatenate(signals)
+        stack = np.concatenate(signals) if signals else np.empty((0, 2, 0), np.float32)
         atomic_write(path.with_suffix(".npy"), lambda p: np.save(p.open("wb"), stack))
-    _write_parquet(pd.concat(frames, ignore_index=True), path, {"gearwear_hash": digest})
+    df = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=list(units()))
+    _write_parquet(df, path, {"gearwear_hash": digest, "gearwear_left_scope": json.dumps(left)})
     return True
+
+
+def left_scope(path: Path) -> list[dict]:
+    """The trajectories of a finished chunk that left the model's scope (:func:`run_chunk`)."""
+    meta = pq.read_schema(path).metadata or {}
+    return json.loads(meta.get(b"gearwear_left_scope", b"[]").decode())
 
 
 def merge(spec: DatasetSpec, out: Path, name: str, digest: str, sidecar: dict[str, Any],
@@ -318,6 +330,12 @@ def merge(spec: DatasetSpec, out: Path, name: str, digest: str, sidecar: dict[st
                          f"first (chunk=<i>) or run without chunk= to do all")
     frames = [pq.read_table(chunk_path(folder, c)).to_pandas() for c in range(spec.chunks)]
     df = pd.concat(frames, ignore_index=True)
+    left = [u for c in range(spec.chunks) for u in left_scope(chunk_path(folder, c))]
+    if left:
+        log.warning("%d of %d trajectories left the model's scope during their wear life and "
+                    "are not in the dataset (listed in %s.json, left_scope): %s", len(left),
+                    spec.units, name, ", ".join(f"case {u['case']} replicate {u['replicate']}"
+                                                for u in left))
     order = np.lexsort((df.cycles.to_numpy(), df.replicate.to_numpy(), df.case.to_numpy()))
     df = df.iloc[order].reset_index(drop=True)
     target = out / f"{name}.parquet"
@@ -327,7 +345,8 @@ def merge(spec: DatasetSpec, out: Path, name: str, digest: str, sidecar: dict[st
                               for c in range(spec.chunks)])[order]
         atomic_write(out / f"{name}_signals.npy", lambda p: np.save(p.open("wb"), sig))
     text = json.dumps({**sidecar, "schema_version": SCHEMA_VERSION, "hash": digest,
-                       "rows": len(df), "units": units()}, indent=2, sort_keys=True,
+                       "rows": len(df), "units": units(), "left_scope": left}, indent=2,
+                      sort_keys=True,
                       default=str)
     atomic_write(out / f"{name}.json", lambda p: p.write_text(text + "\n"))
     return target

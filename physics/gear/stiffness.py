@@ -41,7 +41,7 @@ from scipy.integrate import cumulative_simpson
 
 from physics.gear.geometry import MeshGeometry, mesh_geometry
 from physics.gear.tooth import ToothForm, generate_tooth
-from physics.params import GearPair, Material
+from physics.params import GearPair, Material, OutOfScope
 
 # Sainsot, Velex & Duverger (2004), Table 1: X*(h_f, theta_f) = A/theta_f^2 + B h_f^2
 # + C h_f/theta_f + D/theta_f + E h_f + F, for L*, M*, P*, Q*.
@@ -103,7 +103,7 @@ def _cumulative(form: ToothForm, cut: np.ndarray, width: float) -> _Cumulative:
     w = x_drive + form.x
     if np.any(x_drive <= 0):
         worst = int(np.argmin(x_drive))
-        raise ValueError(
+        raise OutOfScope(
             f"wear of {cut[worst] * 1e6:.1f} um at radius {form.radius[worst] * 1e3:.3f} mm "
             f"reaches the tooth centre line (half-thickness {form.x[worst] * 1e6:.1f} um there): "
             "the tooth would be worn through; the wear model is outside its scope"

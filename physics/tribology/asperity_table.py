@@ -86,7 +86,7 @@ import numpy as np
 from joblib import Parallel, delayed
 from scipy.interpolate import RegularGridInterpolator
 
-from physics.params import Material, Scenario
+from physics.params import Material, OutOfScope, Scenario
 from physics.tribology import mixed_ehl
 
 #: the shipped table (package data of physics.tribology)
@@ -263,7 +263,7 @@ class MixedEHLTable:
             bad = (v < g[0] * (1 - 1e-9)) | (v > g[-1] * (1 + 1e-9)) | ~np.isfinite(v)
             if np.any(bad):
                 x = v[bad].flat[0]
-                raise ValueError(
+                raise OutOfScope(
                     f"mixed-EHL table: {name} = {x:.4g} lies outside the solver table's range "
                     f"[{g[0]:.4g}, {g[-1]:.4g}] (set by {hints[name]}); use "
                     "tribology.asperity_model=regression, or build a wider table with "

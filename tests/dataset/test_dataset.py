@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 
@@ -22,7 +23,7 @@ from physics.dataset.generation import (
     unit_scenario,
     units,
 )
-from physics.params import Dynamics, Scenario, WearSolver, case_values
+from physics.params import Dynamics, Scenario, Tribology, WearSolver, case_values
 from physics.signals.measurement import add_noise, housing_acceleration
 
 BASE = Scenario(solver=WearSolver(n_points=51),
@@ -162,3 +163,20 @@ def test_bad_input_is_refused_before_work(tmp_path, override, message):
 def test_spec_rejects_more_chunks_than_units():
     with pytest.raises(ValueError, match="chunks = 9"):
         DatasetSpec(cases=(3,), replicates=2, chunks=9)
+
+
+def test_a_gearbox_worn_through_is_recorded_not_a_row(tmp_path, caplog):
+    # a wear coefficient 1e4 times the calibrated one wears the teeth through within the life
+    # of every trajectory: each is listed in the sidecar with its reason, none is a row
+    worn = dataclasses.replace(BASE, tribology=Tribology(regime="dry", dry_wear_coeff=2e-4),
+                               solver=WearSolver(n_points=51, update_um=50.0))
+    spec = spec_from_config({**SMALL, "chunks": 2})
+    with caplog.at_level("WARNING"):
+        path = build_dataset(plan_dataset(worn, spec, tmp_path, progress=False))
+    side = json.loads(path.with_suffix(".json").read_text())
+    assert len(pd.read_parquet(path)) == 0 and side["rows"] == 0
+    assert sorted((u["case"], u["replicate"]) for u in side["left_scope"]) == [
+        (c, r) for c in SMALL["cases"] for r in range(SMALL["replicates"])]
+    assert all("worn through" in u["reason"] or "table" in u["reason"]
+               for u in side["left_scope"])
+    assert "4 of 4 trajectories left the model's scope" in caplog.text
