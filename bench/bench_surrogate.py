@@ -1,11 +1,12 @@
 """CPU inference of the wear surrogate: ``python bench/bench_surrogate.py``.
 
-Prints the batch throughput [rows/s] of the default network (width 16, depth 2, 5 members, 16
-inputs: both sensors and the operating point) on 1e6 rows, its single-row latency, the same for
-the public ``Surrogate.predict`` (with the schema checks), and the analytic empirical-inverse
-estimator measured in the same run as the reference (issue target: >= 1e6 rows/s and >= 100
-times the estimator). Timing does not depend on the weights' values, so the network is built
-with its initial weights; the schema is fitted to random rows in the training ranges.
+Prints the batch throughput [rows/s] of the default network (width 16, depth 2, 5 members, 9
+inputs: the invariant features of both sensors and the operating point) on 1e6 rows, its
+single-row latency, the same for the public ``Surrogate.predict`` (with the schema checks),
+and the analytic empirical-inverse estimator measured in the same run as the reference (issue
+target: >= 1e6 rows/s and >= 100 times the estimator). Timing does not depend on the
+weights' values, so the network is built with its initial weights; the schema is fitted to
+random rows in the training ranges.
 """
 
 from __future__ import annotations

@@ -189,8 +189,9 @@ def run(out: Path, root: Path, max_epochs: int | None = None) -> pd.DataFrame:
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m surrogate.benchmark",
                                      description=__doc__.split("\n\n")[0],
-                                     epilog="Takes about 6 minutes on 2 cores (5 trainings; the "
-                                            "shifted dataset is generated once).")
+                                     epilog="Takes about 15 minutes on 2 cores the first time "
+                                            "(the case-3, all-case and shifted datasets are "
+                                            "generated once into data/; 5 trainings).")
     parser.add_argument("--out", type=Path, default=None,
                         help="output folder (default: logs/benchmark/<time>)")
     parser.add_argument("--max-epochs", type=int, default=None,
