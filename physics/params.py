@@ -218,7 +218,11 @@ class Tribology:
     friction coefficient f_c of 2.5, not stated by the thesis: 0.1, the middle of the 0.05-0.15
     of boundary-lubricated steel on steel (Stachowiak & Batchelor, Engineering Tribology, 4th
     ed., ch. 8). ``regime = "dry"`` selects the classical Archard law on the whole Hertz
-    pressure with ``dry_wear_coeff`` (2.7.5, Table 5).
+    pressure with ``dry_wear_coeff`` (2.7.5, Table 5). ``boundary_share`` b blends the two in
+    the lubricated regime, ``(1 - b)`` lubricated law ``+ b`` dry law: the share of running time
+    under boundary lubrication (starts and stops, starved supply, oil-temperature peaks), in
+    which the film carries nothing. The thesis uses one law or the other; a real gearbox lies
+    between, by an amount nobody measures, so the dataset draws b (``data.nuisance``).
 
     ``asperity_model`` chooses where the lubricated (mixed) law takes the film and the share of
     the load carried by asperities: ``"solver"`` (default), the numerical mixed-EHL line-contact
@@ -248,6 +252,10 @@ class Tribology:
     dry_wear_coeff: float = bounded(2e-8, 0.0, 1.0)
     dry_friction_coeff: float = bounded(0.1, 0.0, 1.0)
     regime: str = choice("mixed", "mixed", "dry")
+    boundary_share: float = bounded(
+        0.0, 0.0, 1.0, "share of running time under boundary lubrication, 0 <= b < 1 (b = 1: "
+        "tribology.regime=dry)",
+        closed=True)
     asperity_model: str = choice("solver", "solver", "regression")
 
     def __post_init__(self) -> None:

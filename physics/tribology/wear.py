@@ -12,8 +12,10 @@ numerical mixed-EHL solver by default, or the Masjedi-Khonsari regression: ``tri
 asperity_model``, see :mod:`physics.tribology.contact_state`) and ``psi`` the oil-film
 deficiency coefficient; ``k`` is ``tribology.wear_coeff`` (calibrated, see
 :class:`physics.params.Tribology`). The dry mode (thesis 2.7.5) uses ``L_a = psi = 1`` and the
-dry coefficient. Wear is integrated in cycle blocks: each block is as long as it can be without any
-point of either flank wearing more than ``solver.update_um``, after which the profile (radii of
+dry coefficient; ``tribology.boundary_share`` b blends the two laws, ``(1 - b)`` lubricated
+``+ b`` dry, for a gearbox that runs part of its time under boundary lubrication. Wear is
+integrated in cycle blocks: each block is as long as it can be without any point of either
+flank wearing more than ``solver.update_um``, after which the profile (radii of
 curvature ``R_new = R_old - h_w`` and the wear gap of the load sharing) and every contact quantity
 are recomputed (thesis 2.6; Flodin & Andersson, Wear 207 (1997) 16-23).
 
@@ -98,6 +100,9 @@ def wear_rate(
     else:
         k, psi = tri.wear_coeff, film_deficiency(state.v_s, state.temperature, scn.lubricant)
         share = state.asperity_ratio * psi
+        if tri.boundary_share:  # time under boundary lubrication wears by the dry law
+            b = tri.boundary_share
+            k, share = 1.0, (1 - b) * tri.wear_coeff * share + b * tri.dry_wear_coeff
     base = k * share * state.p_mean / scn.material.hardness
     return WearRate(base * L1, base * L2 * scn.gear.z1 / scn.gear.z2, load, psi, state)
 

@@ -77,13 +77,14 @@ def test_draws_stay_within_their_documented_ranges(single):
 
 
 def test_a_trajectorys_draws_reach_its_physics():
-    spec = spec_from_config({**SMALL, "chunks": 1})
+    spec = spec_from_config({**SMALL, "chunks": 1, "nuisance": {"boundary_share": [0.2, 0.8]}})
     d = unit_draw(spec, 3, 1)
     scn = unit_scenario(BASE, spec, 3, 1)
     assert scn.dynamics.damping_ratio == d["damping_ratio"]
     assert scn.dynamics.housing_mass_kg == d["housing_mass_kg"]
     assert scn.tribology.dry_wear_coeff == pytest.approx(
         BASE.tribology.dry_wear_coeff * d["wear_coeff_factor"])
+    assert 0.2 <= scn.tribology.boundary_share == d["boundary_share"] <= 0.8
     assert scn.operating.n1_rpm == pytest.approx(case_values(3)["n1_rpm"] * d["speed_factor"])
 
 

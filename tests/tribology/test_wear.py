@@ -145,6 +145,29 @@ def test_dry_wear_above_mixed(baseline):
     assert dry.mean_depth() > 1000 * thesis_k.mean_depth()
 
 
+@settings(max_examples=8, deadline=None)
+@given(b=st.floats(0.05, 0.95))
+def test_boundary_share_blends_the_two_laws(baseline, b):
+    """The unworn profile's wear rate under boundary share b is (1 - b) times the lubricated
+    law's plus b times the dry law's at every point (the contact state of the lubricated
+    regime; the dry law needs only the Hertz pressure and sliding distance, the same in both)."""
+    first = {k: simulate_wear(_with(baseline, "tribology", **kw), 1.0).first_rate.pinion
+             for k, kw in (("mixed", {}), ("dry", {"regime": "dry"}),
+                           ("blend", {"boundary_share": b}))}
+    np.testing.assert_allclose(first["blend"], (1 - b) * first["mixed"] + b * first["dry"],
+                               rtol=1e-9, atol=1e-30)
+
+
+def test_boundary_share_spreads_wear_over_the_dedendum(baseline):
+    """More running time under boundary lubrication moves the worn profile from the lubricated
+    law's root peak towards the dry law's wear over the whole dedendum."""
+    ratio = []
+    for b in (0.0, 0.5, 0.9):
+        w = simulate_wear(_with(baseline, "tribology", boundary_share=b), CYCLES)
+        ratio.append(w.pinion.max() / w.mean_depth())
+    assert ratio[0] > ratio[1] > ratio[2]
+
+
 def test_larger_centre_distance_less_wear(baseline):
     res = [simulate_wear(_with(baseline, "gear", center_distance_mm=a), CYCLES)
            for a in (44.955, 45.0, 45.045)]
