@@ -10,7 +10,12 @@ housing acceleration only) and ``loco2`` / ``loco5`` (all cases but one). Test s
   nuisance range (:func:`shifted_ranges`): a gearbox inside the ranges, away from most training
   trajectories;
 - ``independent_simulator``: features of records of the independent spur-pair simulator
-  (:mod:`physics.loop.independent_simulator`, another model form) at 2000/300 and 1800/290.
+  (:mod:`physics.loop.independent_simulator`, another model form) at 2000/300 and 1800/290;
+- ``independent_fleet_heldout``: gearboxes of a fleet of the independent simulator
+  (:func:`independent_fleet`) that neither network saw, scored for the physics-trained network
+  (``case3``, ``all``) and for the same network fine-tuned on the fleet's other labelled
+  gearboxes (``case3_finetuned``, ``all_finetuned``): what a user with a few labelled records
+  of his own gearbox type gets (README, training on your own data).
 
 The estimator (thesis 4.4: cubics of DTE peak-to-peak and kurtosis in cycles and the empirical
 wear law, :class:`physics.estimators.empirical_inverse.EmpiricalInverse`) is fitted on the same
@@ -24,6 +29,7 @@ training trajectories as the network. Columns: RMSE [mm], R2, mean and maximum r
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import logging
 import time
 from datetime import datetime
@@ -37,7 +43,7 @@ from hydra.utils import instantiate
 from physics.dataset.generation import NuisanceRanges
 from physics.estimators.empirical_inverse import EmpiricalInverse, wear_errors
 from physics.files import atomic_write, pyplot
-from physics.loop.independent_simulator import simulate_record
+from physics.loop.independent_simulator import IndependentPair, simulate_record
 from physics.signals.features import features
 from surrogate import settings
 from surrogate.data import load_dataset
@@ -111,6 +117,12 @@ MODELS = {
 #: the independent simulator's operating points and wear states (loop issue)
 INDEPENDENT_POINTS = ((2000.0, 300.0), (1800.0, 290.0))
 INDEPENDENT_WEAR_MM = (0.0, 0.003, 0.006, 0.009, 0.012, 0.015)
+#: the fleet of independent gearboxes: these fields of ``IndependentPair`` times U(1 -+ spread)
+FLEET_FIELDS = ("runout1_um", "mesh_damping_ratio", "single_stiffness_N_mm_um",
+                "housing_mass_kg", "half_backlash_um")
+FLEET_SPREAD = 0.25
+#: fleet gearboxes: labelled for fine-tuning, validating (the interval) and held out
+FLEET_SPLIT = {"train": 4, "val": 2, "test": 4}
 
 
 def shifted_ranges(share: float = 0.4) -> dict:
@@ -124,15 +136,16 @@ def shifted_ranges(share: float = 0.4) -> dict:
     return out
 
 
-def independent_rows(seed: int = 0) -> pd.DataFrame:
+def independent_rows(seed: int = 0, pair: IndependentPair | None = None) -> pd.DataFrame:
     """Feature rows of the independent spur-pair simulator (a model form other than ours):
     DTE and housing acceleration records at two operating points and six wear depths."""
     rows = []
     for k, (n1, torque) in enumerate(INDEPENDENT_POINTS):
         for w, wear in enumerate(INDEPENDENT_WEAR_MM):
             rng = np.random.default_rng([seed, k, w])
-            rec = {q: simulate_record(n1_rpm=n1, torque_Nm=torque, wear_mm=wear, quantity=q,
-                                      rng=rng)[None] for q in ("dte_m", "accel_m_s2")}
+            rec = {q: simulate_record(pair, n1_rpm=n1, torque_Nm=torque, wear_mm=wear,
+                                      quantity=q, rng=rng)[None]
+                   for q in ("dte_m", "accel_m_s2")}
             f_dte, f_acc = features(rec["dte_m"]), features(rec["accel_m_s2"])
             rows.append({"case": 3 if (n1, torque) == (2000.0, 300.0) else 1, "cycles": np.nan,
                          "n1_rpm": n1, "torque_Nm": torque, TARGET: wear,
@@ -141,12 +154,46 @@ def independent_rows(seed: int = 0) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def independent_fleet(gearboxes: int, seed: int = 1) -> pd.DataFrame:
+    """Labelled rows of ``gearboxes`` gearboxes of the independent simulator (column
+    ``gearbox``), each with the fields of :data:`FLEET_FIELDS` drawn within +-25 % of the
+    simulator's defaults: a user's labelled records of his own gearbox type."""
+    base, frames = IndependentPair(), []
+    for g in range(gearboxes):
+        rng = np.random.default_rng([seed, g])
+        pair = dataclasses.replace(base, **{
+            f: getattr(base, f) * (1 + FLEET_SPREAD * rng.uniform(-1, 1)) for f in FLEET_FIELDS})
+        frames.append(independent_rows(seed=1000 * seed + g, pair=pair).assign(gearbox=g))
+    return pd.concat(frames, ignore_index=True)
+
+
+def finetune(root: Path, out: Path, name: str, fleet: pd.DataFrame, extra: list[str]
+             ) -> tuple[Surrogate, pd.DataFrame]:
+    """Fine-tune model ``name`` on the fleet's labelled gearboxes the way a user would
+    (``data.table``, ``init_from``); returns the network and the fleet's held-out rows."""
+    table = out / f"fleet_{name}.csv"
+    atomic_write(table, lambda p: fleet.to_csv(p, index=False))
+    cfg = train_config(root, out / "models" / f"{name}_finetuned", *MODELS[name], *extra,
+                       f"data.table={table}", "data.group=gearbox",
+                       f"data.val_replicates={FLEET_SPLIT['val']}",
+                       f"data.test_replicates={FLEET_SPLIT['test']}",
+                       f"init_from={out / 'models' / name / 'wear_surrogate.pt'}",
+                       "model.lr=0.0003")
+    log.info("model %s: fine-tuning on %d labelled gearboxes", name, FLEET_SPLIT["train"])
+    train(cfg)
+    dm = instantiate(cfg.data)
+    dm.setup()
+    return Surrogate.load(out / "models" / f"{name}_finetuned" / "wear_surrogate.pt"), \
+        dm.frames["test"]
+
+
 def run(out: Path, root: Path, max_epochs: int | None = None) -> pd.DataFrame:
     """Train the models of :data:`MODELS` and score them and the estimator on the test sets."""
     extra = [f"trainer.max_epochs={max_epochs}"] if max_epochs else []
     shifted = load_dataset(root / "data" / "dataset_shifted.parquet",
                            {"seed": 1, "replicates": 8, "nuisance": shifted_ranges()})
     foreign = independent_rows()
+    fleet = independent_fleet(sum(FLEET_SPLIT.values()))
     rows, plots = [], {}
     for name, overrides in MODELS.items():
         cfg = train_config(root, out / "models" / name, *overrides, *extra)
@@ -168,10 +215,16 @@ def run(out: Path, root: Path, max_epochs: int | None = None) -> pd.DataFrame:
                                                   speed=name == "case3" and
                                                   set_name == "heldout_trajectories")
             rows += r
+        if name in ("case3", "all"):
+            tuned, held = finetune(root, out, name, fleet[fleet.case.isin(cases)], extra)
+            for label, net in ((name, surrogate), (f"{name}_finetuned", tuned)):
+                r, plots[(label, "independent_fleet_heldout")] = evaluate(
+                    f"{label}/independent_fleet_heldout", net, est, held, speed=False)
+                rows += r
     table = pd.DataFrame(rows)
     atomic_write(out / "benchmark.csv", lambda p: table.to_csv(p, index=False))
     plt = pyplot()
-    fig, axes = plt.subplots(2, 4, figsize=(18, 9))
+    fig, axes = plt.subplots(3, 5, figsize=(22, 13))
     for ax, key in zip(axes.flat, plots, strict=False):
         d = plots[key]
         parity_figure(d["true"], d["estimator"], None, "/".join(key), TARGET, ax,

@@ -270,3 +270,16 @@ def test_two_job_joblib_multirun_and_its_summary(tmp_path, dataset):
     assert len(table) == 2 and set(table.status) == {"ok"}
     assert {"overrides", "val/mre_pct"} <= set(table.columns)
     assert (sweep / "multirun.yaml").is_file()
+
+
+def test_the_benchmarks_fleet_is_labelled_gearboxes_that_differ():
+    """The fleet used for fine-tuning in the benchmark: every gearbox its own drawn pair (so
+    their DTE differ at equal wear), six wear labels per operating point, a group column."""
+    from surrogate.benchmark import INDEPENDENT_WEAR_MM, independent_fleet
+
+    fleet = independent_fleet(2)
+    assert len(fleet) == 2 * 2 * len(INDEPENDENT_WEAR_MM)
+    assert fleet.groupby("gearbox").root_wear_mm.apply(sorted).map(tuple).nunique() == 1
+    new = fleet[fleet.root_wear_mm == 0].groupby("gearbox").dte_peak_to_peak.mean()
+    assert abs(new[0] / new[1] - 1) > 0.01
+    assert np.isfinite(fleet.drop(columns="cycles").to_numpy(float)).all()
