@@ -144,6 +144,8 @@ CASES: dict[str, Case] = {
     "python -m physics.loop --help": Case(),
     "python bench/bench_loop.py": Case(("--seeds", "1", "--null-seeds", "1", "--records", "6"),
                                        slow=True),
+    "python bench/bench_loop.py --generator independent": Case(
+        ("--seeds", "1", "--null-seeds", "1"), slow=True),
 }
 SNIPPETS: dict[str, Case] = {
     's = Surrogate.load("logs/train/runs/<run>/wear_surrogate.pt")': Case(before=(TRAIN_CASE3,)),
