@@ -222,7 +222,8 @@ class Tribology:
     the lubricated regime, ``(1 - b)`` lubricated law ``+ b`` dry law: the share of running time
     under boundary lubrication (starts and stops, starved supply, oil-temperature peaks), in
     which the film carries nothing. The thesis uses one law or the other; a real gearbox lies
-    between, by an amount nobody measures, so the dataset draws b (``data.nuisance``).
+    between, by an amount nobody measures; the dataset can draw b per trajectory
+    (``data.nuisance.boundary_share``, off by default).
 
     ``asperity_model`` chooses where the lubricated (mixed) law takes the film and the share of
     the load carried by asperities: ``"solver"`` (default), the numerical mixed-EHL line-contact
@@ -254,8 +255,7 @@ class Tribology:
     regime: str = choice("mixed", "mixed", "dry")
     boundary_share: float = bounded(
         0.0, 0.0, 1.0, "share of running time under boundary lubrication, 0 <= b < 1 (b = 1: "
-        "tribology.regime=dry)",
-        closed=True)
+        "tribology.regime=dry)", closed=True)
     asperity_model: str = choice("solver", "solver", "regression")
 
     def __post_init__(self) -> None:
