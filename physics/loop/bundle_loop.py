@@ -13,12 +13,19 @@ its run folder.
    split into train and test by record within each group (the manifest's ``split`` column
    where given, else seeded), never by windows of one record.
 2. **Calibration** of the declared nuisance parameters on the train records of all groups at
-   once: the physical ones (mesh damping ratio, pinion run-out and profile error amplitudes)
-   are one value for the whole bundle; the measurement chain's (the housing's effective mass
-   ``m_h``) belongs to the acceleration records only; the groups' standardised residuals are
-   concatenated into one cost. A parameter that does not move the residuals (the pinion
-   run-out on the line of action: a shaft-rate error is dynamically inert in the torsional
-   model) is held at its declared value and reported as not identifiable. The search
+   once, before any effect is considered: the physical ones (mesh damping ratio, pinion
+   run-out and profile error amplitudes, and the model's own form uncertainty,
+   :data:`MODEL_FORM`: mesh-stiffness level, double/single stiffness ratio, effective mass,
+   backlash and a once-per-revolution mesh modulation with its phase, :func:`with_model_form`
+   and :func:`with_modulation`) are one value for the whole bundle; the measurement chain's
+   (the housing's effective mass ``m_h``) belongs to the acceleration records only; the
+   groups' standardised residuals are concatenated into one cost. A parameter that does not
+   move the residuals (the pinion run-out on the line of action: a shaft-rate error is
+   dynamically inert in the torsional model; the modulation's phase, which no amplitude of
+   the signature sees unless another once-per-revolution feature is in the model; the
+   backlash in acceleration records whose flanks never part) is held at its declared value
+   and reported as not identifiable. Every candidate effect is then fitted jointly with the
+   free parameters, model form included. The search
    (:func:`search`): a scrambled Sobol sample around the declared values, ``m_h`` levelled at
    each point, the best refined by bounded least squares on the standardised signature
    residuals. Measurement noise is not fitted: its level is read off each record's spectral
@@ -102,11 +109,24 @@ from physics.signals.order_analysis import (
 
 log = logging.getLogger(__name__)
 
-#: declared nuisance parameters: name, bounds, log-scaled
+#: declared nuisance parameters of the scenario: name, bounds, log-scaled
 NUISANCE = {"damping_ratio": (0.01, 0.3, True), "eccentricity1_um": (0.2, 60.0, True),
             "profile_error_um": (0.1, 30.0, True), "housing_mass_kg": (0.01, 1e5, True)}
-#: the nuisance parameters the dynamics see (``m_h`` acts on the measurement chain)
-DYNAMIC_NUISANCE = ("damping_ratio", "eccentricity1_um", "profile_error_um")
+#: the declared model's own form uncertainty (:func:`with_model_form`): name, bounds,
+#: log-scaled, the neutral value (None: the scenario's). Calibrated with the nuisance above,
+#: before any effect is considered; at the neutral values the model is the declared one.
+MODEL_FORM = {"stiffness_factor": (0.5, 2.0, True, 1.0),
+              "resonance_factor": (0.5, 2.0, True, 1.0),
+              "double_contact_factor": (0.6, 1.6, True, 1.0),
+              "half_backlash_um": (0.5, 200.0, True, None),
+              "mesh_modulation": (0.0, 0.2, False, 0.0),
+              "modulation_phase_rad": (0.0, 2 * math.pi, False, 0.0)}
+#: bounds of every calibrated parameter of the declared model
+BOUNDS = NUISANCE | {n: b[:3] for n, b in MODEL_FORM.items()}
+#: the nuisance parameters the dynamics see (``m_h`` acts on the measurement chain); the model
+#: form's only with ``loop.model_form``
+SCENARIO_DYNAMIC = ("damping_ratio", "eccentricity1_um", "profile_error_um")
+DYNAMIC_NUISANCE = (*SCENARIO_DYNAMIC, *MODEL_FORM)
 #: signature entries that do not scale with the record's gain
 SCALE_FREE = ("kurtosis", "crest", "tsa_kurtosis")
 #: RMS change of the standardised train residuals below which a parameter is not identifiable
@@ -114,6 +134,9 @@ MIN_SENSITIVITY = 0.02
 #: half-width of the nuisance's search around its declared values (unit coordinates: a factor
 #: of 2.3 in damping ratio, of 4 in profile error)
 EXPLORE_SPAN = 0.25
+#: the calibration explores this many times ``loop.explore`` points (its model form over the
+#: whole range: the resonance's residual surface has a basin per mesh harmonic it can sit on)
+CALIBRATION_EXPLORE = 4
 #: least-squares evaluations that polish a screened candidate's best grid point
 SCREEN_NFEV = 6
 #: simulations kept by :func:`responses`
@@ -121,8 +144,20 @@ CACHE_SIZE = 256
 
 
 def declared_nuisance(scn: Scenario) -> dict[str, float]:
-    """The nuisance parameters' configured values (the calibration's starting point)."""
+    """The nuisance parameters' configured values (the calibration's starting point, with
+    :func:`declared_model_form`)."""
     return {n: float(getattr(scn.dynamics, n)) for n in NUISANCE}
+
+
+def declared_model_form(scn: Scenario) -> dict[str, float]:
+    """The model-form parameters at their neutral values (the declared model itself)."""
+    return {n: float(getattr(scn.dynamics, n) if b[3] is None else b[3])
+            for n, b in MODEL_FORM.items()}
+
+
+def completed(nuisance: dict, scn: Scenario) -> dict:
+    """``nuisance`` with the model-form parameters it lacks at their neutral values."""
+    return declared_model_form(scn) | nuisance
 
 
 @dataclass(frozen=True)
@@ -153,9 +188,15 @@ class LoopSettings:
     false_add_rate: float = bounded(0.01, 0.0, 1.0, "share of bundles without an effect that "
                                     "may get one")
     candidates: tuple[str, ...] | None = None  # effects to try; None: the whole library
+    # calibrate the declared model's form uncertainty (:data:`MODEL_FORM`) with the nuisance;
+    # off by default: on the project's own bundles it absorbs part of a tip relief and lets the
+    # greedy second round add spurious effects (docs/measured-data.md)
+    model_form: bool = False
 
     def __post_init__(self):
         validate_fields(self, "loop")
+        if not isinstance(self.model_form, bool):
+            raise ValueError(f"loop.model_form = {self.model_form!r} must be true or false")
         e = self.explore
         if isinstance(e, bool) or not isinstance(e, int) or e < 0 or e & (e - 1):
             raise ValueError(f"loop.explore = {e!r} must be 0 or a power of 2 (a Sobol "
@@ -356,11 +397,99 @@ def shaft_rates(scn: Scenario) -> tuple[float, float]:
 
 
 def with_nuisance(m: PairModel, nuisance: dict, base_ratio: float) -> PairModel:
-    """The declared model with calibrated damping and error amplitudes."""
-    return dataclasses.replace(
+    """The declared model with calibrated damping and error amplitudes, and the model-form
+    parameters of :func:`with_model_form` (those ``nuisance`` lacks stay neutral). The mesh
+    modulation (:func:`with_modulation`) is not applied here: it goes after any effect."""
+    m = dataclasses.replace(
         m, damping=m.damping * nuisance["damping_ratio"] / base_ratio,
         long_error=nuisance["eccentricity1_um"] * 1e-6 * math.sin(m.geometry.alpha_w),
         short_error=nuisance["profile_error_um"] * 1e-6)
+    return with_model_form(m, nuisance)
+
+
+def with_model_form(m: PairModel, v: dict) -> PairModel:
+    """The declared model's form uncertainty: level, double/single ratio and inertia of the
+    mesh, and the backlash (missing names are neutral; at the neutral values ``m`` itself).
+
+    - ``stiffness_factor`` ``s_k`` multiplies both pairs' stiffness. The declared stiffness
+      is the potential-energy method's (:mod:`physics.stiffness`); ISO 6336-1 (2006, cl. 9)
+      gives ``c' = 14 N/(mm um)`` times correction factors for the same pair, finite-element
+      and measured values scatter by some 10-30 % about both, and a real mount puts shaft
+      and bearing compliance in series with the mesh (hence the wide range, 0.5-2).
+    - ``double_contact_factor`` ``r`` multiplies the pairs' stiffness in the double-contact
+      zone (where pair B is on the path) and so the double/single stiffness ratio: ISO
+      6336-1's lumped mean ``c_gamma = c' (0.75 eps_alpha + 0.25)`` implies one ratio, the
+      potential-energy method another, and a loaded tooth touches early (extended contact),
+      which lengthens the double zone's effect; the ratio sets the mesh harmonics' level.
+    - ``resonance_factor`` ``f_r`` multiplies the mesh resonance ``sqrt(k_mean / m_e)``
+      (thesis 3.3) through the inertias: both are scaled by ``s_m = (k_mean' / k_mean) /
+      f_r^2`` (``k_mean'`` the mean stiffness after the two factors above), so ``m_e`` by
+      ``s_m``. The declared inertias are the gear blanks alone, while shafts, hubs and
+      couplings turn with them, and shaft and bearing compliance couple the torsional mode
+      with lateral ones: the mesh resonance is the least certain frequency of the model.
+      It is a factor on the resonance rather than on the mass so that the stiffness level
+      (quasi-static amplitudes) and the resonance (dynamic amplification) are near-orthogonal
+      directions for the fit.
+    - the damping ``c`` is rescaled by ``sqrt(k_mean' m_e' / (k_mean m_e))`` so that the
+      calibrated damping ratio keeps its meaning, ``c = 2 zeta sqrt(k_mean m_e)``.
+    - ``half_backlash_um`` replaces the declared half backlash: it opens the dead zone where
+      flanks separate and, in the declared DTE (measured from the centre of the backlash),
+      sets the DTE's mean; measured DTE is referred to flank contact or to an arbitrary
+      encoder zero, so the DTE's datum is as uncertain as the backlash itself.
+    """
+    s_k = float(v.get("stiffness_factor", 1.0))
+    f_r = float(v.get("resonance_factor", 1.0))
+    r = float(v.get("double_contact_factor", 1.0))
+    backlash = v.get("half_backlash_um")
+    if s_k == 1.0 and f_r == 1.0 and r == 1.0 and backlash is None:
+        return m
+    double = m.k_b > 0
+    k_a = m.k_a * np.where(double, r, 1.0) * s_k
+    k_b = m.k_b * r * s_k
+    stiffer = float(np.mean(k_a + k_b)) / float(np.mean(m.k_a + m.k_b))
+    s_m = stiffer / f_r**2
+    j1, j2 = m.inertias
+    return dataclasses.replace(
+        m, k_a=k_a, k_b=k_b, mass=m.mass * s_m, inertias=(j1 * s_m, j2 * s_m),
+        damping=m.damping * math.sqrt(stiffer * s_m),
+        half_backlash=m.half_backlash if backlash is None else float(backlash) * 1e-6)
+
+
+def with_modulation(m: PairModel, v: dict) -> PairModel:
+    """A once-per-pinion-revolution modulation of the mesh stiffness, ``k_i(t) (1 + mu
+    cos(w1 t + phi))`` (``mesh_modulation`` ``mu``, ``modulation_phase_rad`` ``phi``; ``mu`` = 0
+    or missing: ``m`` itself).
+
+    Radial run-out of the pinion (ISO 1328-2:2020, ``F_r``) and its wobble change the centre
+    distance and the load distribution across the face once per revolution, and with them
+    the length of the contact lines that carry the load, so the mesh stiffness; the declared
+    model holds the run-out only as a line-of-action error (thesis 3.3), which is inert in
+    the torsional model. Lumped models of such errors modulate the mesh once per revolution
+    in amplitude (Inalpolat & Kahraman, J. Sound Vib. 329 (2010) 371; the sidebands ``k f_m
+    +- f_1`` of Randall, J. Mech. Des. 104 (1982) 259). The depth is not predictable from a
+    tolerance class (the face-load factor's variation is unknown), so it is calibrated. The
+    tables are tiled over one pinion revolution (``periods`` = ``z1``; a model that already
+    spans one, with a tooth defect, keeps its tables) and multiplied cell by cell, pairs A
+    and B by the same instantaneous factor.
+    """
+    mu = float(v.get("mesh_modulation", 0.0))
+    if mu == 0.0:
+        return m
+    z1 = round(m.omega_mesh / m.omega1)
+    if m.periods not in (1, z1):
+        raise ValueError(f"the mesh modulation needs tables of one mesh period or of one pinion "
+                         f"revolution ({z1} periods), not {m.periods}")
+    reps = z1 // m.periods
+    tiled = {k: np.tile(getattr(m, k), reps) for k in ("k_a", "k_b", "g_a", "g_b")}
+    tiled |= {k: np.tile(getattr(m, k), reps) for k in ("lam_a", "lam_b")
+              if getattr(m, k) is not None}
+    n = len(tiled["k_a"])
+    # table cell c is reached at the pinion angle 2 pi c / n (the tables start at t = 0)
+    factor = 1.0 + mu * np.cos(2 * np.pi * np.arange(n) / n
+                               + float(v.get("modulation_phase_rad", 0.0)))
+    tiled["k_a"] = tiled["k_a"] * factor
+    tiled["k_b"] = tiled["k_b"] * factor
+    return dataclasses.replace(m, periods=z1, **tiled)
 
 
 def responses(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | None,
@@ -374,7 +503,7 @@ def responses(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | None,
     dynamic = eff is not None and eff.model is not None
     key = None
     if models is None:
-        key = (tuple(int(i) for i in idx), tuple(nuisance[n] for n in DYNAMIC_NUISANCE),
+        key = (tuple(int(i) for i in idx), tuple(nuisance.get(n) for n in DYNAMIC_NUISANCE),
                (eff.name, tuple(sorted(values.items()))) if dynamic else None)
         if key in rec.cache:
             return rec.cache[key]
@@ -384,6 +513,7 @@ def responses(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | None,
           for m in (models if models is not None else [rec.models[i] for i in idx])]
     if dynamic:
         ms = [eff.model(m, values) for m in ms]
+    ms = [with_modulation(m, nuisance) for m in ms]
     out: list[np.ndarray] = [np.empty(0)] * len(idx)
     fs_all = man.fs_hz.to_numpy(float)[idx]
     for fs in np.unique(fs_all):
@@ -505,11 +635,12 @@ def identifiable(rec: Records, nuisance: dict, names: tuple[str, ...]) -> list[s
     """Those of ``names`` that change the train residuals: each is moved by a tenth of its
     (log) range; one that moves the standardised residuals by less than ``MIN_SENSITIVITY``
     RMS is not identifiable from these records and stays at its declared value."""
+    nuisance = completed(nuisance, rec.scenarios[0])
     r0 = residuals(rec, rec.train, model_signals(rec, rec.train, nuisance, None, {}))
     out = []
     for n in names:
-        u = to_unit(nuisance[n], *NUISANCE[n])
-        moved = nuisance | {n: from_unit(u + (0.1 if u < 0.5 else -0.1), *NUISANCE[n])}
+        u = to_unit(nuisance[n], *BOUNDS[n])
+        moved = nuisance | {n: from_unit(u + (0.1 if u < 0.5 else -0.1), *BOUNDS[n])}
         r1 = residuals(rec, rec.train, model_signals(rec, rec.train, moved, None, {}))
         if rms(r1 - r0) >= MIN_SENSITIVITY:
             out.append(n)
@@ -518,8 +649,8 @@ def identifiable(rec: Records, nuisance: dict, names: tuple[str, ...]) -> list[s
 
 def split_fitted(fitted: dict) -> tuple[dict, dict]:
     """(effect values with option, nuisance) of a fitted parameter set."""
-    return ({k: v for k, v in fitted.items() if k not in NUISANCE},
-            {n: fitted[n] for n in NUISANCE})
+    return ({k: v for k, v in fitted.items() if k not in BOUNDS},
+            {n: fitted[n] for n in BOUNDS if n in fitted})
 
 
 def least_squares(rec: Records, eff: Effect | None, fixed: dict, start: dict,
@@ -585,14 +716,23 @@ def explore(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[
             ) -> Candidate:
     """The best of ``c`` and a scrambled Sobol sample (``settings.explore`` points) over the
     effect's whole range and the dynamic nuisance within ``EXPLORE_SPAN`` (unit coordinates)
-    of its declared values, ``m_h`` levelled at each. A missing effect drags the calibration
+    of its declared values (the model form: of ``c``'s; in the calibration, ``eff`` None,
+    ``CALIBRATION_EXPLORE`` times as many points and the model form over its whole range),
+    ``m_h`` levelled at each. A missing effect drags the calibration
     (to the bounds, at worst), and least squares from a single start stays in its basin; the
     declared values are the prior that does not depend on the fit."""
     params = eff.params if eff is not None else ()
     dyn = [n for n in free_nuisance if n in DYNAMIC_NUISANCE]
-    prior = declared_nuisance(rec.scenarios[0])
+    # the scenario's nuisance around its declared values; the model form over its whole
+    # range in the calibration (its neutral value is no prior worth holding to), around the
+    # calibration with an effect
+    prior = completed(c.nuisance, rec.scenarios[0]) | declared_nuisance(rec.scenarios[0])
+    span = {n: (0.5 if eff is None and n in MODEL_FORM else EXPLORE_SPAN) for n in dyn}
+    centres = {n: (0.5 if span[n] == 0.5 else to_unit(prior[n], *BOUNDS[n])) for n in dyn}
     dim = len(params) + len(dyn)
-    pts = (qmc.Sobol(dim, seed=rec.settings.seed).random(rec.settings.explore) if dim
+    wide = eff is None and rec.settings.model_form
+    n_points = rec.settings.explore * (CALIBRATION_EXPLORE if wide else 1)
+    pts = (qmc.Sobol(dim, seed=rec.settings.seed).random(n_points) if dim and n_points
            else np.empty((0, 0)))
     best = c
     for u in pts:
@@ -600,9 +740,8 @@ def explore(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[
                            for p, x in zip(params, u, strict=False)}
         nui = dict(c.nuisance)
         for n, x in zip(dyn, u[len(params):], strict=True):
-            centre = to_unit(prior[n], *NUISANCE[n])
-            nui[n] = from_unit(float(np.clip(centre + EXPLORE_SPAN * (2 * x - 1), 0, 1)),
-                               *NUISANCE[n])
+            nui[n] = from_unit(float(np.clip(centres[n] + span[n] * (2 * x - 1), 0, 1)),
+                               *BOUNDS[n])
         nui = with_level(rec, nui, eff, vals)
         cost = train_cost(rec, nui, eff, vals)
         if cost < best.train_rss:
@@ -618,11 +757,17 @@ def search(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[s
     candidate get the same search."""
     c = explore(rec, eff, c, free_nuisance)
     free = eff.bounds() if eff is not None else []
-    free += [(n, *NUISANCE[n]) for n in free_nuisance]
+    free += [(n, *BOUNDS[n]) for n in free_nuisance]
     fitted, rss = least_squares(rec, eff, c.option, c.values | c.nuisance, free,
                                 rec.settings.max_nfev)
     vals, nui = split_fitted(fitted)
     return dataclasses.replace(c, values=vals, nuisance=nui, train_rss=rss, refined=True)
+
+
+def screened(settings: LoopSettings) -> tuple[str, ...]:
+    """The dynamic parameters the calibration may free: the model form's with
+    ``loop.model_form`` only."""
+    return DYNAMIC_NUISANCE if settings.model_form else SCENARIO_DYNAMIC
 
 
 def calibrate(rec: Records, start: dict) -> tuple[dict, list[str]]:
@@ -630,8 +775,8 @@ def calibrate(rec: Records, start: dict) -> tuple[dict, list[str]]:
     values); returns the calibrated nuisance and the names of the free ones. ``m_h`` scales
     every acceleration amplitude and is always free for acceleration records; a dynamic
     parameter that is not identifiable stays at its declared value."""
-    start = with_level(rec, start, None, {})
-    free = identifiable(rec, start, DYNAMIC_NUISANCE)
+    start = with_level(rec, completed(start, rec.scenarios[0]), None, {})
+    free = identifiable(rec, start, screened(rec.settings))
     free += ["housing_mass_kg"] if accel_in(rec) else []
     c = Candidate("declared", {}, {}, start, train_cost(rec, start, None, {}), 0)
     return search(rec, None, c, free).nuisance, free
@@ -1003,7 +1148,7 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
             "error_after_db": rms(np.concatenate(residuals_db(rec, rec.test, after_test))),
             "error_before_with_discrepancy": rms(residuals(judged, rec.test, base_test)),
             "error_after_with_discrepancy": rms(residuals(judged, rec.test, after_test)),
-            "not_identifiable": [n for n in DYNAMIC_NUISANCE if n not in free_nuisance],
+            "not_identifiable": [n for n in screened(settings) if n not in free_nuisance],
             "train_records": [bundle.records[i] for i in rec.train],
             "test_records": [bundle.records[i] for i in rec.test],
             "groups": group_summary(judged, base_test, after_test),

@@ -9,13 +9,17 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from physics.dynamics.model import build_model
-from physics.loop.bundle import read_bundle
+from physics.dynamics.model import build_model, simulate
+from physics.gear.stiffness import MeshStiffness
+from physics.loop.bundle import read_bundle, write_bundle
 from physics.loop.bundle_loop import (
+    BOUNDS,
+    MODEL_FORM,
     NUISANCE,
     Group,
     LoopSettings,
     calibrate,
+    declared_model_form,
     declared_nuisance,
     discrepancy_allowance,
     discrepancy_sd,
@@ -30,12 +34,18 @@ from physics.loop.bundle_loop import (
     split_records,
     stacked,
     with_discrepancy,
+    with_model_form,
+    with_modulation,
+    with_nuisance,
+    worn_models,
 )
 from physics.loop.effects import EFFECTS
 from physics.loop.independent_simulator import make_independent_bundle
 from physics.loop.report import adopts, write_report
 from physics.loop.synthetic import make_bundle
 from physics.params import scenario_from_config
+from physics.signals.measurement import add_noise, declared_chain, sensed
+from physics.signals.order_analysis import line_amplitudes
 
 OPERATING_POINTS = ((2000.0, 300.0), (1800.0, 290.0))
 FAST = {"seed": 1, "explore": 4, "max_nfev": 3, "refine": 1}
@@ -83,7 +93,7 @@ def test_a_mixed_bundle_is_accepted_and_grouped(mixed):
 
 def test_one_calibration_shares_the_physical_parameters(mixed):
     rec, nuisance = mixed
-    assert set(nuisance) == set(NUISANCE)
+    assert set(nuisance) == set(BOUNDS) == set(NUISANCE) | set(MODEL_FORM)
     assert all(isinstance(v, float) for v in nuisance.values())  # one value each, all groups
     every = np.arange(len(rec.models))
     acc = rec.bundle.manifest.quantity.to_numpy() == "accel_m_s2"
@@ -235,3 +245,113 @@ def test_clean_mixed_independent_bundle_gets_no_effect(tmp_path, mixed, scn):
     write_report(report, tmp_path)
     text = (tmp_path / "report.md").read_text()
     assert all(label in text for label in groups)
+
+
+# --- the declared model's form uncertainty ---------------------------------------------------
+
+def _dte(models, scn, seconds=0.25):
+    dyn = dataclasses.replace(scn.dynamics, duration_s=seconds, transient_s=0.05, phase_bins=16)
+    return simulate(models, dyn).dte
+
+
+def test_model_form_at_its_neutral_values_is_the_declared_model(scn):
+    m = build_model(scn)
+    nui = declared_nuisance(scn)
+    plain = with_nuisance(m, nui, scn.dynamics.damping_ratio)
+    neutral = with_modulation(with_nuisance(m, nui | declared_model_form(scn),
+                                            scn.dynamics.damping_ratio),
+                              declared_model_form(scn))
+    assert with_modulation(plain, {}) is plain and with_model_form(plain, {}) is plain
+    for f in dataclasses.fields(plain):
+        a, b = getattr(plain, f.name), getattr(neutral, f.name)
+        assert np.array_equal(a, b) if isinstance(a, np.ndarray) else a == b, f.name
+    np.testing.assert_array_equal(_dte([plain], scn), _dte([neutral], scn))  # bit for bit
+
+
+def test_model_form_factors_move_stiffness_mass_and_keep_the_damping_ratio(scn):
+    m = build_model(scn)
+    out = with_model_form(m, {"stiffness_factor": 1.5, "resonance_factor": 0.8,
+                              "double_contact_factor": 1.2, "half_backlash_um": 10.0})
+    double = m.k_b > 0
+    np.testing.assert_allclose(out.k_a[~double], 1.5 * m.k_a[~double])  # single contact
+    np.testing.assert_allclose((out.k_a + out.k_b)[double], 1.8 * (m.k_a + m.k_b)[double])
+    # the mesh resonance sqrt(k_mean / m_e) moves by the resonance factor alone
+    assert np.sqrt(np.mean(out.k_a + out.k_b) / out.mass) == pytest.approx(
+        0.8 * np.sqrt(np.mean(m.k_a + m.k_b) / m.mass))
+    # m_e = J1 J2 / (J1 rb2^2 + J2 rb1^2) of the scaled inertias is the scaled mass
+    (j1, j2), g = out.inertias, m.geometry
+    assert j1 * j2 / (j1 * g.rb2**2 + j2 * g.rb1**2) == pytest.approx(out.mass)
+
+    def ratio(x):
+        return x.damping / (2 * np.sqrt(np.mean(x.k_a + x.k_b) * x.mass))
+
+    assert ratio(out) == pytest.approx(ratio(m))
+    assert out.half_backlash == pytest.approx(10e-6)
+    # the declared DTE is measured from the centre of the backlash: the datum moves its mean
+    base, moved = _dte([m, dataclasses.replace(m, half_backlash=10e-6)], scn)
+    assert np.mean(base) - np.mean(moved) == pytest.approx(m.half_backlash - 10e-6, rel=1e-3)
+
+
+def test_mesh_modulation_makes_pinion_sidebands_and_keeps_the_mean_stiffness(scn):
+    m = build_model(scn)
+    z1 = scn.gear.z1
+    mod = with_modulation(m, {"mesh_modulation": 0.05, "modulation_phase_rad": 1.0})
+    assert mod.periods == z1 and len(mod.k_a) == z1 * len(m.k_a)
+    assert np.mean(mod.k_a + mod.k_b) == pytest.approx(np.mean(m.k_a + m.k_b), rel=1e-9)
+    # a model that already spans a revolution (a tooth defect) keeps its tables' length
+    pit = EFFECTS["tooth_defect"].model(m, EFFECTS["tooth_defect"].defaults())
+    assert len(with_modulation(pit, {"mesh_modulation": 0.05}).k_a) == len(pit.k_a)
+    f1 = scn.operating.n1_rpm / 60
+    fm = z1 * f1
+    lines = np.array([fm - f1, fm, fm + f1])
+    fs = scn.dynamics.sample_rate_hz
+    shallow = with_modulation(m, {"mesh_modulation": 0.02})
+    plain, = _dte([m], scn)  # one-period tables: a batch of its own
+    low, high, shifted = _dte([shallow, with_modulation(m, {"mesh_modulation": 0.04}),
+                                      with_modulation(m, {"mesh_modulation": 0.04,
+                                                          "modulation_phase_rad": 2.0})], scn)
+    amp = {k: line_amplitudes(x, fs, lines) for k, x in
+           (("plain", plain), ("low", low), ("high", high), ("shifted", shifted))}
+    # once-per-revolution amplitude modulation: sidebands k f_m +- f_1 proportional to its
+    # depth, absent without it; the phase alone does not change the amplitudes
+    assert np.all(amp["plain"][[0, 2]] < 0.05 * amp["low"][[0, 2]])
+    np.testing.assert_allclose(amp["high"][[0, 2]] / amp["low"][[0, 2]], 2.0, rtol=0.1)
+    np.testing.assert_allclose(amp["shifted"], amp["high"], rtol=0.05)
+
+
+def _modulated_bundle(path, scn, seed: int, records: int = 6, duration_s: float = 0.75):
+    """Own-model DTE bundle whose pinion modulates the mesh once per revolution, with a
+    stiffer mesh and heavier inertias than declared (a gearbox the declared model does not
+    describe at its neutral form), no effect of the library."""
+    form = {"stiffness_factor": 1.25, "resonance_factor": 0.85, "double_contact_factor": 1.0,
+            "half_backlash_um": 30.0, "mesh_modulation": 0.06, "modulation_phase_rad": 0.7}
+    nuisance = declared_nuisance(scn) | form
+    cycles = np.linspace(0.0, 1.5e7, records)
+    by_cycles, root = worn_models(scn, MeshStiffness(scn.gear, scn.material), list(cycles))
+    models = [with_modulation(with_nuisance(by_cycles[float(c)], nuisance,
+                                            scn.dynamics.damping_ratio), nuisance)
+              for c in cycles]
+    dyn = dataclasses.replace(scn.dynamics, duration_s=duration_s, transient_s=0.1,
+                              phase_bins=16)
+    clean = declared_chain(sensed(simulate(models, dyn), "dte_m"), "dte_m", 1.0)
+    x = add_noise(clean, 30.0, np.random.default_rng(seed))
+    names = [f"r{k:02d}" for k in range(records)]
+    man = pd.DataFrame({"record": names, "quantity": "dte_m", "fs_hz": dyn.sample_rate_hz,
+                        "n1_rpm": scn.operating.n1_rpm, "torque_Nm": scn.operating.torque_Nm,
+                        "wear_mm": [root[float(c)] for c in cycles], "cycles": cycles,
+                        "split": ""})
+    return write_bundle(path, man, dict(zip(names, x, strict=True))), nuisance
+
+
+@pytest.mark.slow
+def test_once_per_revolution_modulation_is_fitted_by_the_model_not_an_effect(tmp_path, scn):
+    # at shaft order 1 a torque ripple also makes pinion sidebands: the calibrated model form
+    # must take the modulation first, so that the ripple (or any effect) is not added
+    path, truth = _modulated_bundle(tmp_path / "mod", scn, seed=4)
+    report = run_loop(read_bundle(path), scn, LoopSettings(seed=4, model_form=True))
+    cal = report["calibration"]
+    assert "mesh_modulation" not in report["not_identifiable"]
+    assert cal["mesh_modulation"] == pytest.approx(truth["mesh_modulation"], rel=0.25)
+    assert cal["stiffness_factor"] == pytest.approx(truth["stiffness_factor"], rel=0.15)
+    assert report["chosen_effect"] is None
+    assert report["error_before"] < 2.0  # the calibrated model is near the noise
