@@ -441,6 +441,8 @@ def with_model_form(m: PairModel, v: dict) -> PairModel:
     f_r = float(v.get("resonance_factor", 1.0))
     r = float(v.get("double_contact_factor", 1.0))
     backlash = v.get("half_backlash_um")
+    if backlash is not None and float(backlash) * 1e-6 == m.half_backlash:
+        backlash = None  # the declared value: nothing to change
     if s_k == 1.0 and f_r == 1.0 and r == 1.0 and backlash is None:
         return m
     double = m.k_b > 0
