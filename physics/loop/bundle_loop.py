@@ -95,7 +95,7 @@ from physics.dynamics.evolution import root_wear_evolution, simulate_dynamic_wea
 from physics.dynamics.model import PairModel, build_model, simulate
 from physics.gear.stiffness import MeshStiffness
 from physics.loop.bundle import Bundle, record_scenario
-from physics.loop.effects import EFFECTS, Effect
+from physics.loop.effects import EFFECTS, Effect, revolution_tables
 from physics.loop.report import LoopReport, adopts
 from physics.params import PhysicsConfig, Scenario, bounded, validate_fields
 from physics.signals.features import FEATURES, features
@@ -477,21 +477,12 @@ def with_modulation(m: PairModel, v: dict) -> PairModel:
     mu = float(v.get("mesh_modulation", 0.0))
     if mu == 0.0:
         return m
-    z1 = round(m.omega_mesh / m.omega1)
-    if m.periods not in (1, z1):
-        raise ValueError(f"the mesh modulation needs tables of one mesh period or of one pinion "
-                         f"revolution ({z1} periods), not {m.periods}")
-    reps = z1 // m.periods
-    tiled = {k: np.tile(getattr(m, k), reps) for k in ("k_a", "k_b", "g_a", "g_b")}
-    tiled |= {k: np.tile(getattr(m, k), reps) for k in ("lam_a", "lam_b")
-              if getattr(m, k) is not None}
-    n = len(tiled["k_a"])
+    rev = revolution_tables(m)
+    n = len(rev.k_a)
     # table cell c is reached at the pinion angle 2 pi c / n (the tables start at t = 0)
     factor = 1.0 + mu * np.cos(2 * np.pi * np.arange(n) / n
                                + float(v.get("modulation_phase_rad", 0.0)))
-    tiled["k_a"] = tiled["k_a"] * factor
-    tiled["k_b"] = tiled["k_b"] * factor
-    return dataclasses.replace(m, periods=z1, **tiled)
+    return dataclasses.replace(rev, k_a=rev.k_a * factor, k_b=rev.k_b * factor)
 
 
 def responses(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | None,
@@ -988,6 +979,7 @@ class Round:
     null_bic: float
     allowed: float  # what the discrepancy allows the best (:func:`discrepancy_allowance`)
     adopted: bool
+    base_test: list[np.ndarray]  # the test signals of the model the candidates were added to
 
     @property
     def best(self) -> Candidate:
@@ -1041,7 +1033,7 @@ def attribute(rec: Records, judged: Records, declared: Effect | None, declared_v
     adopted = adopts(best.own_after, best.own_before, best.bic - null_bic, settings.min_gain,
                      settings.min_delta_bic, min(best.explained.values(), default=0.0),
                      allowed)
-    return Round(ranking, effects, null_bic, allowed, adopted)
+    return Round(ranking, effects, null_bic, allowed, adopted, base_test)
 
 
 def stacked(first: Effect, values: dict, second: Effect) -> Effect:
@@ -1058,10 +1050,13 @@ def stacked(first: Effect, values: dict, second: Effect) -> Effect:
 
     def model(m: PairModel, v: dict) -> PairModel:
         stages = [(e, ev) for e, ev in ((first, values), (second, v)) if e.model is not None]
+        built = [e.model(m, ev) for e, ev in stages]
         # an effect that tiles the tables over a pinion revolution (a tooth defect) needs
         # one-period tables and does not tile the others' per-pair factors: it goes first
-        stages.sort(key=lambda st: st[0].model(m, st[1]).periods == m.periods)
-        for e, ev in stages:
+        order = sorted(range(len(stages)), key=lambda i: built[i].periods == m.periods)
+        m = built[order[0]]
+        for i in order[1:]:
+            e, ev = stages[i]
             m = e.model(m, ev)
         return m
 
@@ -1093,8 +1088,8 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
     rec = prepare(bundle, base, settings)
     nuisance, free_nuisance = calibrate(rec, declared_nuisance(base))
     judged = with_discrepancy(rec, nuisance)
-    base_test = model_signals(rec, rec.test, nuisance, None, {})
     first = attribute(rec, judged, None, {}, nuisance, free_nuisance, candidates, progress)
+    base_test = first.base_test  # the calibrated declared model's
     rounds = [first]
     if first.adopted:  # greedy: a second effect on the residual of the first, the same rule
         eff = first.effects[first.best.name]

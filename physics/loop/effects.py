@@ -129,13 +129,28 @@ def _tip_relief(m: PairModel, v: dict) -> PairModel:
                                g_b=np.where(on_b, m.g_b + relief(s_b), m.g_b))
 
 
-def _tooth_defect(m: PairModel, v: dict) -> PairModel:
+def revolution_tables(m: PairModel) -> PairModel:
+    """``m`` with its per-cell tables (stiffness, gaps, friction factors) tiled over one pinion
+    revolution, ``z1`` mesh periods: the form a model needs for a feature that differs from
+    tooth to tooth. ``m`` itself if it spans a revolution already."""
     z1 = round(m.omega_mesh / m.omega1)
+    if m.periods == z1:
+        return m
+    if m.periods != 1:
+        raise ValueError(f"tables of {m.periods} mesh periods: one period or one pinion "
+                         f"revolution ({z1} periods) expected")
+    names = [k for k in ("k_a", "k_b", "g_a", "g_b", "lam_a", "lam_b")
+             if getattr(m, k) is not None]
+    return dataclasses.replace(m, periods=z1, **{k: np.tile(getattr(m, k), z1) for k in names})
+
+
+def _tooth_defect(m: PairModel, v: dict) -> PairModel:
     if m.periods != 1:
         raise ValueError("tooth_defect needs a model with one-period tables")
     g = m.geometry
     n = len(m.k_a)
-    tiles = {k: np.tile(getattr(m, k), z1) for k in ("k_a", "k_b", "g_a", "g_b")}
+    rev = revolution_tables(m)
+    tiles = {k: getattr(rev, k) for k in ("k_a", "k_b", "g_a", "g_b")}
     tau = g.base_pitch * np.arange(n) / n
     s_a, s_b = g.s_start + tau, g.s_start + tau + g.base_pitch
     half = 0.5 * v["length_mm"] * 1e-3
@@ -152,7 +167,7 @@ def _tooth_defect(m: PairModel, v: dict) -> PairModel:
     on_b = m.k_b > 0
     tiles["g_b"][b1] += np.where(on_b, depth * bump(s_b), 0.0)
     tiles["k_b"][b1] *= 1 - share * np.where(on_b, bump(s_b), 0.0)
-    return dataclasses.replace(m, periods=z1, **tiles)
+    return rev
 
 
 def _backlash_growth(m: PairModel, v: dict) -> PairModel:
