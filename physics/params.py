@@ -320,6 +320,13 @@ class Dynamics:
       measurements (:mod:`physics.loop`): with 20 kg the healthy thesis pair gives an RMS of
       about 70 m/s^2 where the rig of thesis Table 15 measured 1.1 m/s^2 through its real
       transfer path.
+    - ``support_hz`` 0 and ``support_damping`` 0.05: a declared bearing-support mode between the
+      mesh and the housing (:func:`physics.signals.measurement.support_path`): the pinion body
+      on its shaft and bearings. 0 declares a rigid support; a user who knows the mode (an
+      impact test, or ``sqrt(k_b / m)`` of the bearing stiffness and the body's mass) states
+      it, and the measured-data loop calibrates it around that value. 0.05: a lightly damped
+      mode (rolling bearings add little damping: SKF Evolution, "Damping in a rolling bearing
+      arrangement"; the loop fits it within 0.005-0.3).
     """
 
     damping_ratio: float = bounded(0.07, 0.0, 1.0, "fraction of critical damping; 0.03-0.17 "
@@ -338,6 +345,9 @@ class Dynamics:
         "keeps it accurate")
     phase_bins: int = bounded(512, 16, 1 << 20, whole=True)
     housing_mass_kg: float = bounded(20.0, 0.0, 1e5)
+    support_hz: float = bounded(0.0, 0.0, 1e6, "0: a rigid support; else the bearing-support "
+                                "mode [Hz]", closed=True)
+    support_damping: float = bounded(0.05, 0.0, 1.0, "fraction of critical damping")
 
     def __post_init__(self) -> None:
         validate_fields(self, "dynamics")

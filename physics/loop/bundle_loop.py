@@ -18,7 +18,8 @@ its run folder.
    :data:`MODEL_FORM`: mesh-stiffness level, double/single stiffness ratio, effective mass,
    backlash and a once-per-revolution mesh modulation with its phase, :func:`with_model_form`
    and :func:`with_modulation`) are one value for the whole bundle; the measurement chain's
-   (the housing's effective mass ``m_h``) belongs to the acceleration records only; the
+   (the housing's effective mass ``m_h`` and, where the scenario declares one, the bearing
+   support's mode and damping, :data:`SUPPORT`) belong to the acceleration records only; the
    groups' standardised residuals are concatenated into one cost. A parameter that does not
    move the residuals (the pinion run-out on the line of action: a shaft-rate error is
    dynamically inert in the torsional model; the modulation's phase, which no amplitude of
@@ -121,12 +122,20 @@ MODEL_FORM = {"stiffness_factor": (0.5, 2.0, True, 1.0),
               "half_backlash_um": (0.5, 200.0, True, None),
               "mesh_modulation": (0.0, 0.2, False, 0.0),
               "modulation_phase_rad": (0.0, 2 * math.pi, False, 0.0)}
+#: the declared bearing-support mode of the acceleration chain
+#: (:func:`physics.signals.measurement.support_path`): name, bounds, log-scaled. Calibrated with
+#: ``m_h`` where the scenario declares one (``dynamics.support_hz`` > 0), around that value.
+SUPPORT = {"support_hz": (200.0, 20000.0, True), "support_damping": (0.005, 0.3, True)}
 #: bounds of every calibrated parameter of the declared model
-BOUNDS = NUISANCE | {n: b[:3] for n, b in MODEL_FORM.items()}
+BOUNDS = NUISANCE | SUPPORT | {n: b[:3] for n, b in MODEL_FORM.items()}
 #: the nuisance parameters the dynamics see (``m_h`` acts on the measurement chain); the model
 #: form's only with ``loop.model_form``
 SCENARIO_DYNAMIC = ("damping_ratio", "eccentricity1_um", "profile_error_um")
 DYNAMIC_NUISANCE = (*SCENARIO_DYNAMIC, *MODEL_FORM)
+#: the parameters a Sobol sample explores before least squares (their residual surface has
+#: several basins): the dynamic ones and the support mode's (a basin per mesh harmonic it can
+#: sit on)
+EXPLORED = (*DYNAMIC_NUISANCE, *SUPPORT)
 #: signature entries that do not scale with the record's gain
 SCALE_FREE = ("kurtosis", "crest", "tsa_kurtosis")
 #: RMS change of the standardised train residuals below which a parameter is not identifiable
@@ -153,6 +162,21 @@ def declared_model_form(scn: Scenario) -> dict[str, float]:
     """The model-form parameters at their neutral values (the declared model itself)."""
     return {n: float(getattr(scn.dynamics, n) if b[3] is None else b[3])
             for n, b in MODEL_FORM.items()}
+
+
+def declared_support(scn: Scenario) -> dict[str, float]:
+    """The declared bearing-support mode (:data:`SUPPORT`), none for a rigid support
+    (``dynamics.support_hz`` = 0); a declared mode outside the loop's bounds is refused."""
+    dyn = scn.dynamics
+    if dyn.support_hz == 0:
+        return {}
+    for n in SUPPORT:
+        lo, hi, _ = SUPPORT[n]
+        if not lo <= getattr(dyn, n) <= hi:
+            raise ValueError(f"dynamics.{n} = {getattr(dyn, n)!r} must lie in [{lo:g}, {hi:g}] "
+                             "for the loop to calibrate it; state the mode inside that range "
+                             "or set dynamics.support_hz=0 (a rigid support)")
+    return {n: float(getattr(dyn, n)) for n in SUPPORT}
 
 
 def completed(nuisance: dict, scn: Scenario) -> dict:
@@ -536,9 +560,12 @@ def model_signals(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | N
     out = []
     for k, i in enumerate(idx):
         quantity = man.quantity.iloc[i]
-        x = declared_chain(raw[k], quantity, nuisance["housing_mass_kg"])
+        fs = float(man.fs_hz.iloc[i])
+        x = declared_chain(raw[k], quantity, nuisance["housing_mass_kg"], fs=fs,
+                           support_hz=nuisance.get("support_hz", 0.0),
+                           support_damping=nuisance.get("support_damping", 0.05))
         if eff is not None and eff.record is not None and quantity in eff.quantities:
-            x = eff.record(x, float(man.fs_hz.iloc[i]), values)
+            x = eff.record(x, fs, values)
         rng = np.random.default_rng([rec.settings.seed, int(i)])  # common numbers per record
         out.append(x + rec.noise_std[i] * rng.standard_normal(x.size))
     return out
@@ -715,11 +742,12 @@ def explore(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[
     (to the bounds, at worst), and least squares from a single start stays in its basin; the
     declared values are the prior that does not depend on the fit."""
     params = eff.params if eff is not None else ()
-    dyn = [n for n in free_nuisance if n in DYNAMIC_NUISANCE]
-    # the scenario's nuisance around its declared values; the model form over its whole
-    # range in the calibration (its neutral value is no prior worth holding to), around the
-    # calibration with an effect
-    prior = completed(c.nuisance, rec.scenarios[0]) | declared_nuisance(rec.scenarios[0])
+    dyn = [n for n in free_nuisance if n in EXPLORED]
+    # the scenario's nuisance (and support mode) around its declared values; the model form
+    # over its whole range in the calibration (its neutral value is no prior worth holding
+    # to), around the calibration with an effect
+    scn = rec.scenarios[0]
+    prior = completed(c.nuisance, scn) | declared_nuisance(scn) | declared_support(scn)
     span = {n: (0.5 if eff is None and n in MODEL_FORM else EXPLORE_SPAN) for n in dyn}
     centres = {n: (0.5 if span[n] == 0.5 else to_unit(prior[n], *BOUNDS[n])) for n in dyn}
     dim = len(params) + len(dyn)
@@ -765,12 +793,14 @@ def screened(settings: LoopSettings) -> tuple[str, ...]:
 
 def calibrate(rec: Records, start: dict) -> tuple[dict, list[str]]:
     """Fit the declared nuisance parameters on the train records (from their declared
-    values); returns the calibrated nuisance and the names of the free ones. ``m_h`` scales
-    every acceleration amplitude and is always free for acceleration records; a dynamic
-    parameter that is not identifiable stays at its declared value."""
+    values); returns the calibrated nuisance and the names of the free ones. ``m_h`` (and a
+    declared support mode) scales and shapes every acceleration amplitude and is always free
+    for acceleration records; a dynamic parameter that is not identifiable stays at its
+    declared value."""
     start = with_level(rec, completed(start, rec.scenarios[0]), None, {})
     free = identifiable(rec, start, screened(rec.settings))
-    free += ["housing_mass_kg"] if accel_in(rec) else []
+    if accel_in(rec):
+        free += ["housing_mass_kg", *[n for n in SUPPORT if n in start]]
     c = Candidate("declared", {}, {}, start, train_cost(rec, start, None, {}), 0)
     return search(rec, None, c, free).nuisance, free
 
@@ -1085,17 +1115,18 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
     """The whole loop on one bundle; returns its report (see the module text)."""
     settings = settings or LoopSettings()
     candidates = candidates_for(set(bundle.manifest.quantity), settings)
+    start = declared_nuisance(base) | declared_support(base)  # a bad support mode: before work
     rec = prepare(bundle, base, settings)
-    nuisance, free_nuisance = calibrate(rec, declared_nuisance(base))
+    nuisance, free_nuisance = calibrate(rec, start)
     judged = with_discrepancy(rec, nuisance)
     first = attribute(rec, judged, None, {}, nuisance, free_nuisance, candidates, progress)
     base_test = first.base_test  # the calibrated declared model's
     rounds = [first]
-    if first.adopted:  # greedy: a second effect on the residual of the first, the same rule
-        eff = first.effects[first.best.name]
+    eff = first.effects[first.best.name]
+    more = second_candidates(eff, first.best.values, candidates) if first.adopted else []
+    if more:  # greedy: a second effect on the residual of the first, the same rule
         rounds.append(attribute(rec, judged, eff, first.best.values, first.best.nuisance,
-                                free_nuisance, second_candidates(eff, first.best.values,
-                                                                 candidates), progress))
+                                free_nuisance, more, progress))
     last = next((r for r in reversed(rounds) if r.adopted), None)
     best = last.best if last else None
     chosen = last.effects[best.name] if last else None

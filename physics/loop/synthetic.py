@@ -2,9 +2,10 @@
 
 :func:`make_bundle` simulates records of the full model with one effect of the library switched
 on at a realistic size (its ``typical`` value times a seeded factor in [0.7, 1.4]), with the
-declared nuisance parameters moved off their defaults (each times a seeded factor in
-[0.6, 1.6]) and white measurement noise at ``snr_db``. Records span the wear life of one
-operating case (wear and cycles known), so the loop also has a wear estimate to judge.
+declared nuisance parameters (and a declared support mode) moved off their defaults (each
+times a seeded factor in [0.6, 1.6]) and white measurement noise at ``snr_db``. Records span
+the wear life of one operating case (wear and cycles known), so the loop also has a wear
+estimate to judge.
 """
 
 from __future__ import annotations
@@ -18,7 +19,13 @@ import pandas as pd
 from physics.dynamics.model import simulate
 from physics.gear.stiffness import MeshStiffness
 from physics.loop.bundle import write_bundle
-from physics.loop.bundle_loop import declared_nuisance, shaft_rates, with_nuisance, worn_models
+from physics.loop.bundle_loop import (
+    declared_nuisance,
+    declared_support,
+    shaft_rates,
+    with_nuisance,
+    worn_models,
+)
 from physics.loop.effects import effect
 from physics.params import Scenario
 from physics.signals.measurement import add_noise, declared_chain, sensed
@@ -30,7 +37,8 @@ def make_bundle(path: str | Path, base: Scenario, effect_name: str | None, seed:
     """Write a bundle; return its path and the truth (effect, its values, the nuisance)."""
     rng = np.random.default_rng([seed, 7])
     dyn = base.dynamics
-    nuisance = {k: v * rng.uniform(0.6, 1.6) for k, v in declared_nuisance(base).items()}
+    nuisance = {k: v * rng.uniform(0.6, 1.6)
+                for k, v in (declared_nuisance(base) | declared_support(base)).items()}
     eff = effect(effect_name) if effect_name else None
     values = {}
     if eff is not None:
@@ -49,7 +57,9 @@ def make_bundle(path: str | Path, base: Scenario, effect_name: str | None, seed:
     run = dataclasses.replace(dyn, duration_s=duration_s, transient_s=0.1, phase_bins=16)
     def chain(ms):
         return declared_chain(sensed(simulate(ms, run), quantity), quantity,
-                              nuisance["housing_mass_kg"])
+                              nuisance["housing_mass_kg"], fs=dyn.sample_rate_hz,
+                              support_hz=nuisance.get("support_hz", 0.0),
+                              support_damping=nuisance.get("support_damping", 0.05))
 
     clean = chain(models)
     plain = chain(declared) if models is not declared else clean

@@ -115,7 +115,9 @@ def model_features(td: TableData, rows: np.ndarray, nuisance: dict, eff: Effect 
     run = dataclasses.replace(dyn, duration_s=td.settings.segment_s,
                               transient_s=td.settings.transient_s, phase_bins=16)
     resp = simulate(ms, run)
-    x = declared_chain(sensed(resp, td.quantity), td.quantity, nuisance["housing_mass_kg"])
+    x = declared_chain(sensed(resp, td.quantity), td.quantity, nuisance["housing_mass_kg"],
+                       fs=dyn.sample_rate_hz, support_hz=dyn.support_hz,
+                       support_damping=dyn.support_damping)
     if eff is not None and eff.record is not None:
         x = eff.record(x, dyn.sample_rate_hz, values)
     rng = np.random.default_rng(td.settings.seed)

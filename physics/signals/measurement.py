@@ -2,10 +2,11 @@
 
 - DTE: the relative displacement on the line of action, ``x(t)`` of :mod:`physics.dynamics`.
 - Housing acceleration: a rigid housing of effective mass ``m_h`` driven by the fluctuating mesh
-  force, ``a(t) = (F_d(t) - mean F_d) / m_h`` (``dynamics.housing_mass_kg``). Structural
-  resonances of the transfer path (:func:`transfer_path`) are not part of the declared chain of
-  the loop (there they are an effect of :mod:`physics.loop.effects`); the dataset draws one per
-  trajectory.
+  force, ``a(t) = (F_d(t) - mean F_d) / m_h`` (``dynamics.housing_mass_kg``), optionally through
+  a declared bearing-support mode (:func:`support_path`, ``dynamics.support_hz``; 0, the
+  default: a rigid support). Further structural resonances of the transfer path
+  (:func:`transfer_path`) are not part of the declared chain of the loop (there they are an
+  effect of :mod:`physics.loop.effects`); the dataset draws one per trajectory.
 - Measurement noise: white Gaussian at a signal-to-noise ratio relative to the AC power.
 """
 
@@ -34,10 +35,41 @@ def sensed(resp: Response, quantity: str) -> np.ndarray:
     return resp.dte if quantity == "dte_m" else resp.force
 
 
-def declared_chain(x: np.ndarray, quantity: str, housing_mass_kg: float) -> np.ndarray:
-    """The declared chain applied to :func:`sensed`: DTE as it is, the force through the rigid
+def declared_chain(x: np.ndarray, quantity: str, housing_mass_kg: float, *,
+                   fs: float | None = None, support_hz: float = 0.0,
+                   support_damping: float = 0.05) -> np.ndarray:
+    """The declared chain applied to :func:`sensed`: DTE as it is, the force through the
+    bearing support (``support_hz`` > 0, sampled at ``fs``; :func:`support_path`) and the rigid
     housing."""
-    return x if quantity == "dte_m" else housing_acceleration(x, housing_mass_kg)
+    if quantity == "dte_m":
+        return x
+    if support_hz > 0:
+        if fs is None:
+            raise ValueError("a declared support mode needs the record's sampling rate fs")
+        x = support_path(x, fs, support_hz, support_damping)
+    return housing_acceleration(x, housing_mass_kg)
+
+
+def transmissibility(f: np.ndarray, fn_hz: float, zeta: float) -> np.ndarray:
+    """Complex force transmissibility of a single-degree-of-freedom support at frequencies
+    ``f`` [Hz]: ``(1 + 2 i zeta r) / (1 - r^2 + 2 i zeta r)``, ``r = f / fn`` (Rao, Mechanical
+    Vibrations, 5th ed., 3.6; the analog form of :func:`transfer_path`)."""
+    r = np.asarray(f, float) / fn_hz
+    return (1 + 2j * zeta * r) / (1 - r**2 + 2j * zeta * r)
+
+
+def support_path(x: np.ndarray, fs: float, fn_hz: float, zeta: float) -> np.ndarray:
+    """The mesh force as the housing feels it through the bearing support: the pinion body on
+    its bearings is a single-degree-of-freedom mode (shaft bending in series with the rolling
+    bearings' radial stiffness, the body's mass), so the bearing force is the mesh force times
+    :func:`transmissibility`. Applied along the last axis in the frequency domain (one period
+    of ``x`` assumed), so ``fn_hz`` may lie anywhere, also above ``fs / 2`` where the mode only
+    raises the band below it; as ``fn_hz`` grows the support becomes rigid (identity)."""
+    if not fn_hz > 0 or not 0 < zeta < 1:
+        raise ValueError(f"support fn_hz = {fn_hz!r} must be > 0 and zeta = {zeta!r} in (0, 1)")
+    n = x.shape[-1]
+    spec = np.fft.rfft(x, axis=-1) * transmissibility(np.fft.rfftfreq(n, 1 / fs), fn_hz, zeta)
+    return np.fft.irfft(spec, n, axis=-1)
 
 
 def transfer_path(x: np.ndarray, fs: float, fn_hz: float, zeta: float) -> np.ndarray:

@@ -21,8 +21,10 @@ from physics.loop.bundle_loop import (
     DYNAMIC_NUISANCE,
     Candidate,
     LoopSettings,
+    calibrate,
     candidates_for,
     declared_nuisance,
+    declared_support,
     identifiable,
     model_signals,
     prepare,
@@ -320,6 +322,26 @@ def test_chain_parameters_reuse_the_simulation(clean_records):
         assert misfit(nui) < misfit(nui | moved)
 
 
+def test_calibration_finds_a_declared_support_mode(tmp_path):
+    # the records carry a bearing-support mode 0.6-1.6 times the declared one; calibrated with
+    # m_h (explored around the declared value), it is found where the records have it
+    scn = scenario_from_config({"case": 3, "dynamics": {"support_hz": 3000.0}})
+    path, truth = make_bundle(tmp_path / "b", scn, None, seed=4, records=4, duration_s=0.5)
+    rec = prepare(read_bundle(path), scn, LoopSettings(seed=4, explore=8, max_nfev=8))
+    nuisance, free = calibrate(rec, declared_nuisance(scn) | declared_support(scn))
+    assert {"housing_mass_kg", "support_hz", "support_damping"} <= set(free)
+    assert nuisance["support_hz"] == pytest.approx(truth["nuisance"]["support_hz"], rel=0.05)
+    assert declared_support(scenario_from_config({"case": 3})) == {}  # rigid by default
+
+
+def test_a_support_mode_outside_the_loop_bounds_is_refused_before_work(clean_records):
+    rec, _ = clean_records
+    bad = scenario_from_config({"case": 3, "dynamics": {"support_hz": 50.0}})
+    with pytest.raises(ValueError, match=r"dynamics.support_hz = 50.0 must lie in \[200, "
+                                         r"20000\].*support_hz=0"):
+        run_loop(rec.bundle, bad)
+
+
 def test_search_never_ends_above_its_start(clean_records, scn):
     # the declared model from a start off the truth: exploration keeps the best point, least
     # squares only accepts steps that lower the cost
@@ -351,8 +373,9 @@ def test_backlash_growth_leaves_records_without_contact_loss_unchanged(tmp_path,
 
 # --- the loop --------------------------------------------------------------------------------
 
-FAST = ["loop.max_nfev=6", "loop.explore=8", "loop.refine=1",
-        "loop.candidates=[transfer_path,friction]", "progress=false"]
+# one candidate: no second round to stack on it (the loop used to fail there)
+FAST = ["loop.max_nfev=6", "loop.explore=8", "loop.refine=1", "loop.candidates=[transfer_path]",
+        "progress=false"]
 
 
 def run_app(tmp: Path, data: Path, *extra: str) -> subprocess.CompletedProcess:
@@ -369,6 +392,7 @@ def test_loop_app_finds_an_undeclared_transfer_path(tmp_path, scn):
     report = json.loads((tmp_path / "run" / "report.json").read_text())
     assert tuple(report)[:len(STABLE_KEYS)] == STABLE_KEYS  # one report type, stable keys
     assert report["chosen_effect"] == "transfer_path"
+    assert report["second_round"] is None
     assert report["error_after"] < 0.5 * report["error_before"]
     assert report["not_identifiable"] == ["eccentricity1_um"]
     assert set(report["nuisance_after"]) == set(report["calibration"])

@@ -1,0 +1,67 @@
+"""The declared measurement chain: the bearing-support mode against hand calculations."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from physics.signals.measurement import (
+    declared_chain,
+    support_path,
+    transfer_path,
+    transmissibility,
+)
+
+FS = 40960.0
+N = 8192  # 0.2 s: bins of 5 Hz
+
+
+def tone(f_hz: float) -> np.ndarray:
+    return np.sin(2 * np.pi * f_hz * np.arange(N) / FS)
+
+
+def amplitude(x: np.ndarray, f_hz: float) -> float:
+    """Amplitude of the bin-centred tone ``f_hz`` in ``x``."""
+    return 2 * abs(np.fft.rfft(x)[round(f_hz * N / FS)]) / N
+
+
+@settings(max_examples=30, deadline=None)
+@given(fn=st.floats(300.0, 15000.0), zeta=st.floats(0.005, 0.5), ratio=st.floats(0.2, 3.0))
+def test_support_gain_is_the_single_degree_of_freedom_transmissibility(fn, zeta, ratio):
+    # by hand: |T|^2 = (1 + (2 zeta r)^2) / ((1 - r^2)^2 + (2 zeta r)^2)
+    f = round(min(ratio * fn, 0.45 * FS) * N / FS) * FS / N
+    r = f / fn
+    by_hand = math.sqrt((1 + (2 * zeta * r) ** 2) / ((1 - r * r) ** 2 + (2 * zeta * r) ** 2))
+    assert amplitude(support_path(tone(f), FS, fn, zeta), f) == pytest.approx(by_hand, rel=1e-9)
+    assert abs(transmissibility(np.array([f]), fn, zeta)[0]) == pytest.approx(by_hand, rel=1e-12)
+
+
+@pytest.mark.parametrize("fn, zeta", [(1000.0, 0.05), (2500.0, 0.03), (6000.0, 0.2)])
+def test_support_agrees_with_the_time_domain_transfer_path_at_the_mode(fn, zeta):
+    # the bilinear transfer path is pre-warped at fn: both discretisations are exact there
+    f = round(fn * N / FS) * FS / N
+    steady = slice(N // 2, N)  # after the time-domain filter's start transient
+    a_time = np.max(np.abs(transfer_path(tone(f), FS, f, zeta)[steady]))
+    a_freq = np.max(np.abs(support_path(tone(f), FS, f, zeta)[steady]))
+    assert a_freq == pytest.approx(a_time, rel=0.01)
+
+
+def test_a_support_far_above_the_band_is_rigid_and_zero_declares_none():
+    rng = np.random.default_rng(0)
+    x = rng.standard_normal((3, N))
+    # r <= 0.02 up to fs/2: |T| - 1 ~ r^2 = 4e-4
+    assert np.max(np.abs(support_path(x, FS, 1e6, 0.05) - x)) < 2e-3 * np.max(np.abs(x))
+    rigid = declared_chain(x, "accel_m_s2", 20.0)
+    assert np.array_equal(declared_chain(x, "accel_m_s2", 20.0, fs=FS, support_hz=0.0), rigid)
+    assert np.array_equal(declared_chain(x, "dte_m", 20.0, fs=FS, support_hz=2000.0), x)
+
+
+def test_a_support_mode_needs_its_sampling_rate_and_a_valid_damping():
+    with pytest.raises(ValueError, match="sampling rate"):
+        declared_chain(tone(100.0), "accel_m_s2", 20.0, support_hz=2000.0)
+    with pytest.raises(ValueError, match="zeta"):
+        support_path(tone(100.0), FS, 2000.0, 1.5)
