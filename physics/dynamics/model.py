@@ -25,17 +25,29 @@ action, shaft rate) and short-period (profile, mesh rate) errors. The thesis's "
 
 Integration is the fixed-step classical Runge-Kutta of the thesis, compiled with numba and run in
 parallel over a batch of scenarios; the step is ``step_factor / omega_max`` with ``omega_max`` the
-highest natural frequency ``sqrt(k_max / m_e)``, rounded down to divide the output sample period.
+highest natural frequency ``sqrt(k_max / m_e)``, rounded down to divide the output sample period
+(at least twice per sample).
+
+The recorded DTE and mesh force are what a data-acquisition system samples: the integrator's
+record (the DTE at every step, the force averaged over every step) passes the anti-aliasing
+low-pass every such system has before its converter (:func:`anti_aliased`), then is decimated
+to ``sample_rate_hz``. Sampling the integrator's state directly folds the mesh force's
+harmonics above ``fs / 2`` (its stiffness steps pass straight into the force above the mesh
+resonance) back into the band, and point values of the force at each step fold those above the
+integration rate: at 2000 r/min in case 3 together they made lines at ``f_m / 3`` and
+``2 f_m / 3`` 6-10 dB above the mesh line itself.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numba
 import numpy as np
+from scipy import signal
 
 from physics.gear.geometry import MeshGeometry
 from physics.gear.stiffness import MeshStiffness
@@ -152,16 +164,29 @@ class Response:
     over the record in each of ``phase_bins`` bins of the mesh period (phase 0 = a pair enters
     contact): where backlash lets the coast flanks strike (a negative mesh force), the drive
     flanks carry nothing, and only drive-flank load wears the drive flanks the wear model
-    follows.
+    follows. ``dte`` and ``force`` are the sensors' records, anti-aliased from the integrator's
+    (:func:`anti_aliased`) when first read; ``load_a`` and ``load_b`` are the pairs' loads at
+    the sample instants.
     """
 
     time: np.ndarray  # [s] since the start of the integration (transient included)
-    dte: np.ndarray  # x [m]
-    force: np.ndarray  # F_d = sum over pairs in contact of k f(x - g) + c_i x' [N]
+    dte_steps: np.ndarray  # x [m] at every step (see :func:`_integrate`)
+    force_steps: np.ndarray  # F_d [N] averaged over every step
     load_a: np.ndarray  # load of pair A [N] (its elastic force and its share of damping)
     load_b: np.ndarray  # load of pair B [N]
     force_by_phase: np.ndarray  # [N]
     time_step: float  # RK4 step [s]
+    steps_per_sample: int
+
+    @functools.cached_property
+    def dte(self) -> np.ndarray:
+        """x [m], the DTE record."""
+        return anti_aliased(self.dte_steps, self.steps_per_sample, len(self.time))
+
+    @functools.cached_property
+    def force(self) -> np.ndarray:
+        """F_d = sum over pairs in contact of k f(x - g) + c_i x' [N], the force record."""
+        return anti_aliased(self.force_steps, self.steps_per_sample, len(self.time))
 
 
 #: positions of the kernel's per-scenario parameters (numba reads module constants as literals)
@@ -187,10 +212,52 @@ def kernel_parameters(m: PairModel) -> np.ndarray:
 
 
 def time_step(models: Sequence[PairModel], dyn: Dynamics) -> tuple[float, int]:
-    """RK4 step and sub-steps per output sample: ``dt <= step_factor / omega_max``."""
+    """RK4 step and sub-steps per output sample: ``dt <= step_factor / omega_max``, and at
+    least two sub-steps (the anti-aliasing filter needs a record above ``fs``)."""
     dt_max = dyn.step_factor / max(m.omega_max for m in models)
-    n_sub = max(1, math.ceil(1.0 / (dyn.sample_rate_hz * dt_max)))
+    n_sub = max(2, math.ceil(1.0 / (dyn.sample_rate_hz * dt_max)))
     return 1.0 / (dyn.sample_rate_hz * n_sub), n_sub
+
+
+#: the anti-aliasing filter keeps 0-PASS_EDGE fs (the signatures' band) within 1e-4 and
+#: suppresses everything that would fold into it (above ``(1 - PASS_EDGE) fs``) by STOP_DB
+PASS_EDGE = 0.45
+STOP_DB = 80.0
+
+
+def anti_aliasing_filter(n_sub: int) -> np.ndarray:
+    """Linear-phase low-pass FIR at ``n_sub`` times the output rate (Kaiser window, Oppenheim &
+    Schafer, Discrete-Time Signal Processing, 3rd ed., 7.6): pass band to ``PASS_EDGE fs``,
+    stop band from ``(1 - PASS_EDGE) fs``, ``2 L n_sub + 1`` taps (a whole number ``L`` of
+    output samples either side)."""
+    width = (1 - 2 * PASS_EDGE) * 2 / n_sub  # transition, as a fraction of the fine Nyquist
+    taps, beta = signal.kaiserord(STOP_DB, width)
+    half = math.ceil((taps - 1) / (2 * n_sub))
+    return signal.firwin(2 * half * n_sub + 1, 1.0 / n_sub, window=("kaiser", beta))
+
+
+def anti_aliased(fine: np.ndarray, n_sub: int, n_out: int) -> np.ndarray:
+    """Output samples of a record taken every integration step: the anti-aliasing FIR
+    (:func:`anti_aliasing_filter`, half-length ``L n_sub``) centred on every ``n_sub``-th
+    step. ``fine[..., j]`` is step ``j - (L - 1) n_sub`` of the output interval, so output
+    sample ``i`` is centred on step ``(i + 1) n_sub``, the instant the point sample had."""
+    h = anti_aliasing_filter(n_sub)
+    rows = np.ascontiguousarray(fine, dtype=float).reshape(-1, fine.shape[-1])
+    return _decimate(h, rows, n_sub, n_out).reshape(*fine.shape[:-1], n_out)
+
+
+@numba.njit(cache=True, parallel=True, fastmath=True)
+def _decimate(h, x, n_sub, n_out):
+    """``y[r, i] = sum_t h[t] x[r, i n_sub + t]`` (``h`` symmetric: a convolution)."""
+    y = np.empty((x.shape[0], n_out))
+    for r in numba.prange(x.shape[0]):
+        for i in range(n_out):
+            acc = 0.0
+            base = i * n_sub
+            for t in range(h.size):
+                acc += h[t] * x[r, base + t]
+            y[r, i] = acc
+    return y
 
 
 def simulate(models: Sequence[PairModel] | PairModel, dyn: Dynamics) -> Response:
@@ -203,21 +270,23 @@ def simulate(models: Sequence[PairModel] | PairModel, dyn: Dynamics) -> Response
     if len(n_phase) != 1:
         raise ValueError("all scenarios of a batch need the same phase grid and periods")
     dt, n_sub = time_step(models, dyn)
-    n_transient = round(dyn.transient_s / dt)
     n_out = round(dyn.duration_s * dyn.sample_rate_hz)
+    half = (len(anti_aliasing_filter(n_sub)) - 1) // (2 * n_sub)
+    # the filter reaches (L - 1) n_sub steps before the first sample: inside the transient
+    n_transient = max(round(dyn.transient_s / dt), (half - 1) * n_sub)
     par = np.stack([kernel_parameters(m) for m in models])
     tables = np.stack([np.stack([m.k_a, m.k_b, m.g_a, m.g_b, *m.force_factors()])
                        for m in models])
     x0 = np.array([m.half_backlash + m.static_force / (m.k_a[0] + m.k_b[0]) for m in models])
-    out = _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, dyn.phase_bins)
-    dte, force, load_a, load_b, phase_sum, phase_count = out
+    out = _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, dyn.phase_bins, half)
+    dte_steps, force_steps, load_a, load_b, phase_sum, phase_count = out
     with np.errstate(invalid="ignore"):
         by_phase = phase_sum / phase_count
     if np.any(phase_count == 0):
         raise ValueError(f"dynamics.duration_s = {dyn.duration_s:g} is too short to visit every "
                          f"one of {dyn.phase_bins} phase bins; lengthen it or use fewer bins")
     time = n_transient * dt + (np.arange(n_out) + 1) * n_sub * dt
-    return Response(time, dte, force, load_a, load_b, by_phase, dt)
+    return Response(time, dte_steps, force_steps, load_a, load_b, by_phase, dt, n_sub)
 
 
 @numba.njit(cache=True, fastmath=True, inline="always")
@@ -280,12 +349,12 @@ def _mesh(par, tab, pos, x, v, da):
 @numba.njit(cache=True, fastmath=True)
 def _accel(par, tab, pos, x, v, e_dd, w, da):
     """x'' of the reduced model at mesh phase ``pos``, given e'', the static force w and the
-    centre-distance change da there.
+    centre-distance change da there, and the mesh force.
 
     Each pair's force enters with its factor (1, or the sliding-friction moment factor).
     """
     l_a, l_b, f_a, f_b = _mesh(par, tab, pos, x, v, da)
-    return (w - par[MASS] * e_dd - l_a * f_a - l_b * f_b) / par[MASS]
+    return (w - par[MASS] * e_dd - l_a * f_a - l_b * f_b) / par[MASS], f_a + f_b
 
 
 @numba.njit(cache=True, fastmath=True, inline="always")
@@ -308,10 +377,18 @@ def _wrap(pos, n):
 
 
 @numba.njit(cache=True, parallel=True, fastmath=True)
-def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins):
+def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins, half):
+    """DTE at every step and the mesh force averaged over every step (the RK4 stages' weights,
+    Simpson's rule: a step's record does not alias the force's harmonics above the
+    integration rate), from ``(half - 1) n_sub`` steps before the first output instant to
+    ``half n_sub`` after the last (for :func:`anti_aliased`); the pairs' loads at the output
+    instants; the drive-flank load by mesh phase over the record."""
     n = par.shape[0]
-    dte = np.empty((n, n_out))
-    force = np.empty((n, n_out))
+    k_first = n_sub - half * n_sub  # first and last recorded step, relative to the transient
+    k_last = n_out * n_sub + half * n_sub
+    n_fine = k_last - k_first + 1
+    dte = np.empty((n, n_fine))
+    force = np.empty((n, n_fine))
     load_a = np.empty((n, n_out))
     load_b = np.empty((n, n_out))
     phase_sum = np.zeros((n, n_bins))
@@ -330,25 +407,26 @@ def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins):
         cl, sl = math.cos(0.5 * p[OMEGA1] * dt), math.sin(0.5 * p[OMEGA1] * dt)
         cs, ss = math.cos(0.5 * p[OMEGA_MESH] * dt), math.sin(0.5 * p[OMEGA_MESH] * dt)
         s1, c1, s2, c2 = 0.0, 1.0, 0.0, 1.0  # sin, cos of w1 t and wm t
-        total = n_transient + n_out * n_sub
+        total = n_transient + k_last + 1  # the last recorded step's force needs its stages
         da0 = _extra(p, 0.0)[2]
         for step in range(total + 1):
             # the mesh at (t, x) serves both the record of the state reached and stage 1 of RK4
             l_a, l_b, f_a, f_b = _mesh(p, tab, pos, x, v, da0)
-            if step > n_transient:
-                f = f_a + f_b
-                b = int((pos % n_per) / n_per * n_bins)
-                if b >= n_bins:
-                    b = n_bins - 1
-                phase_sum[j, b] += max(f, 0.0)  # drive flanks only (coast impacts: < 0)
-                phase_count[j, b] += 1.0
-                k = step - n_transient
-                if k % n_sub == 0:
-                    i = k // n_sub - 1
-                    dte[j, i] = x
-                    force[j, i] = f
-                    load_a[j, i] = f_a
-                    load_b[j, i] = f_b
+            k = step - n_transient
+            f = f_a + f_b
+            recorded = k_first <= k <= k_last
+            if recorded:
+                dte[j, k - k_first] = x
+                if 0 < k <= n_out * n_sub:
+                    b = int((pos % n_per) / n_per * n_bins)
+                    if b >= n_bins:
+                        b = n_bins - 1
+                    phase_sum[j, b] += max(f, 0.0)  # drive flanks only (coast impacts: < 0)
+                    phase_count[j, b] += 1.0
+                    if k % n_sub == 0:
+                        i = k // n_sub - 1
+                        load_a[j, i] = f_a
+                        load_b[j, i] = f_b
             if step == total:
                 break
             s1h, c1h = s1 * cl + c1 * sl, c1 * cl - s1 * sl  # at t + dt/2
@@ -365,10 +443,13 @@ def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins):
             a1 = (w0 - p[MASS] * e0 - l_a * f_a - l_b * f_b) / p[MASS]
             pos_h = _wrap(pos + 0.5 * inc, n_tab)
             pos_1 = _wrap(pos + inc, n_tab)
-            a2 = _accel(p, tab, pos_h, x + 0.5 * dt * v, v + 0.5 * dt * a1, eh, wh, dah)
-            a3 = _accel(p, tab, pos_h, x + 0.5 * dt * (v + 0.5 * dt * a1), v + 0.5 * dt * a2,
-                        eh, wh, dah)
-            a4 = _accel(p, tab, pos_1, x + dt * (v + 0.5 * dt * a2), v + dt * a3, e1, w1, da1)
+            a2, f2 = _accel(p, tab, pos_h, x + 0.5 * dt * v, v + 0.5 * dt * a1, eh, wh, dah)
+            a3, f3 = _accel(p, tab, pos_h, x + 0.5 * dt * (v + 0.5 * dt * a1),
+                            v + 0.5 * dt * a2, eh, wh, dah)
+            a4, f4 = _accel(p, tab, pos_1, x + dt * (v + 0.5 * dt * a2), v + dt * a3, e1, w1,
+                            da1)
+            if recorded:
+                force[j, k - k_first] = (f + 2.0 * (f2 + f3) + f4) / 6.0
             x += dt * (v + dt * (a1 + a2 + a3) / 6.0)
             v += dt * (a1 + 2.0 * a2 + 2.0 * a3 + a4) / 6.0
             pos = pos_1

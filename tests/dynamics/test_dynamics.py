@@ -8,6 +8,8 @@ import numpy as np
 import pytest
 
 from physics.dynamics.model import (
+    anti_aliased,
+    anti_aliasing_filter,
     build_model,
     force_per_position,
     simulate,
@@ -73,21 +75,49 @@ def test_contact_loss_enters_the_dead_zone(ms):
     scn = Scenario(operating=Operating(n1_rpm=f_n * 60 / 18, torque_Nm=50.0), dynamics=dyn)
     model = build_model(scn, ms)
     resp = simulate(model, dyn)
-    apart = resp.dte[0] < model.half_backlash
+    # the state at the sample instants: the DTE the integrator reached and the pairs' loads
+    # there (resp.dte and resp.force are the sensors' band-limited records of them)
+    force = resp.load_a[0] + resp.load_b[0]
+    apart = force == 0.0
     assert apart.mean() > 0.05
     # while apart the teeth transmit nothing, and the mesh force never pulls
-    assert np.all(resp.force[0][apart] == 0.0)
-    assert resp.force.min() >= 0.0
-    assert resp.force.max() > 2 * model.static_force  # and the impacts that follow are hard
+    assert force.min() >= 0.0
+    assert force.max() > 2 * model.static_force  # and the impacts that follow are hard
+    # the sensed DTE dips below the dead zone's edge where the flanks parted
+    assert np.mean(resp.dte[0][apart] < model.half_backlash) > 0.5
 
 
 def test_two_dof_and_reduced_forms_agree(ms):
+    """The compiled reduced integrator against solve_ivp on the two-inertia equations, the
+    reference sampled like the integrator's record (the DTE at every step, the force averaged
+    over every step by Simpson's rule) and passed through the same anti-aliasing filter as
+    the sensors' records."""
     scn = _scn(duration_s=0.004, transient_s=0.0)
     model = build_model(scn, ms)
     resp = simulate(model, scn.dynamics)
-    x, force = simulate_two_dof(model, resp.time)
-    assert np.max(np.abs(x - resp.dte[0])) < 0.01 * np.ptp(resp.dte[0])
-    assert np.max(np.abs(force - resp.force[0])) < 0.01 * np.ptp(resp.force[0])
+    dt, n_sub = time_step([model], scn.dynamics)
+    half = (len(anti_aliasing_filter(n_sub)) - 1) // (2 * n_sub)
+    n_out = resp.dte.shape[1]
+    steps = np.arange(2 * (n_sub - half * n_sub), 2 * (n_out + half) * n_sub + 3) / 2
+    x, force = simulate_two_dof(model, resp.time[0] + (steps - n_sub) * dt)
+    x = x[:-2:2]
+    force = (force[:-2:2] + 4 * force[1::2] + force[2::2]) / 6
+    assert np.max(np.abs(anti_aliased(x, n_sub, n_out) - resp.dte[0])) < 0.01 * np.ptp(resp.dte)
+    assert (np.max(np.abs(anti_aliased(force, n_sub, n_out) - resp.force[0]))
+            < 0.01 * np.ptp(resp.force))
+
+
+def test_records_are_anti_aliased():
+    """A tone the integrator's record carries above (1 - PASS_EDGE) fs does not fold into the
+    band; one below PASS_EDGE fs passes unchanged, at its own sample instants."""
+    n_sub, n_out = 10, 4096
+    half = (len(anti_aliasing_filter(n_sub)) - 1) // (2 * n_sub)
+    steps = np.arange(n_sub - half * n_sub, (n_out + half) * n_sub + 1)
+    phase = 2 * np.pi * steps / n_sub  # one cycle per output sample: frequency fs
+    for f_rel, gain in ((0.3, 1.0), (0.45, 1.0), (0.58, 0.0), (0.97, 0.0), (3.02, 0.0)):
+        y = anti_aliased(np.cos(f_rel * phase), n_sub, n_out)
+        expected = gain * np.cos(2 * np.pi * f_rel * (np.arange(n_out) + 1))
+        assert np.max(np.abs(y - expected)) < 2e-4, f_rel
 
 
 def test_step_halving_converges(ms):
