@@ -62,7 +62,9 @@ its run folder.
    the noise) by at least ``min_gain`` (20 %), its BIC by at least ``min_delta_bic`` (10, "very
    strong" on Kass & Raftery's scale), and, in every group where it shows, removes more
    standardised sum of squares per held-out record than the discrepancy lets a candidate of its
-   size absorb by chance (:func:`discrepancy_allowance`). The rule is designed for a false-add
+   size absorb by chance (:func:`discrepancy_allowance`), and, last, where the held-out
+   records' wear is known, if it does not worsen the model-based wear estimate by more than
+   ``max_wear_loss`` (10 %) of its error (:func:`wear_kept`). The rule is designed for a false-add
    rate of ``false_add_rate`` (1 %) per bundle when the declared model's form error is
    unstructured (no effect of the library resembles it); a form error that looks like an effect
    is not separable from it by any rule on these data.
@@ -212,6 +214,10 @@ class LoopSettings:
     false_add_rate: float = bounded(0.01, 0.0, 1.0, "share of bundles without an effect that "
                                     "may get one")
     candidates: tuple[str, ...] | None = None  # effects to try; None: the whole library
+    # an effect is not adopted if it worsens the model-based wear estimate of the held-out
+    # records (where their wear is known) by more than this share of its error
+    max_wear_loss: float = bounded(0.1, 0.0, 100.0, "share of the wear estimate's held-out "
+                                   "error an adopted effect may add", closed=True)
     # calibrate the declared model's form uncertainty (:data:`MODEL_FORM`) with the nuisance;
     # off by default: on the project's own bundles it absorbs part of a tip relief and lets the
     # greedy second round add spurious effects (docs/measured-data.md)
@@ -940,6 +946,28 @@ def wear_estimates(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | 
     return np.array(out)
 
 
+def wear_error(rec: Records, nuisance: dict, eff: Effect | None, values: dict) -> float | None:
+    """Error of the model-based wear estimate (:func:`wear_estimates`) over the held-out records
+    whose wear is known: mean relative error [%] (mean absolute error [mm] if every such
+    record is unworn); None if no held-out record's wear is known."""
+    man = rec.bundle.manifest
+    known = np.array([i for i in rec.test if not pd.isna(man.wear_mm.iloc[i])
+                      and rec.wear_states[i]], int)
+    if not known.size:
+        return None
+    true = man.wear_mm.to_numpy(float)[known]
+    est = wear_estimates(rec, known, nuisance, eff, values)
+    ok = true > 0
+    return (float(np.mean(np.abs(est[ok] - true[ok]) / true[ok]) * 100) if ok.any()
+            else float(np.mean(np.abs(est - true))))
+
+
+def wear_kept(before: float | None, after: float | None, max_loss: float) -> bool:
+    """Whether an effect keeps the wear estimate (issue 16, item 6): its held-out error may
+    grow by at most ``max_loss`` of its value; without known wear there is nothing to keep."""
+    return before is None or after is None or after <= (1 + max_loss) * before
+
+
 def by_group(rec: Records, idx: np.ndarray) -> dict[int, list[int]]:
     """Positions in ``idx`` of each group's records, by group index in order (groups without a
     record in ``idx`` left out)."""
@@ -1010,6 +1038,9 @@ class Round:
     allowed: float  # what the discrepancy allows the best (:func:`discrepancy_allowance`)
     adopted: bool
     base_test: list[np.ndarray]  # the test signals of the model the candidates were added to
+    # held-out wear-estimate error [%] without and with the best, where the rest of the null
+    # test passed it (:func:`wear_kept`)
+    wear: tuple[float | None, float | None] = (None, None)
 
     @property
     def best(self) -> Candidate:
@@ -1063,7 +1094,14 @@ def attribute(rec: Records, judged: Records, declared: Effect | None, declared_v
     adopted = adopts(best.own_after, best.own_before, best.bic - null_bic, settings.min_gain,
                      settings.min_delta_bic, min(best.explained.values(), default=0.0),
                      allowed)
-    return Round(ranking, effects, null_bic, allowed, adopted, base_test)
+    wear: tuple[float | None, float | None] = (None, None)
+    if adopted:  # last: it costs a simulation per wear state and record
+        wear = (wear_error(rec, nuisance, declared, declared_values),
+                wear_error(rec, best.nuisance, effects[best.name], best.values))
+        adopted = wear_kept(*wear, settings.max_wear_loss)
+        log.info("%s: held-out wear-estimate error %s -> %s %%%s", best.name, *wear,
+                 "" if adopted else ": worse, not adopted")
+    return Round(ranking, effects, null_bic, allowed, adopted, base_test, wear)
 
 
 def stacked(first: Effect, values: dict, second: Effect) -> Effect:
@@ -1135,18 +1173,9 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
     after_test = (model_signals(rec, rec.test, after_nui, chosen, after_vals) if last
                   else base_test)
     adopted = [r.best for r in rounds if r.adopted]
-    man = bundle.manifest
-    known = np.array([i for i in rec.test if not pd.isna(man.wear_mm.iloc[i])
-                      and rec.wear_states[i]], int)
-    wear_err = {}
-    if known.size:
-        true = man.wear_mm.to_numpy(float)[known]
-        for key, (nui, eff, vals) in {"before": (nuisance, None, {}),
-                                      "after": (after_nui, chosen, after_vals)}.items():
-            est = wear_estimates(rec, known, nui, eff, vals)
-            ok = true > 0
-            wear_err[key] = (float(np.mean(np.abs(est[ok] - true[ok]) / true[ok]) * 100)
-                             if ok.any() else float(np.mean(np.abs(est - true))))
+    # each adopted round's check already has the estimates (the null test's last condition)
+    wear_before = first.wear[0] if first.adopted else wear_error(rec, nuisance, None, {})
+    wear_err = {"before": wear_before, "after": last.wear[1] if last else wear_before}
     rec.cache.clear()  # the report keeps the records, not the simulations
     return LoopReport(
         mode="bundle",
@@ -1170,7 +1199,8 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
         null_bic=first.null_bic,
         ranking=first.table(),
         decision_rule={"min_gain": settings.min_gain, "min_delta_bic": settings.min_delta_bic,
-                       "false_add_rate": settings.false_add_rate, "allowed": first.allowed},
+                       "false_add_rate": settings.false_add_rate, "allowed": first.allowed,
+                       "max_wear_loss": settings.max_wear_loss},
         details={
             "error_before_db": rms(np.concatenate(residuals_db(rec, rec.test, base_test))),
             "error_after_db": rms(np.concatenate(residuals_db(rec, rec.test, after_test))),
@@ -1182,6 +1212,8 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
             "groups": group_summary(judged, base_test, after_test),
             "residual_before": residual_table(rec, rec.test, base_test),
             "residual_after": residual_table(rec, rec.test, after_test),
+            "wear_check": [{"effect": r.best.name, "before_pct": r.wear[0],
+                            "after_pct": r.wear[1]} for r in rounds],
             "second_round": ({"on": first.best.name, "adopted": rounds[1].adopted,
                               "allowed": rounds[1].allowed, "ranking": rounds[1].table()}
                              if len(rounds) > 1 else None),

@@ -393,6 +393,10 @@ def test_loop_app_finds_an_undeclared_transfer_path(tmp_path, scn):
     assert tuple(report)[:len(STABLE_KEYS)] == STABLE_KEYS  # one report type, stable keys
     assert report["chosen_effect"] == "transfer_path"
     assert report["second_round"] is None
+    check = report["wear_check"][0]  # the adopted effect kept the wear estimate
+    assert check["after_pct"] == report["wear_error_after_pct"]
+    assert check["after_pct"] <= (1 + report["decision_rule"]["max_wear_loss"]) * check[
+        "before_pct"]
     assert report["error_after"] < 0.5 * report["error_before"]
     assert report["not_identifiable"] == ["eccentricity1_um"]
     assert set(report["nuisance_after"]) == set(report["calibration"])

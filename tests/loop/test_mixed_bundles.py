@@ -8,6 +8,8 @@ import dataclasses
 import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from physics.dynamics.model import build_model, simulate
 from physics.gear.stiffness import MeshStiffness
@@ -34,6 +36,7 @@ from physics.loop.bundle_loop import (
     second_candidates,
     split_records,
     stacked,
+    wear_kept,
     with_discrepancy,
     with_model_form,
     with_modulation,
@@ -173,6 +176,14 @@ def test_adopts_is_one_rule_for_both_loops():
     assert not adopts(0.5, 1.0, -20.0, 0.2, 10.0, explained=5.0, allowed=10.0)
     assert adopts(0.5, 1.0, -20.0, 0.2, 10.0, explained=50.0, allowed=10.0)
     assert not adopts(float("nan"), 1.0, -20.0, 0.2, 10.0, explained=50.0, allowed=10.0)
+
+
+@given(before=st.floats(0.1, 500.0), loss=st.floats(0.0, 1.0), share=st.floats(0.0, 1.0))
+def test_wear_check_allows_only_the_stated_loss(before, loss, share):
+    limit = (1 + loss) * before
+    assert wear_kept(before, share * limit, loss)  # better, or worse within the stated loss
+    assert not wear_kept(before, 1.001 * limit, loss)  # worse beyond it
+    assert wear_kept(None, 3 * before, loss) and wear_kept(before, None, loss)  # wear unknown
 
 
 def test_split_is_stratified_and_unchanged_for_one_group():
