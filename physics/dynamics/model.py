@@ -225,15 +225,18 @@ PASS_EDGE = 0.45
 STOP_DB = 80.0
 
 
+@functools.lru_cache(maxsize=32)
 def anti_aliasing_filter(n_sub: int) -> np.ndarray:
     """Linear-phase low-pass FIR at ``n_sub`` times the output rate (Kaiser window, Oppenheim &
     Schafer, Discrete-Time Signal Processing, 3rd ed., 7.6): pass band to ``PASS_EDGE fs``,
     stop band from ``(1 - PASS_EDGE) fs``, ``2 L n_sub + 1`` taps (a whole number ``L`` of
-    output samples either side)."""
+    output samples either side). Designed once per ``n_sub`` (read-only)."""
     width = (1 - 2 * PASS_EDGE) * 2 / n_sub  # transition, as a fraction of the fine Nyquist
     taps, beta = signal.kaiserord(STOP_DB, width)
     half = math.ceil((taps - 1) / (2 * n_sub))
-    return signal.firwin(2 * half * n_sub + 1, 1.0 / n_sub, window=("kaiser", beta))
+    h = signal.firwin(2 * half * n_sub + 1, 1.0 / n_sub, window=("kaiser", beta))
+    h.flags.writeable = False
+    return h
 
 
 def anti_aliased(fine: np.ndarray, n_sub: int, n_out: int) -> np.ndarray:
