@@ -181,6 +181,12 @@ def declared_support(scn: Scenario) -> dict[str, float]:
     return {n: float(getattr(dyn, n)) for n in SUPPORT}
 
 
+def support_of(nuisance: dict) -> dict[str, float]:
+    """The support mode's entries of ``nuisance`` (none: a rigid support), as
+    :func:`physics.signals.measurement.declared_chain` takes them."""
+    return {n: nuisance[n] for n in SUPPORT if n in nuisance}
+
+
 def completed(nuisance: dict, scn: Scenario) -> dict:
     """``nuisance`` with the model-form parameters it lacks at their neutral values."""
     return declared_model_form(scn) | nuisance
@@ -568,8 +574,7 @@ def model_signals(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | N
         quantity = man.quantity.iloc[i]
         fs = float(man.fs_hz.iloc[i])
         x = declared_chain(raw[k], quantity, nuisance["housing_mass_kg"], fs=fs,
-                           support_hz=nuisance.get("support_hz", 0.0),
-                           support_damping=nuisance.get("support_damping", 0.05))
+                           **support_of(nuisance))
         if eff is not None and eff.record is not None and quantity in eff.quantities:
             x = eff.record(x, fs, values)
         rng = np.random.default_rng([rec.settings.seed, int(i)])  # common numbers per record

@@ -23,6 +23,7 @@ from physics.loop.bundle_loop import (
     declared_nuisance,
     declared_support,
     shaft_rates,
+    support_of,
     with_nuisance,
     worn_models,
 )
@@ -58,8 +59,7 @@ def make_bundle(path: str | Path, base: Scenario, effect_name: str | None, seed:
     def chain(ms):
         return declared_chain(sensed(simulate(ms, run), quantity), quantity,
                               nuisance["housing_mass_kg"], fs=dyn.sample_rate_hz,
-                              support_hz=nuisance.get("support_hz", 0.0),
-                              support_damping=nuisance.get("support_damping", 0.05))
+                              **support_of(nuisance))
 
     clean = chain(models)
     plain = chain(declared) if models is not declared else clean
