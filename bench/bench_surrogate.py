@@ -1,12 +1,12 @@
 """CPU inference of the wear surrogate: ``python bench/bench_surrogate.py``.
 
-Prints the batch throughput [rows/s] of the default network (width 16, depth 2, 5 members, 9
-inputs: the invariant features of both sensors and the operating point) on 1e6 rows, its
-single-row latency, the same for the public ``Surrogate.predict`` (with the schema checks),
-and the analytic empirical-inverse estimator measured in the same run as the reference (issue
-target: >= 1e6 rows/s and >= 100 times the estimator). Timing does not depend on the
-weights' values, so the network is built with its initial weights; the schema is fitted to
-random rows in the training ranges.
+Prints the batch throughput [rows/s] (median of 7 runs) of the default network (width 16,
+depth 2, 5 members, 9 inputs: the invariant features of both sensors and the operating point)
+on 1e6 rows, on torch's threads and on one, its single-row latency, the same for the public
+``Surrogate.predict`` (with the schema checks), and the analytic empirical-inverse estimator
+measured in the same run as the reference (issue target: >= 1e6 rows/s and >= 100 times the
+estimator). Timing does not depend on the weights' values, so the network is built with its
+initial weights; the schema is fitted to random rows in the training ranges.
 """
 
 from __future__ import annotations
@@ -25,9 +25,10 @@ from surrogate.model import WearRegressor
 from surrogate.schema import FeatureSchema
 
 
-def rate(fn, n_rows: int, repeat: int = 3) -> float:
-    """Rows per second of ``fn()`` over ``n_rows`` (best of ``repeat``)."""
-    return n_rows / min(timeit.repeat(fn, number=1, repeat=repeat))
+def rate(fn, n_rows: int, repeat: int = 7) -> float:
+    """Rows per second of ``fn()`` over ``n_rows`` (median of ``repeat``: this machine's
+    timings scatter by a factor of 2 from run to run)."""
+    return n_rows / float(np.median(timeit.repeat(fn, number=1, repeat=repeat)))
 
 
 def latency_us(fn, repeat: int = 300) -> float:
@@ -55,6 +56,10 @@ def main() -> None:
     frame = pd.DataFrame(x, columns=cols)
     s.predict_array(x[:1000])
     batch = rate(lambda: s.predict_array(x), n)
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    serial = rate(lambda: s.predict_array(x), n)
+    torch.set_num_threads(threads)
     checked = rate(lambda: s.predict(frame), n, repeat=2)
     one = latency_us(lambda: s.predict_array(x[:1]))
     one_checked = latency_us(lambda: s.predict(frame.iloc[:1]), repeat=100)
@@ -67,8 +72,9 @@ def main() -> None:
     est_rate = rate(lambda: est.predict(p2p, kurt), p2p.size)
     est_one = latency_us(lambda: est.predict(p2p[:1], kurt[:1]), repeat=100)
 
-    print(f"threads                             : {torch.get_num_threads()}")
+    print(f"torch threads                       : {threads}")
     print(f"surrogate, batch of {n:,} rows      : {batch:,.0f} rows/s (target >= 1e6)")
+    print(f"surrogate, same, one thread         : {serial:,.0f} rows/s")
     print(f"surrogate.predict (schema checks)   : {checked:,.0f} rows/s")
     print(f"surrogate, one row                  : {one:.0f} us ({one_checked:.0f} us checked)")
     print(f"empirical inverse, batch            : {est_rate:,.0f} rows/s, one row {est_one:.0f} us")
