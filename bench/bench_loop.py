@@ -1,7 +1,7 @@
 """Confusion matrix and timing of the measured-data loop on bundles with an undeclared effect.
 
     python bench/bench_loop.py [--generator own|independent] [--seeds 3] [--null-seeds 6]
-                               [--records 12] [--jobs 2] [--out DIR]
+                               [--records 12] [--jobs 2] [--model-form] [--out DIR]
 
 For every effect of the library (acceleration bundles; ``sensor``, which only DTE records show,
 on DTE bundles) and for bundles without any effect, a generator writes a bundle and
@@ -15,7 +15,8 @@ size, 30 dB noise, the gear set's error phases drawn from the seed; the loop is 
 gearbox's bearing-support mode as estimated from its drawings); its true model is not ours,
 so the floor column is empty there. Prints and writes
 ``loop_runs.csv`` (one row per bundle: truth, choice, held-out error before/after and that of
-the data-generating model itself, wear-estimate error, seconds) and ``loop_confusion.csv``
+the data-generating model itself, wear-estimate error, seconds, and the first round's best
+candidate with the null test's figures on it) and ``loop_confusion.csv``
 (truth x choice counts), plus the rates the issue asks for: right effect named, held-out error
 at least halved, nothing added on clean bundles.
 Also times one bundle of 20 records of 1 s.
@@ -60,8 +61,8 @@ def base_scenario(generator: str = "own"):
     return scenario_from_config({"case": 3, "dynamics": {"support_hz": support}})
 
 
-def one(job: tuple[str, str | None, int, int, str]) -> dict:
-    generator, name, seed, records, tmp = job
+def one(job: tuple[str, str | None, int, int, bool, str]) -> dict:
+    generator, name, seed, records, model_form, tmp = job
     base = base_scenario(generator)
     quantity = "dte_m" if name == "sensor" else "accel_m_s2"
     if generator == "independent":
@@ -71,7 +72,7 @@ def one(job: tuple[str, str | None, int, int, str]) -> dict:
         path, truth = make_bundle(Path(tmp) / f"{name}_{seed}", base, name, seed,
                                   quantity=quantity, records=records)
     t = time.perf_counter()
-    r = run_loop(read_bundle(path), base, LoopSettings(seed=seed))
+    r = run_loop(read_bundle(path), base, LoopSettings(seed=seed, model_form=model_form))
     seconds = time.perf_counter() - t
     rec = r.signals["rec"]
     floor = float("nan")
@@ -85,7 +86,18 @@ def one(job: tuple[str, str | None, int, int, str]) -> dict:
             "error_true_model": floor,
             "wear_error_before_pct": r["wear_error_before_pct"],
             "wear_error_after_pct": r["wear_error_after_pct"],
-            "seconds": seconds}
+            "seconds": seconds, **best_candidate(r)}
+
+
+def best_candidate(r) -> dict:
+    """The first round's best candidate and the null test's figures on it: why it was or was
+    not adopted (own-entry error before/after, the least sum of squares it explains per
+    held-out record over the groups against what the discrepancy allows, its BIC change)."""
+    best = r["ranking"][0]
+    return {"best": best["effect"], "own_before": best["own_entries_error"][0],
+            "own_after": best["own_entries_error"][1],
+            "explained": min(best["explained"].values(), default=0.0),
+            "allowed": r["decision_rule"]["allowed"], "delta_bic": best["delta_bic"]}
 
 
 def main() -> None:
@@ -97,6 +109,8 @@ def main() -> None:
     ap.add_argument("--records", type=int, default=12,
                     help="records (1 s each) per bundle of the own generator")
     ap.add_argument("--jobs", type=int, default=2, help="bundles analysed in parallel")
+    ap.add_argument("--model-form", action="store_true",
+                    help="calibrate the declared model's form uncertainty (loop.model_form=true)")
     ap.add_argument("--out", default="bench_loop_out", help="folder for the CSV files")
     args = ap.parse_args()
     out = Path(args.out)
@@ -106,13 +120,13 @@ def main() -> None:
             t = time.perf_counter()
             base = base_scenario()
             path, _ = make_bundle(Path(tmp) / "timing", base, "tip_relief", 99, records=20)
-            run_loop(read_bundle(path), base)
+            run_loop(read_bundle(path), base, LoopSettings(model_form=args.model_form))
             print(f"one bundle of 20 records x 1 s: {time.perf_counter() - t:.1f} s "
                   "(generation included; target <= 120 s)")
         names = EFFECTS if args.generator == "own" else EFFECT_NAMES
-        jobs = [(args.generator, n, s, args.records, tmp) for n in names
+        jobs = [(args.generator, n, s, args.records, args.model_form, tmp) for n in names
                 for s in range(args.seeds)]
-        jobs += [(args.generator, None, 100 + s, args.records, tmp)
+        jobs += [(args.generator, None, 100 + s, args.records, args.model_form, tmp)
                  for s in range(args.null_seeds)]
         spawn = multiprocessing.get_context("spawn")  # numba's OpenMP threads do not survive fork
         with ProcessPoolExecutor(args.jobs, mp_context=spawn) as pool:
