@@ -225,8 +225,9 @@ class LoopSettings:
     max_wear_loss: float = bounded(0.1, 0.0, 100.0, "share of the wear estimate's held-out "
                                    "error an adopted effect may add", closed=True)
     # calibrate the declared model's form uncertainty (:data:`MODEL_FORM`) with the nuisance;
-    # off by default: on the project's own bundles it absorbs part of a tip relief and lets the
-    # greedy second round add spurious effects (docs/measured-data.md)
+    # off by default: better on the independent simulator's bundles, but on the project's own
+    # it absorbs a friction, leaves a tooth defect's error above half and lets the greedy
+    # second round stack a spurious effect (docs/measured-data.md, 2026-11-24)
     model_form: bool = False
 
     def __post_init__(self):

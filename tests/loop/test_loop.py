@@ -14,6 +14,7 @@ import pandas as pd
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from scipy import signal
 
 from physics.dynamics.model import build_model, simulate
 from physics.loop.bundle import read_bundle, read_feature_table, write_bundle
@@ -44,6 +45,7 @@ from physics.loop.table_loop import parse_columns
 from physics.params import scenario_from_config
 from physics.signals.order_analysis import (
     line_amplitudes,
+    power_spectrum,
     synchronous_average,
     white_noise_std,
 )
@@ -163,6 +165,28 @@ def test_line_amplitude_of_an_off_bin_sinusoid(f, a, phase):
     x = a * np.sin(2 * np.pi * f * t + phase) + 0.5 * a * np.sin(2 * np.pi * 7.3 * f * t)
     amp = line_amplitudes(x, FS, np.array([f, 7.3 * f]))
     np.testing.assert_allclose(amp, [a, 0.5 * a], rtol=0.02)
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(1, 5000), st.floats(-1e3, 1e3), st.integers(0, 2**32 - 1))
+def test_power_spectrum_is_scipys_hann_periodogram(n, offset, seed):
+    x = offset + np.random.default_rng(seed).standard_normal(n)
+    f, p = power_spectrum(x, FS)
+    f_ref, p_ref = signal.periodogram(x, FS, window="hann", detrend="constant",
+                                      scaling="spectrum")
+    np.testing.assert_allclose(f, f_ref)
+    np.testing.assert_allclose(p, p_ref, rtol=1e-9, atol=1e-12 * max(p_ref.max(), 1e-300))
+
+
+@pytest.mark.parametrize("bin_", [7, 100, 2000])
+def test_power_spectrum_peak_of_an_on_bin_sinusoid_is_its_mean_square(bin_):
+    n, a = 4096, 3.0
+    x = a * np.cos(2 * np.pi * bin_ * np.arange(n) / n + 0.4)
+    _, p = power_spectrum(x, FS)
+    assert p[bin_] == pytest.approx(a**2 / 2, rel=1e-12)  # the 'spectrum' scaling
+    # periodic Hann: each neighbour has half the peak's amplitude, the other bins nothing
+    np.testing.assert_allclose(p[[bin_ - 1, bin_ + 1]], a**2 / 2 / 4, rtol=1e-9)
+    assert np.delete(p, [bin_ - 1, bin_, bin_ + 1]).max() < 1e-20 * a**2
 
 
 def test_noise_floor_under_dense_lines():
