@@ -8,9 +8,9 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from scipy.signal import periodogram
 
 from physics.files import pyplot, save_figure
+from physics.signals.order_analysis import power_spectrum
 from physics.tribology.mixed_ehl import EHLSolution
 from physics.tribology.wear import WearResult
 
@@ -42,7 +42,7 @@ def plot_dte_spectrum(dte: pd.DataFrame, mesh_hz: float, fs: float, path: Path) 
     for n, df in dte.groupby("cycles"):
         x = df.dte_m.to_numpy()
         # Hann-windowed power of each line (A^2/2): amplitude sqrt(2 P)
-        f, power = periodogram(x, fs, window="hann", detrend="constant", scaling="spectrum")
+        f, power = power_spectrum(x, fs)
         spec = np.sqrt(2 * power)
         ax.semilogy(f, spec * 1e6, lw=0.8, label=f"{n:.3g} cycles")
         ax2.plot(df.time_s * 1e3, x * 1e6, lw=0.8, label=f"{n:.3g} cycles")
