@@ -14,8 +14,9 @@ housing acceleration only) and ``loco2`` / ``loco5`` (all cases but one). Test s
 - ``independent_fleet_heldout``: gearboxes of a fleet of the independent simulator
   (:func:`independent_fleet`) that neither network saw, scored for the physics-trained network
   (``case3``, ``all``) and for the same network fine-tuned on the fleet's other labelled
-  gearboxes (``case3_finetuned``, ``all_finetuned``): what a user with a few labelled records
-  of his own gearbox type gets (README, training on your own data).
+  gearboxes, all its weights (``case3_finetuned``, ``all_finetuned``) or its output layers
+  only (``case3_head``, ``all_head``, :data:`FINETUNES`): what a user with a few labelled
+  records of his own gearbox type gets (README, training on your own data).
 
 The estimator (thesis 4.4: cubics of DTE peak-to-peak and kurtosis in cycles and the empirical
 wear law, :class:`physics.estimators.empirical_inverse.EmpiricalInverse`) is fitted on the same
@@ -123,6 +124,9 @@ FLEET_FIELDS = ("runout1_um", "mesh_damping_ratio", "single_stiffness_N_mm_um",
 FLEET_SPREAD = 0.25
 #: fleet gearboxes: labelled for fine-tuning, validating (the interval) and held out
 FLEET_SPLIT = {"train": 4, "val": 2, "test": 4}
+#: fine-tunes on the fleet: label -> train.py overrides (every weight at a tenth of the
+#: learning rate; or the output layers only, at the default rate)
+FINETUNES = {"finetuned": ["model.lr=0.0003"], "head": ["model.trainable=head"]}
 
 
 def shifted_ranges(share: float = 0.4) -> dict:
@@ -167,24 +171,26 @@ def independent_fleet(gearboxes: int, seed: int = 1) -> pd.DataFrame:
     return pd.concat(frames, ignore_index=True)
 
 
-def finetune(root: Path, out: Path, name: str, fleet: pd.DataFrame, extra: list[str]
-             ) -> tuple[Surrogate, pd.DataFrame]:
+def finetune(root: Path, out: Path, name: str, fleet: pd.DataFrame, extra: list[str],
+             label: str) -> tuple[Surrogate, pd.DataFrame]:
     """Fine-tune model ``name`` on the fleet's labelled gearboxes the way a user would
-    (``data.table``, ``init_from``); returns the network and the fleet's held-out rows."""
+    (``data.table``, ``init_from`` and the overrides of ``FINETUNES[label]``); returns the
+    network and the fleet's held-out rows."""
     table = out / f"fleet_{name}.csv"
     atomic_write(table, lambda p: fleet.to_csv(p, index=False))
-    cfg = train_config(root, out / "models" / f"{name}_finetuned", *MODELS[name], *extra,
+    folder = out / "models" / f"{name}_{label}"
+    cfg = train_config(root, folder, *MODELS[name], *extra,
                        f"data.table={table}", "data.group=gearbox",
                        f"data.val_replicates={FLEET_SPLIT['val']}",
                        f"data.test_replicates={FLEET_SPLIT['test']}",
                        f"init_from={out / 'models' / name / 'wear_surrogate.pt'}",
-                       "model.lr=0.0003")
-    log.info("model %s: fine-tuning on %d labelled gearboxes", name, FLEET_SPLIT["train"])
+                       *FINETUNES[label])
+    log.info("model %s: fine-tuning (%s) on %d labelled gearboxes", name, label,
+             FLEET_SPLIT["train"])
     train(cfg)
     dm = instantiate(cfg.data)
     dm.setup()
-    return Surrogate.load(out / "models" / f"{name}_finetuned" / "wear_surrogate.pt"), \
-        dm.frames["test"]
+    return Surrogate.load(folder / "wear_surrogate.pt"), dm.frames["test"]
 
 
 def run(out: Path, root: Path, max_epochs: int | None = None) -> pd.DataFrame:
@@ -216,15 +222,19 @@ def run(out: Path, root: Path, max_epochs: int | None = None) -> pd.DataFrame:
                                                   set_name == "heldout_trajectories")
             rows += r
         if name in ("case3", "all"):
-            tuned, held = finetune(root, out, name, fleet[fleet.case.isin(cases)], extra)
-            for label, net in ((name, surrogate), (f"{name}_finetuned", tuned)):
+            nets = {name: surrogate}
+            for label in FINETUNES:
+                nets[f"{name}_{label}"], held = finetune(root, out, name,
+                                                         fleet[fleet.case.isin(cases)], extra,
+                                                         label)
+            for label, net in nets.items():
                 r, plots[(label, "independent_fleet_heldout")] = evaluate(
                     f"{label}/independent_fleet_heldout", net, est, held, speed=False)
                 rows += r
     table = pd.DataFrame(rows)
     atomic_write(out / "benchmark.csv", lambda p: table.to_csv(p, index=False))
     plt = pyplot()
-    fig, axes = plt.subplots(3, 5, figsize=(22, 13))
+    fig, axes = plt.subplots(3, 6, figsize=(26, 13))
     for ax, key in zip(axes.flat, plots, strict=False):
         d = plots[key]
         parity_figure(d["true"], d["estimator"], None, "/".join(key), TARGET, ax,

@@ -61,10 +61,10 @@ class WearRegressor(L.LightningModule):
 
     def __init__(self, n_inputs: int, schema: dict, width: int = 64, depth: int = 2,
                  members: int = 5, lr: float = 3e-3, weight_decay: float = 1e-5,
-                 interval: float = 0.9) -> None:
+                 interval: float = 0.9, trainable: str = "all") -> None:
         super().__init__()
         ModelConfig(width=width, depth=depth, members=members, lr=lr, weight_decay=weight_decay,
-                    interval=interval).check()
+                    interval=interval, trainable=trainable).check()
         self.save_hyperparameters()
         self.net = EnsembleMLP(n_inputs, [width] * depth, members)
         self.z = NormalDist().inv_cdf(0.5 + interval / 2)
@@ -102,6 +102,13 @@ class WearRegressor(L.LightningModule):
     def test_step(self, batch, _):
         self._evaluate(batch, "test")
 
+    def trained_parameters(self) -> list[nn.Parameter]:
+        """The weights the optimiser moves (``trainable``): all, or each member's output
+        layer (``head``: the hidden layers, the physics-trained features, stay as they are)."""
+        if self.hparams.get("trainable", "all") == "all":
+            return list(self.parameters())
+        return [self.net.weights[-1], self.net.biases[-1]]
+
     def configure_optimizers(self):
-        return torch.optim.AdamW(self.parameters(), lr=self.hparams.lr,
+        return torch.optim.AdamW(self.trained_parameters(), lr=self.hparams.lr,
                                  weight_decay=self.hparams.weight_decay)

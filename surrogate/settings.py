@@ -51,9 +51,15 @@ class ModelConfig:
     lr: float = 3e-3
     weight_decay: float = 1e-5
     interval: float = 0.9  # level of the predictive interval (calibrated on validation)
+    # which weights train: "all", or "head" (each member's output layer only: a fine-tune on a
+    # few labelled gearboxes that keeps the physics-trained features, ``init_from``)
+    trainable: str = "all"
 
     def check(self) -> None:
         """Raise ``ValueError`` naming the first setting outside its range."""
+        if self.trainable not in ("all", "head"):
+            raise ValueError(f"model.trainable = {self.trainable!r} must be 'all' or 'head' "
+                             "(the output layers only, for fine-tuning with init_from)")
         for name, lo, hi in (("width", 1, 4096), ("depth", 1, 64), ("members", 1, 256)):
             v = getattr(self, name)
             if not (isinstance(v, numbers.Integral) and not isinstance(v, bool) and lo <= v <= hi):

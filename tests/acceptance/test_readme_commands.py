@@ -123,7 +123,7 @@ CASES: dict[str, Case] = {
     f"python train.py {TABLE_ARGS}": Case(tuple(FAST_TRAIN + SMALL_SPLIT), before=(USER_TABLE,),
                                           check=_files("logs/train/runs/case3_*/metrics.json")),
     f"python train.py {TABLE_ARGS} init_from=logs/train/runs/<run>/wear_surrogate.pt "
-    "model.lr=0.0003": Case(("trainer.max_epochs=3", "trainer.min_epochs=1", *SMALL_SPLIT),
+    "model.trainable=head": Case(("trainer.max_epochs=3", "trainer.min_epochs=1", *SMALL_SPLIT),
                              before=(USER_TABLE,)),
     "python -m surrogate.benchmark": Case(("--max-epochs", "3"), slow=True),
     "python train.py --help": Case(),

@@ -233,6 +233,16 @@ def test_training_on_a_users_table_from_scratch_and_fine_tuned(trained, dataset,
     assert s.schema == base.schema  # fine-tuned in the pre-trained network's scaling
     with pytest.raises(ValueError, match=r"data\.group"):
         train(train_cfg(tmp_path / "c", dataset, *common[:1], *common[2:]))
+    # the output layers only: the hidden layers (the physics-trained features) stay as they
+    # were, the output layer moves
+    assert np.isfinite(train(train_cfg(tmp_path / "d", dataset,
+                                       f"init_from={trained / 'wear_surrogate.pt'}",
+                                       "model.trainable=head", *common)))
+    head = Surrogate.load(tmp_path / "d" / "run" / "wear_surrogate.pt").model.net
+    for i, (w, b) in enumerate(zip(head.weights, head.biases, strict=True)):
+        same = (torch.equal(w, base.model.net.weights[i])
+                and torch.equal(b, base.model.net.biases[i]))
+        assert same == (i < len(head.weights) - 1), f"layer {i}"
 
 
 def test_conformal_scale_covers_the_level_on_exchangeable_scores():
@@ -251,6 +261,8 @@ def test_model_rejects_bad_settings():
         WearRegressor(3, {}, interval=1.5)
     with pytest.raises(ValueError, match="width"):
         WearRegressor(3, {}, width=0)
+    with pytest.raises(ValueError, match="trainable"):
+        WearRegressor(3, {}, trainable="hidden")
 
 
 def test_export_is_atomic_and_loadable_without_pickle(trained, tmp_path):
