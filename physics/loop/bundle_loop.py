@@ -748,37 +748,32 @@ def explore(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[
             ) -> Candidate:
     """The best of ``c`` and a scrambled Sobol sample (``settings.explore`` points) over the
     effect's whole range and the dynamic nuisance within ``EXPLORE_SPAN`` (unit coordinates)
-    of its declared values (the model form: of ``c``'s for the first half of the points, of
-    its neutral values for the second; in the calibration, ``eff`` None,
+    of its declared values (the model form: of ``c``'s; in the calibration, ``eff`` None,
     ``CALIBRATION_EXPLORE`` times as many points and the model form over its whole range),
-    ``m_h`` levelled at each. A missing effect drags the calibration (to the bounds, at
-    worst; the model form as much as the nuisance: it takes up what of the effect it can),
-    and least squares from a single start stays in its basin; the declared values are the
-    prior that does not depend on the fit."""
+    ``m_h`` levelled at each. A missing effect drags the calibration
+    (to the bounds, at worst), and least squares from a single start stays in its basin; the
+    declared values are the prior that does not depend on the fit."""
     params = eff.params if eff is not None else ()
     dyn = [n for n in free_nuisance if n in EXPLORED]
     # the scenario's nuisance (and support mode) around its declared values; the model form
     # over its whole range in the calibration (its neutral value is no prior worth holding
-    # to), with an effect around the calibration and around its neutral values
+    # to), around the calibration with an effect
     scn = rec.scenarios[0]
     prior = completed(c.nuisance, scn) | declared_nuisance(scn) | declared_support(scn)
     span = {n: (0.5 if eff is None and n in MODEL_FORM else EXPLORE_SPAN) for n in dyn}
     centres = {n: (0.5 if span[n] == 0.5 else to_unit(prior[n], *BOUNDS[n])) for n in dyn}
-    neutral = {n: to_unit(v, *BOUNDS[n]) for n, v in declared_model_form(scn).items()
-               if n in dyn and eff is not None}
     dim = len(params) + len(dyn)
     wide = eff is None and rec.settings.model_form
     n_points = rec.settings.explore * (CALIBRATION_EXPLORE if wide else 1)
     pts = (qmc.Sobol(dim, seed=rec.settings.seed).random(n_points) if dim and n_points
            else np.empty((0, 0)))
     best = c
-    for j, u in enumerate(pts):
+    for u in pts:
         vals = c.option | {p.name: from_unit(float(x), p.low, p.high, p.log)
                            for p, x in zip(params, u, strict=False)}
         nui = dict(c.nuisance)
-        home = centres | (neutral if 2 * j >= len(pts) else {})
         for n, x in zip(dyn, u[len(params):], strict=True):
-            nui[n] = from_unit(float(np.clip(home[n] + span[n] * (2 * x - 1), 0, 1)),
+            nui[n] = from_unit(float(np.clip(centres[n] + span[n] * (2 * x - 1), 0, 1)),
                                *BOUNDS[n])
         nui = with_level(rec, nui, eff, vals)
         cost = train_cost(rec, nui, eff, vals)
