@@ -60,6 +60,10 @@ def prepare(cfg: DictConfig) -> TrainJob:
     trainer = _instantiate(cfg.trainer, "trainer", callbacks=callbacks, logger=loggers or False)
     data = _instantiate(cfg.data, "data")
     init = Surrogate.load(cfg.init_from) if cfg.get("init_from") else None
+    if init is None and cfg.model.get("trainable", "all") != "all":
+        raise ValueError(f"model.trainable = {cfg.model.trainable!r} trains the output layers of "
+                         "a pre-trained network and needs init_from=<run>/wear_surrogate.pt; "
+                         "to train from scratch leave model.trainable at 'all'")
     if init is not None and list(init.schema.inputs) != data.inputs:
         raise ValueError(f"init_from = {cfg.init_from}: that network takes "
                          f"{list(init.schema.inputs)}, this run's data gives {data.inputs}; "

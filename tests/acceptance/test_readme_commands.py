@@ -124,7 +124,7 @@ CASES: dict[str, Case] = {
                                           check=_files("logs/train/runs/case3_*/metrics.json")),
     f"python train.py {TABLE_ARGS} init_from=logs/train/runs/<run>/wear_surrogate.pt "
     "model.trainable=head": Case(("trainer.max_epochs=3", "trainer.min_epochs=1", *SMALL_SPLIT),
-                             before=(USER_TABLE,)),
+                                 before=(USER_TABLE,)),
     "python -m surrogate.benchmark": Case(("--max-epochs", "3"), slow=True),
     "python train.py --help": Case(),
     "python -m physics.dataset": Case(tuple(SMALL_DATASET), check=_files(

@@ -243,6 +243,8 @@ def test_training_on_a_users_table_from_scratch_and_fine_tuned(trained, dataset,
         same = (torch.equal(w, base.model.net.weights[i])
                 and torch.equal(b, base.model.net.biases[i]))
         assert same == (i < len(head.weights) - 1), f"layer {i}"
+    with pytest.raises(ValueError, match="needs init_from"):  # random hidden layers, frozen
+        train(train_cfg(tmp_path / "e", dataset, "model.trainable=head", *common))
 
 
 def test_conformal_scale_covers_the_level_on_exchangeable_scores():
