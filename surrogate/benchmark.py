@@ -222,11 +222,9 @@ def run(out: Path, root: Path, max_epochs: int | None = None) -> pd.DataFrame:
                                                   set_name == "heldout_trajectories")
             rows += r
         if name in ("case3", "all"):
-            nets = {name: surrogate}
-            for label in FINETUNES:
-                nets[f"{name}_{label}"], held = finetune(root, out, name,
-                                                         fleet[fleet.case.isin(cases)], extra,
-                                                         label)
+            nets, mine = {name: surrogate}, fleet[fleet.case.isin(cases)]
+            for label in FINETUNES:  # the same split each time: ``held`` is one set of rows
+                nets[f"{name}_{label}"], held = finetune(root, out, name, mine, extra, label)
             for label, net in nets.items():
                 r, plots[(label, "independent_fleet_heldout")] = evaluate(
                     f"{label}/independent_fleet_heldout", net, est, held, speed=False)
