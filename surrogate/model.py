@@ -105,7 +105,7 @@ class WearRegressor(L.LightningModule):
     def trained_parameters(self) -> list[nn.Parameter]:
         """The weights the optimiser moves (``trainable``): all, or each member's output
         layer (``head``: the hidden layers, the physics-trained features, stay as they are)."""
-        if self.hparams.get("trainable", "all") == "all":
+        if self.hparams.trainable == "all":
             return list(self.parameters())
         return [self.net.weights[-1], self.net.biases[-1]]
 
