@@ -40,13 +40,17 @@ class EnsembleMLP(nn.Module):
         self.act = nn.SiLU()
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
-        h = x.unsqueeze(0).expand(self.weights[0].shape[0], -1, -1)
-        last = len(self.weights) - 1
-        for i, (w, b) in enumerate(zip(self.weights, self.biases, strict=True)):
-            h = torch.baddbmm(b, h, w)
-            if i < last:
-                h = self.act(h)
-        return h
+        # Rows last: every product is (units_out, units_in) @ (units_in, rows), one wide matrix
+        # product per member, and the first layer of all members is one product with the input
+        # read as its transpose (no copy). On one thread of this machine 5.2e6 rows/s against
+        # 3.7e6 with rows first (batches of 4096; bench/bench_surrogate.py).
+        w, b = self.weights[0], self.biases[0]
+        members, n_in, n_out = w.shape
+        h = torch.addmm(b.transpose(1, 2).reshape(-1, 1),
+                        w.transpose(1, 2).reshape(-1, n_in), x.T).view(members, n_out, -1)
+        for w, b in zip(self.weights[1:], self.biases[1:], strict=True):
+            h = torch.baddbmm(b.transpose(1, 2), w.transpose(1, 2), self.act(h))
+        return h.transpose(1, 2)
 
 
 def mixture(out: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:

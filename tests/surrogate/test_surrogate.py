@@ -119,6 +119,14 @@ def test_ensemble_members_differ_and_the_mixture_is_right():
     with torch.no_grad():
         out = net(torch.randn(5, 4))
     assert out.shape == (3, 5, 2) and not torch.allclose(out[0], out[1])
+    x = torch.randn(5, 4)
+    with torch.no_grad():  # each member is the plain MLP x W + b, SiLU between layers
+        for m in range(3):
+            h = x
+            for i, (w, b) in enumerate(zip(net.weights, net.biases, strict=True)):
+                h = h @ w[m] + b[m]
+                h = h * torch.sigmoid(h) if i < 2 else h
+            assert torch.allclose(net(x)[m], h, atol=1e-6)
     mean, var = mixture(out)
     mu, v = out[..., 0].numpy(), np.exp(out[..., 1].numpy())
     assert np.allclose(mean.detach(), mu.mean(0), atol=1e-6)
