@@ -67,7 +67,11 @@ its run folder.
    ``max_wear_loss`` (10 %) of its error (:func:`wear_kept`). The rule is designed for a false-add
    rate of ``false_add_rate`` (1 %) per bundle when the declared model's form error is
    unstructured (no effect of the library resembles it); a form error that looks like an effect
-   is not separable from it by any rule on these data.
+   is not separable from it by any rule on these data. Each candidate's **separability** is
+   reported beside it (:func:`separable_share`): the share of its change of the train
+   residuals that no linear combination of the free nuisance's directions reproduces (near 0:
+   the declared model's own freedom makes the same change; a DTE sensor gain against a free
+   stiffness level, whose lengths scale out of the equation of motion, is the exact case).
    **Greedy second round** (:func:`attribute` again): once an effect is adopted, every other
    effect is tried on the model that carries it (:func:`stacked`, the first's parameters
    held at their fit, the nuisance refitted), judged by the same rule against that model.
@@ -150,6 +154,9 @@ EXPLORE_SPAN = 0.25
 CALIBRATION_EXPLORE = 4
 #: least-squares evaluations that polish a screened candidate's best grid point
 SCREEN_NFEV = 6
+#: unit-coordinate step of the free parameters' directions that judge a candidate's
+#: separability (:func:`free_directions`)
+SEPARABILITY_STEP = 0.02
 #: simulations kept by :func:`responses`
 CACHE_SIZE = 256
 
@@ -721,6 +728,7 @@ class Candidate:
     explained: dict = field(default_factory=dict)  # per group: see :func:`signature_gain`
     own_before: float = math.nan  # held-out error in its own entries, declared model ...
     own_after: float = math.nan  # ... and with the candidate
+    separable: float = math.nan  # share of its change no free parameter mimics (separable_share)
 
 
 def screen_effect(rec: Records, eff: Effect, option: dict, nuisance: dict) -> Candidate:
@@ -918,6 +926,36 @@ def signature_gain(rec: Records, idx: np.ndarray, before: list[np.ndarray],
     return explained, rms(np.concatenate(e_b)), rms(np.concatenate(e_a))
 
 
+def free_directions(rec: Records, nuisance: dict, eff: Effect | None, values: dict,
+                    free_nuisance: list[str]) -> np.ndarray:
+    """Columns: the change of the standardised train residuals per unit-coordinate step of
+    each free nuisance parameter (forward differences of ``SEPARABILITY_STEP``, towards the
+    inside of its range) at the model ``eff`` at ``values`` with ``nuisance``."""
+    r0 = residuals(rec, rec.train, model_signals(rec, rec.train, nuisance, eff, values))
+    cols = []
+    for n in free_nuisance:
+        u = to_unit(nuisance[n], *BOUNDS[n])
+        step = SEPARABILITY_STEP if u < 0.5 else -SEPARABILITY_STEP
+        moved = nuisance | {n: from_unit(u + step, *BOUNDS[n])}
+        r1 = residuals(rec, rec.train, model_signals(rec, rec.train, moved, eff, values))
+        cols.append((r1 - r0) / step)
+    return np.column_stack(cols) if cols else np.empty((r0.size, 0))
+
+
+def separable_share(directions: np.ndarray, change: np.ndarray) -> float:
+    """Share of the sum of squares of ``change`` that no linear combination of the columns of
+    ``directions`` reproduces: 1 for a change orthogonal to all of them, 0 for one in their
+    span (the least-squares residual of ``change`` on ``directions``, relative)."""
+    ss = float(change @ change)
+    if ss == 0.0:
+        return math.nan
+    if directions.shape[1] == 0:
+        return 1.0
+    coef, *_ = np.linalg.lstsq(directions, change, rcond=None)
+    rest = change - directions @ coef
+    return float(rest @ rest) / ss
+
+
 def feature_error(rec: Records, idx: np.ndarray, signals: list[np.ndarray]) -> float:
     """Mean relative error of the Table 13 features, model against measurement [%]."""
     errs = []
@@ -1059,7 +1097,8 @@ class Round:
                  "nuisance": c.nuisance, "refined": c.refined,
                  "heldout_error": c.heldout, "delta_bic": c.bic - self.null_bic,
                  "own_entries_error": [c.own_before, c.own_after],
-                 "explained": c.explained, "n_params": c.n_params} for c in self.ranking]
+                 "explained": c.explained, "n_params": c.n_params,
+                 "separable": c.separable} for c in self.ranking]
 
 
 def attribute(rec: Records, judged: Records, declared: Effect | None, declared_values: dict,
@@ -1084,16 +1123,22 @@ def attribute(rec: Records, judged: Records, declared: Effect | None, declared_v
     top = settings.refine
     ranking[:top] = [search(rec, effects[c.name], c, free_nuisance)
                      for c in tqdm(ranking[:top], desc="refining", disable=not progress)]
+    directions = free_directions(rec, nuisance, declared, declared_values, free_nuisance)
     for c in ranking:
+        without = residuals(rec, rec.train, model_signals(rec, rec.train, c.nuisance, declared,
+                                                          declared_values))
+        with_c = residuals(rec, rec.train, model_signals(rec, rec.train, c.nuisance,
+                                                         effects[c.name], c.values))
+        c.separable = separable_share(directions, with_c - without)
         test = model_signals(rec, rec.test, c.nuisance, effects[c.name], c.values)
         c.heldout = rms(residuals(judged, rec.test, test))
         c.explained, c.own_before, c.own_after = signature_gain(judged, rec.test, base_test,
                                                                 test)
         c.bic = bic(c.train_rss, n_train, c.n_params)
         log.info("%s %s: held-out %.2f (baseline %.2f), own entries %.2f -> %.2f, explained "
-                 "%s, dBIC %.1f%s", c.name, c.option, c.heldout, before, c.own_before,
-                 c.own_after, {k: round(v, 1) for k, v in c.explained.items()},
-                 c.bic - null_bic, "" if c.refined else " (screened)")
+                 "%s, dBIC %.1f, separable %.2f%s", c.name, c.option, c.heldout, before,
+                 c.own_before, c.own_after, {k: round(v, 1) for k, v in c.explained.items()},
+                 c.bic - null_bic, c.separable, "" if c.refined else " (screened)")
     ranking.sort(key=lambda c: c.heldout)
     best = ranking[0]
     allowed = discrepancy_allowance(best.n_params, len(ranking), settings.false_add_rate)

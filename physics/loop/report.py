@@ -105,12 +105,14 @@ def markdown(r: dict) -> str:
         lines.append(f"Refitted with the chosen effect: {after}.")
     staged = any("refined" in c for c in r["ranking"])  # bundles: screened, then refined
     lines += ["", "## Ranking (held-out error, with the model discrepancy for records; BIC "
-              "relative to the calibrated model)", "",
-              "| effect | option | held-out error | dBIC | parameters |" + (" fit |" * staged),
-              "|---|---|---|---|---|" + ("---|" * staged)]
+              "relative to the calibrated model; separable: the share of the candidate's "
+              "change that no free nuisance parameter mimics)", "",
+              "| effect | option | held-out error | dBIC | parameters |"
+              + (" fit | separable |" * staged), "|---|---|---|---|---|" + ("---|---|" * staged)]
     for c in r["ranking"]:
         p = ", ".join(f"{k}={v:.3g}" for k, v in c["parameters"].items() if isinstance(v, float))
-        fit = (" refined |" if c["refined"] else " screened |") if staged else ""
+        fit = (f" {'refined' if c['refined'] else 'screened'} | {c['separable']:.2f} |"
+               if staged else "")
         lines.append(f"| {c['effect']} | {c['option'] or ''} | {c['heldout_error']:.3f} | "
                      f"{c['delta_bic']:.1f} | {p} |{fit}")
     rule = r["decision_rule"]

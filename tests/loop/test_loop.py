@@ -24,8 +24,10 @@ from physics.loop.bundle_loop import (
     LoopSettings,
     calibrate,
     candidates_for,
+    completed,
     declared_nuisance,
     declared_support,
+    free_directions,
     identifiable,
     model_signals,
     prepare,
@@ -34,6 +36,7 @@ from physics.loop.bundle_loop import (
     rms,
     run_loop,
     search,
+    separable_share,
     split_records,
     train_cost,
     with_level,
@@ -364,6 +367,43 @@ def test_a_support_mode_outside_the_loop_bounds_is_refused_before_work(clean_rec
     with pytest.raises(ValueError, match=r"dynamics.support_hz = 50.0 must lie in \[200, "
                                          r"20000\].*support_hz=0"):
         run_loop(rec.bundle, bad)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(20, 60), st.integers(1, 5), st.floats(0.0, 10.0), st.integers(0, 2**31))
+def test_separable_share_is_the_part_outside_the_span(n, k, weight, seed):
+    rng = np.random.default_rng(seed)
+    d = rng.standard_normal((n, k))
+    inside = d @ rng.standard_normal(k)
+    q, _ = np.linalg.qr(np.column_stack([d, rng.standard_normal(n)]))
+    outside = q[:, -1] * np.linalg.norm(inside)  # orthogonal to every column of d
+    assert separable_share(d, inside) < 1e-9
+    assert separable_share(d, outside) == pytest.approx(1.0)
+    expected = weight**2 / (1 + weight**2)  # Pythagoras: the parts are orthogonal
+    assert separable_share(d, 3.0 * (inside + weight * outside)) == pytest.approx(expected)
+    assert separable_share(d[:, :0], inside) == 1.0
+
+
+def test_a_dte_gain_is_not_separable_from_the_stiffness_level(tmp_path, scn):
+    """The lengths scale out of the equation of motion (tests/dynamics): on unworn DTE
+    records, a sensor gain is a stiffness level with the errors and the backlash scaled, so
+    its change of the residuals lies in the span of those free parameters' directions; a
+    once-per-revolution tooth defect's does not."""
+    path, truth = make_bundle(tmp_path / "b", scn, None, seed=3, quantity="dte_m", records=4,
+                              duration_s=0.5, cycles_max=1.0)
+    rec = prepare(read_bundle(path), scn, LoopSettings(seed=3, model_form=True))
+    nui = completed(truth["nuisance"], scn)  # the model form at its neutral values
+    free = ["stiffness_factor", "eccentricity1_um", "profile_error_um", "half_backlash_um"]
+    directions = free_directions(rec, nui, None, {}, free)
+    base = residuals(rec, rec.train, model_signals(rec, rec.train, nui, None, {}))
+
+    def share(name, values):
+        moved = residuals(rec, rec.train, model_signals(rec, rec.train, nui, EFFECTS[name],
+                                                        values))
+        return separable_share(directions, moved - base)
+
+    assert share("sensor", {"gain": 1.3}) < 0.01
+    assert share("tooth_defect", {"depth_um": 20.0} | EFFECTS["tooth_defect"].options[0]) > 0.9
 
 
 def test_search_never_ends_above_its_start(clean_records, scn):
