@@ -86,9 +86,9 @@ class Surrogate:
         """Mean and standard deviation of wear for an unscaled input matrix (no checks).
 
         Batches of 4096 rows keep the members' activations in the cache: on one thread of this
-        machine 3.3e6 rows/s against 1.6e6 with batches of 16384 (2026-11-24, median of 9);
-        on two torch threads 4.2e6 (splitting the rows over two Python threads of one torch
-        thread each gave the same, so torch's own threads are used)."""
+        machine 3.3e6 rows/s against 1.6e6 with batches of 16384 (measured with the forward
+        pass rows-first); the rates now and what else was tried: docs/surrogate.md,
+        Throughput."""
         xs = torch.as_tensor(np.asarray(x, np.float32))
         shift = torch.as_tensor(self.schema.mean, dtype=torch.float32)
         inv = 1.0 / torch.as_tensor(self.schema.std, dtype=torch.float32)
