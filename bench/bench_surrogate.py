@@ -2,17 +2,20 @@
 
 Prints the batch throughput [rows/s] (median of 7 runs) of the default network (width 16,
 depth 2, 5 members, 9 inputs: the invariant features of both sensors and the operating point)
-on 1e6 rows, on torch's threads and on one, its single-row latency, the same for the public
-``Surrogate.predict`` (with the schema checks), and the analytic empirical-inverse estimator
-measured in the same run as the reference (issue target: >= 1e6 rows/s and >= 100 times the
-estimator). Timing does not depend on the weights' values, so the network is built with its
-initial weights; the schema is fitted to random rows in the training ranges.
+on 1e6 rows through ``Surrogate.predict_array`` (ONNX Runtime) on two threads and on one, its
+single-row latency, the same for the public ``Surrogate.predict`` (with the schema checks);
+as references measured in the same run, the same computation in torch
+(:func:`surrogate.inference.torch_predict`) and the analytic empirical-inverse estimator
+(issue target: >= 1e6 rows/s and >= 100 times the estimator). Timing does not depend on the
+weights' values, so the network is built with its initial weights; the schema is fitted to
+random rows in the training ranges.
 """
 
 from __future__ import annotations
 
 import time
 import timeit
+from functools import partial
 
 import numpy as np
 import pandas as pd
@@ -20,7 +23,7 @@ import torch
 
 from physics.estimators.empirical_inverse import EmpiricalInverse
 from surrogate.data import input_columns
-from surrogate.inference import Surrogate
+from surrogate.inference import ScaledEnsemble, Surrogate, torch_predict
 from surrogate.model import WearRegressor
 from surrogate.schema import FeatureSchema
 
@@ -50,18 +53,24 @@ def main() -> None:
     schema = FeatureSchema.fit(train, cols, dict.fromkeys([*cols, "root_wear_mm"], "1"),
                                "root_wear_mm")
     model = WearRegressor(len(cols), schema.to_dict(), width=16, depth=2, members=5)
-    s = Surrogate(model, interval_scale=1.645)
     n = 1_000_000
     x = rng.uniform(1.0, 2.0, (n, len(cols)))
     frame = pd.DataFrame(x, columns=cols)
-    s.predict_array(x[:1000])
-    batch = rate(lambda: s.predict_array(x), n)
     threads = torch.get_num_threads()
-    torch.set_num_threads(1)
-    serial = rate(lambda: s.predict_array(x), n)
+    graph = ScaledEnsemble(model, schema)
+    measured = {}
+    for t in (threads, 1):  # the session takes torch's thread count when it is built
+        torch.set_num_threads(t)
+        s = Surrogate(model, interval_scale=1.645)
+        s.predict_array(x[:1000])
+        measured[t] = (rate(partial(s.predict_array, x), n),
+                       rate(partial(torch_predict, graph, x), n))
     torch.set_num_threads(threads)
+    (batch, ref), (serial, ref_serial) = measured[threads], measured[1]
+    s = Surrogate(model, interval_scale=1.645)
     checked = rate(lambda: s.predict(frame), n, repeat=2)
     one = latency_us(lambda: s.predict_array(x[:1]))
+    one_ref = latency_us(lambda: torch_predict(graph, x[:1]))
     one_checked = latency_us(lambda: s.predict(frame.iloc[:1]), repeat=100)
 
     est = EmpiricalInverse.from_config("thesis")
@@ -75,8 +84,11 @@ def main() -> None:
     print(f"torch threads                       : {threads}")
     print(f"surrogate, batch of {n:,} rows      : {batch:,.0f} rows/s (target >= 1e6)")
     print(f"surrogate, same, one thread         : {serial:,.0f} rows/s")
+    print(f"same in torch (reference)           : {ref:,.0f} rows/s, one thread "
+          f"{ref_serial:,.0f} (ONNX Runtime / torch: {batch / ref:.2f}, {serial / ref_serial:.2f})")
     print(f"surrogate.predict (schema checks)   : {checked:,.0f} rows/s")
-    print(f"surrogate, one row                  : {one:.0f} us ({one_checked:.0f} us checked)")
+    print(f"surrogate, one row                  : {one:.0f} us ({one_checked:.0f} us checked; "
+          f"torch {one_ref:.0f} us)")
     print(f"empirical inverse, batch            : {est_rate:,.0f} rows/s, one row {est_one:.0f} us")
     print(f"surrogate / estimator (batch)       : {batch / est_rate:.0f} x (target >= 100)")
 

@@ -22,9 +22,16 @@ from physics.dataset.generation import (
 from physics.params import Dynamics, Scenario, WearSolver
 from surrogate import settings
 from surrogate.data import DEFAULT_INPUTS, split_trajectories
-from surrogate.inference import Surrogate, conformal_scale, export
+from surrogate.inference import (
+    ScaledEnsemble,
+    Surrogate,
+    conformal_scale,
+    export,
+    torch_predict,
+)
 from surrogate.model import EnsembleMLP, WearRegressor, mixture
 from surrogate.predict import predict_file
+from surrogate.schema import FeatureSchema
 from surrogate.summarise import summarise
 from surrogate.training import train
 
@@ -132,6 +139,32 @@ def test_ensemble_members_differ_and_the_mixture_is_right():
     assert np.allclose(mean.detach(), mu.mean(0), atol=1e-6)
     assert np.allclose(var.detach(), (v + mu**2).mean(0) - mu.mean(0) ** 2, atol=1e-5)
 
+
+
+def test_onnx_runtime_predicts_what_torch_predicts():
+    """The ONNX Runtime graph (scaling, members, mixture) against the same computation in
+    torch, on a row count that is not a multiple of the batch, one row and none; a matrix of
+    the wrong width is refused before any work."""
+    torch.manual_seed(1)
+    rng = np.random.default_rng(1)
+    cols = [f"f{i}" for i in range(4)]
+    train = pd.DataFrame(rng.normal(3.0, 2.0, (64, 4)), columns=cols)
+    train["y"] = rng.uniform(0.0, 0.02, 64)
+    schema = FeatureSchema.fit(train, cols, dict.fromkeys([*cols, "y"], "1"), "y")
+    model = WearRegressor(4, schema.to_dict(), width=8, depth=2, members=3)
+    s = Surrogate(model, interval_scale=1.645)
+    x = rng.normal(3.0, 3.0, (1000, 4))
+    mean, std = s.predict_array(x, batch=384)
+    ref_mean, ref_std = torch_predict(ScaledEnsemble(model, schema), x)
+    scale = schema.target_scale
+    assert np.allclose(mean, ref_mean, rtol=1e-5, atol=1e-6 * scale)
+    assert np.allclose(std, ref_std, rtol=1e-4, atol=1e-6 * scale)
+    assert np.all(std > 0)
+    one, _ = s.predict_array(x[5:6])
+    assert one[0] == pytest.approx(ref_mean[5], rel=1e-5, abs=1e-6 * scale)
+    assert s.predict_array(x[:0])[0].shape == (0,)
+    with pytest.raises(ValueError, match=r"\(rows, 4\)"):
+        s.predict_array(x[:, :3])
 
 def test_fast_dev_run(tmp_path, dataset):
     value = train(train_cfg(tmp_path, dataset, "case=3", "data.test_replicates=1",
