@@ -67,12 +67,13 @@ class ScaledEnsemble(torch.nn.Module):
     def __init__(self, model: WearRegressor, schema: FeatureSchema) -> None:
         super().__init__()
         self.net = copy.deepcopy(model.net).eval()
-        inv = 1.0 / torch.tensor(schema.std, dtype=torch.float32)
-        shift = torch.tensor(schema.mean, dtype=torch.float32) * inv
-        with torch.no_grad():
+        inv = 1.0 / torch.tensor(schema.std, dtype=torch.float64)
+        shift = torch.tensor(schema.mean, dtype=torch.float64) * inv
+        with torch.no_grad():  # in double: mean / std reaches 20 for the operating point
             w, b = self.net.weights[0], self.net.biases[0]
-            b -= torch.einsum("i,mio->mo", shift, w).unsqueeze(1)
-            w *= inv[None, :, None]
+            w64 = w.double()
+            b.copy_(b.double() - torch.einsum("i,mio->mo", shift, w64).unsqueeze(1))
+            w.copy_(w64 * inv[None, :, None])
         self.target_scale = float(schema.target_scale)
 
     def forward(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
@@ -150,8 +151,9 @@ class Surrogate:
 
     @cached_property
     def session(self) -> ort.InferenceSession:
-        """The ONNX Runtime session (:func:`onnx_session`), built on first use with as many
-        threads as torch uses in this process (a caller that limits torch limits this too)."""
+        """The ONNX Runtime session (:func:`onnx_session`), built on first use from the weights
+        as they are then, with as many threads as torch uses in this process (a caller that
+        limits torch limits this too)."""
         return onnx_session(self.model, self.schema, torch.get_num_threads())
 
     def predict_array(self, x: np.ndarray, batch: int = 16384) -> tuple[np.ndarray, np.ndarray]:

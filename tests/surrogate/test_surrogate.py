@@ -148,12 +148,13 @@ def test_onnx_runtime_predicts_what_torch_predicts():
     torch.manual_seed(1)
     rng = np.random.default_rng(1)
     cols = [f"f{i}" for i in range(4)]
-    train = pd.DataFrame(rng.normal(3.0, 2.0, (64, 4)), columns=cols)
+    offset = np.array([0.0, 0.0, 0.0, 2000.0])  # an operating point: mean / std of 20
+    train = pd.DataFrame(rng.normal(3.0, 2.0, (64, 4)) * [1, 1, 1, 50] + offset, columns=cols)
     train["y"] = rng.uniform(0.0, 0.02, 64)
     schema = FeatureSchema.fit(train, cols, dict.fromkeys([*cols, "y"], "1"), "y")
     model = WearRegressor(4, schema.to_dict(), width=8, depth=2, members=3)
     s = Surrogate(model, interval_scale=1.645)
-    x = rng.normal(3.0, 3.0, (1000, 4))
+    x = rng.normal(3.0, 3.0, (1000, 4)) * [1, 1, 1, 50] + offset
     mean, std = s.predict_array(x, batch=384)
     ref_mean, ref_std = torch_predict(ScaledEnsemble(model, schema), x)
     scale = schema.target_scale
