@@ -56,7 +56,7 @@ its run folder.
    standardised residual, with discrepancy, over the test records) with the Bayesian
    information criterion on the train records beside it (chi-square plus k ln n, the scatter
    being known, k the effect's parameters).
-   The **null test** (:func:`physics.loop.report.adopts`), judged where the best candidate's own
+   The **null test** (:func:`physics.loop.report.null_test`), judged where the best candidate's own
    signature lives (the entries its model moves by more than their noise,
    :func:`signature_gain`): it is adopted only if it lowers the held-out error there (in units of
    the noise) by at least ``min_gain`` (20 %), its BIC by at least ``min_delta_bic`` (10, "very
@@ -103,7 +103,7 @@ from physics.dynamics.model import PairModel, build_model, simulate
 from physics.gear.stiffness import MeshStiffness
 from physics.loop.bundle import Bundle, record_scenario
 from physics.loop.effects import EFFECTS, Effect, revolution_tables
-from physics.loop.report import LoopReport, adopts
+from physics.loop.report import LoopReport, null_test
 from physics.params import PhysicsConfig, Scenario, bounded, validate_fields
 from physics.signals.features import FEATURES, features
 from physics.signals.measurement import declared_chain, sensed
@@ -1082,6 +1082,9 @@ class Round:
     allowed: float  # what the discrepancy allows the best (:func:`discrepancy_allowance`)
     adopted: bool
     base_test: list[np.ndarray]  # the test signals of the model the candidates were added to
+    # the null test's conditions on the best (:func:`physics.loop.report.null_test`), with the
+    # wear check where the others held and the held-out records' wear is known
+    checks: dict
     # held-out wear-estimate error [%] without and with the best, where the rest of the null
     # test passed it (:func:`wear_kept`)
     wear: tuple[float | None, float | None] = (None, None)
@@ -1142,17 +1145,21 @@ def attribute(rec: Records, judged: Records, declared: Effect | None, declared_v
     ranking.sort(key=lambda c: c.heldout)
     best = ranking[0]
     allowed = discrepancy_allowance(best.n_params, len(ranking), settings.false_add_rate)
-    adopted = adopts(best.own_after, best.own_before, best.bic - null_bic, settings.min_gain,
-                     settings.min_delta_bic, min(best.explained.values(), default=0.0),
-                     allowed)
+    checks = null_test(best.own_after, best.own_before, best.bic - null_bic, settings.min_gain,
+                       settings.min_delta_bic, min(best.explained.values(), default=0.0),
+                       allowed)
+    adopted = all(c["holds"] for c in checks.values())
     wear: tuple[float | None, float | None] = (None, None)
     if adopted:  # last: it costs a simulation per wear state and record
         wear = (wear_error(rec, nuisance, declared, declared_values),
                 wear_error(rec, best.nuisance, effects[best.name], best.values))
         adopted = wear_kept(*wear, settings.max_wear_loss)
+        if None not in wear:
+            checks["wear"] = {"before": wear[0], "value": wear[1],
+                              "bound": (1 + settings.max_wear_loss) * wear[0], "holds": adopted}
         log.info("%s: held-out wear-estimate error %s -> %s %%%s", best.name, *wear,
                  "" if adopted else ": worse, not adopted")
-    return Round(ranking, effects, null_bic, allowed, adopted, base_test, wear)
+    return Round(ranking, effects, null_bic, allowed, adopted, base_test, checks, wear)
 
 
 def stacked(first: Effect, values: dict, second: Effect) -> Effect:
@@ -1263,8 +1270,8 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
             "groups": group_summary(judged, base_test, after_test),
             "residual_before": residual_table(rec, rec.test, base_test),
             "residual_after": residual_table(rec, rec.test, after_test),
-            "wear_check": [{"effect": r.best.name, "before_pct": r.wear[0],
-                            "after_pct": r.wear[1]} for r in rounds],
+            "verdicts": [{"effect": r.best.name, "adopted": r.adopted, "checks": r.checks}
+                         for r in rounds],
             "second_round": ({"on": first.best.name, "adopted": rounds[1].adopted,
                               "allowed": rounds[1].allowed, "ranking": rounds[1].table()}
                              if len(rounds) > 1 else None),

@@ -21,20 +21,42 @@ STABLE_KEYS = ("mode", "chosen_effect", "chosen_option", "chosen_parameters", "e
                "nuisance_after", "null_bic", "ranking", "decision_rule")
 
 
-def adopts(heldout: float, null_heldout: float, delta_bic: float, min_gain: float,
-           min_delta_bic: float, explained: float = math.inf, allowed: float = 0.0) -> bool:
-    """The null test: adopt the best candidate only if it cuts the held-out error by at least
-    ``min_gain`` and the BIC by at least ``min_delta_bic``, and explains more than
-    ``allowed`` (where the loop measures it).
+def null_test(heldout: float, null_heldout: float, delta_bic: float, min_gain: float,
+              min_delta_bic: float, explained: float | None = None, allowed: float = 0.0
+              ) -> dict[str, dict]:
+    """The conditions of the null test, each with the candidate's value, the bound it must
+    pass and whether it does: ``gain``, the held-out error's relative cut, at least
+    ``min_gain``; ``delta_bic``, at most ``-min_delta_bic``; and, where the loop measures it,
+    ``explained``, more than ``allowed``.
 
     The bundle loop passes the held-out errors in the candidate's own signature entries (in
     units of the noise), as ``explained`` the smallest over the groups (operating points and
     quantities) of the sum of squares (standardised by noise and model discrepancy) it removes
     per held-out record there, and as ``allowed`` what the discrepancy lets a candidate of its
     size absorb by chance (:func:`physics.loop.bundle_loop.discrepancy_allowance`). The
-    feature-table loop judges the features as a whole and leaves the last condition open."""
-    return (heldout <= (1 - min_gain) * null_heldout and delta_bic <= -min_delta_bic
-            and explained > allowed)
+    feature-table loop judges the features as a whole and leaves the last condition out."""
+    gain = 1.0 - heldout / null_heldout if null_heldout > 0 else math.nan
+    checks = {"gain": {"value": gain, "bound": min_gain,
+                       "holds": bool(heldout <= (1 - min_gain) * null_heldout)},
+              "delta_bic": {"value": delta_bic, "bound": -min_delta_bic,
+                            "holds": bool(delta_bic <= -min_delta_bic)}}
+    if explained is not None:
+        checks["explained"] = {"value": explained, "bound": allowed,
+                               "holds": bool(explained > allowed)}
+    return checks
+
+
+def verdict_line(v: dict) -> str:
+    """One round's verdict as a sentence: each condition, its value against its bound."""
+    words = {"gain": ("held-out error cut by {value:.0%}", "needs >= {bound:.0%}"),
+             "delta_bic": ("dBIC {value:.4g}", "needs <= {bound:g}"),
+             "explained": ("explained {value:.1f}", "needs > {bound:.1f}"),
+             "wear": ("wear-estimate error {before:.1f} -> {value:.1f} %",
+                      "needs <= {bound:.1f} %")}
+    parts = [f"{words[k][0].format(**c)} ({words[k][1].format(**c)}: "
+             f"{'yes' if c['holds'] else 'no'})" for k, c in v["checks"].items()]
+    return (f"Best candidate {v['effect']}: {'; '.join(parts)}: "
+            f"{'adopted' if v['adopted'] else 'not adopted'}.")
 
 
 @dataclass
@@ -124,7 +146,11 @@ def markdown(r: dict) -> str:
         lines[-1] += (f", and explains more than {rule['allowed']:.1f} (standardised sum of "
                       f"squares per held-out record, in every group), what the discrepancy "
                       f"allows at a false-add rate of {rule['false_add_rate']:.0%}")
+    if "max_wear_loss" in rule:
+        lines[-1] += (f", and, where the held-out records' wear is known, does not worsen the "
+                      f"wear estimate's error by more than {rule['max_wear_loss']:.0%} of it")
     lines[-1] += "."
+    lines += ["", *[f"Round {k + 1}. {verdict_line(v)}" for k, v in enumerate(r["verdicts"])]]
     second = r.get("second_round")
     if second:
         top = second["ranking"][0]

@@ -45,7 +45,7 @@ from physics.loop.bundle_loop import (
     worn_models,
 )
 from physics.loop.effects import EFFECTS, Effect
-from physics.loop.report import LoopReport, adopts
+from physics.loop.report import LoopReport, null_test
 from physics.params import Scenario
 from physics.signals.features import FEATURES, features
 from physics.signals.measurement import declared_chain, sensed
@@ -202,8 +202,9 @@ def run_feature_table(df: pd.DataFrame, base: Scenario,
     ranking = [judge(e, o) for e, o in candidates_for({td.quantity}, settings)]
     ranking.sort(key=lambda c: c["heldout"])
     best = ranking[0]
-    adopt = adopts(best["heldout"], null["heldout"], best["bic"] - null["bic"],
-                   settings.min_gain, settings.min_delta_bic)
+    checks = null_test(best["heldout"], null["heldout"], best["bic"] - null["bic"],
+                       settings.min_gain, settings.min_delta_bic)
+    adopt = all(c["holds"] for c in checks.values())
     chosen = best if adopt else null
     eff = EFFECTS[chosen["effect"]] if adopt else None
     before = model_features(td, rows, null["nuisance"], None, {})
@@ -243,6 +244,7 @@ def run_feature_table(df: pd.DataFrame, base: Scenario,
                   "n_params": c["n_params"]} for c in ranking],
         decision_rule={"min_gain": settings.min_gain, "min_delta_bic": settings.min_delta_bic},
         details={
+            "verdicts": [{"effect": best["effect"], "adopted": adopt, "checks": checks}],
             "wear_mm": td.wear.tolist(),
             "quantity": td.quantity,
             "features_measured": table(td.measured),

@@ -457,10 +457,11 @@ def test_loop_app_finds_an_undeclared_transfer_path(tmp_path, scn):
     assert tuple(report)[:len(STABLE_KEYS)] == STABLE_KEYS  # one report type, stable keys
     assert report["chosen_effect"] == "transfer_path"
     assert report["second_round"] is None
-    check = report["wear_check"][0]  # the adopted effect kept the wear estimate
-    assert check["after_pct"] == report["wear_error_after_pct"]
-    assert check["after_pct"] <= (1 + report["decision_rule"]["max_wear_loss"]) * check[
-        "before_pct"]
+    verdict = report["verdicts"][0]  # every condition held, the wear check last
+    assert verdict["adopted"] and all(c["holds"] for c in verdict["checks"].values())
+    wear = verdict["checks"]["wear"]  # the adopted effect kept the wear estimate
+    assert wear["value"] == report["wear_error_after_pct"]
+    assert wear["value"] <= (1 + report["decision_rule"]["max_wear_loss"]) * wear["before"]
     assert report["error_after"] < 0.5 * report["error_before"]
     assert report["not_identifiable"] == ["eccentricity1_um"]
     assert set(report["nuisance_after"]) == set(report["calibration"])

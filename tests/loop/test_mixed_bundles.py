@@ -45,7 +45,7 @@ from physics.loop.bundle_loop import (
 )
 from physics.loop.effects import EFFECTS
 from physics.loop.independent_simulator import make_independent_bundle
-from physics.loop.report import adopts, write_report
+from physics.loop.report import null_test, verdict_line, write_report
 from physics.loop.synthetic import make_bundle
 from physics.params import scenario_from_config
 from physics.signals.measurement import add_noise, declared_chain, sensed
@@ -171,11 +171,20 @@ def test_allowance_holds_the_designed_false_add_rate():
     assert discrepancy_allowance(2, 8, 0.01) > discrepancy_allowance(1, 8, 0.01)
 
 
-def test_adopts_is_one_rule_for_both_loops():
+def test_the_null_test_is_one_rule_for_both_loops_and_says_what_stopped_it():
+    def adopts(*args, **kw):
+        return all(c["holds"] for c in null_test(*args, **kw).values())
+
     assert adopts(0.5, 1.0, -20.0, 0.2, 10.0)  # the feature-table form: no allowance
     assert not adopts(0.5, 1.0, -20.0, 0.2, 10.0, explained=5.0, allowed=10.0)
     assert adopts(0.5, 1.0, -20.0, 0.2, 10.0, explained=50.0, allowed=10.0)
     assert not adopts(float("nan"), 1.0, -20.0, 0.2, 10.0, explained=50.0, allowed=10.0)
+    checks = null_test(0.85, 1.0, -20.0, 0.2, 10.0, explained=50.0, allowed=10.0)
+    assert checks["gain"]["value"] == pytest.approx(0.15) and not checks["gain"]["holds"]
+    assert checks["delta_bic"]["holds"] and checks["explained"]["holds"]
+    line = verdict_line({"effect": "friction", "adopted": False, "checks": checks})
+    assert "held-out error cut by 15% (needs >= 20%: no)" in line
+    assert line.endswith("not adopted.")
 
 
 @given(before=st.floats(0.1, 500.0), loss=st.floats(0.0, 1.0), share=st.floats(0.0, 1.0))
