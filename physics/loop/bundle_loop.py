@@ -103,7 +103,7 @@ from physics.dynamics.model import PairModel, build_model, simulate
 from physics.gear.stiffness import MeshStiffness
 from physics.loop.bundle import Bundle, record_scenario
 from physics.loop.effects import EFFECTS, Effect, revolution_tables
-from physics.loop.report import LoopReport, null_test
+from physics.loop.report import LoopReport, holds, null_test
 from physics.params import PhysicsConfig, Scenario, bounded, validate_fields
 from physics.signals.features import FEATURES, features
 from physics.signals.measurement import declared_chain, sensed
@@ -1148,7 +1148,7 @@ def attribute(rec: Records, judged: Records, declared: Effect | None, declared_v
     checks = null_test(best.own_after, best.own_before, best.bic - null_bic, settings.min_gain,
                        settings.min_delta_bic, min(best.explained.values(), default=0.0),
                        allowed)
-    adopted = all(c["holds"] for c in checks.values())
+    adopted = holds(checks)
     wear: tuple[float | None, float | None] = (None, None)
     if adopted:  # last: it costs a simulation per wear state and record
         wear = (wear_error(rec, nuisance, declared, declared_values),

@@ -46,6 +46,11 @@ def null_test(heldout: float, null_heldout: float, delta_bic: float, min_gain: f
     return checks
 
 
+def holds(checks: dict[str, dict]) -> bool:
+    """Whether every condition of a :func:`null_test` (and the wear check, if added) holds."""
+    return all(c["holds"] for c in checks.values())
+
+
 def verdict_line(v: dict) -> str:
     """One round's verdict as a sentence: each condition, its value against its bound."""
     words = {"gain": ("held-out error cut by {value:.0%}", "needs >= {bound:.0%}"),

@@ -45,7 +45,7 @@ from physics.loop.bundle_loop import (
     worn_models,
 )
 from physics.loop.effects import EFFECTS, Effect
-from physics.loop.report import LoopReport, null_test
+from physics.loop.report import LoopReport, holds, null_test
 from physics.params import Scenario
 from physics.signals.features import FEATURES, features
 from physics.signals.measurement import declared_chain, sensed
@@ -204,7 +204,7 @@ def run_feature_table(df: pd.DataFrame, base: Scenario,
     best = ranking[0]
     checks = null_test(best["heldout"], null["heldout"], best["bic"] - null["bic"],
                        settings.min_gain, settings.min_delta_bic)
-    adopt = all(c["holds"] for c in checks.values())
+    adopt = holds(checks)
     chosen = best if adopt else null
     eff = EFFECTS[chosen["effect"]] if adopt else None
     before = model_features(td, rows, null["nuisance"], None, {})

@@ -45,7 +45,7 @@ from physics.loop.bundle_loop import (
 )
 from physics.loop.effects import EFFECTS
 from physics.loop.independent_simulator import make_independent_bundle
-from physics.loop.report import null_test, verdict_line, write_report
+from physics.loop.report import holds, null_test, verdict_line, write_report
 from physics.loop.synthetic import make_bundle
 from physics.params import scenario_from_config
 from physics.signals.measurement import add_noise, declared_chain, sensed
@@ -173,7 +173,7 @@ def test_allowance_holds_the_designed_false_add_rate():
 
 def test_the_null_test_is_one_rule_for_both_loops_and_says_what_stopped_it():
     def adopts(*args, **kw):
-        return all(c["holds"] for c in null_test(*args, **kw).values())
+        return holds(null_test(*args, **kw))
 
     assert adopts(0.5, 1.0, -20.0, 0.2, 10.0)  # the feature-table form: no allowance
     assert not adopts(0.5, 1.0, -20.0, 0.2, 10.0, explained=5.0, allowed=10.0)

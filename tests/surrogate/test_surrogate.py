@@ -140,11 +140,11 @@ def test_ensemble_members_differ_and_the_mixture_is_right():
     assert np.allclose(var.detach(), (v + mu**2).mean(0) - mu.mean(0) ** 2, atol=1e-5)
 
 
-
 def test_onnx_runtime_predicts_what_torch_predicts():
-    """The ONNX Runtime graph (scaling, members, mixture) against the same computation in
-    torch, on a row count that is not a multiple of the batch, one row and none; a matrix of
-    the wrong width is refused before any work."""
+    """The ONNX Runtime graph (scaling folded into the first layer, members, mixture) against
+    the same graph in torch and against the unfolded computation (inputs scaled, then the
+    network), on a row count that is not a multiple of the batch, one row and none; a matrix
+    of the wrong width is refused before any work."""
     torch.manual_seed(1)
     rng = np.random.default_rng(1)
     cols = [f"f{i}" for i in range(4)]
@@ -161,11 +161,18 @@ def test_onnx_runtime_predicts_what_torch_predicts():
     assert np.allclose(mean, ref_mean, rtol=1e-5, atol=1e-6 * scale)
     assert np.allclose(std, ref_std, rtol=1e-4, atol=1e-6 * scale)
     assert np.all(std > 0)
+    with torch.no_grad():  # unfolded: (x - mean) / std into the network as trained
+        scaled = (x - np.array(schema.mean)) / np.array(schema.std)
+        plain_mean, plain_var = mixture(model.net(torch.as_tensor(scaled, dtype=torch.float32)))
+    assert np.allclose(mean, plain_mean.numpy() * scale, rtol=1e-4, atol=1e-5 * scale)
+    assert np.allclose(std, plain_var.clamp_min(0).sqrt().numpy() * scale, rtol=1e-3,
+                       atol=1e-5 * scale)
     one, _ = s.predict_array(x[5:6])
     assert one[0] == pytest.approx(ref_mean[5], rel=1e-5, abs=1e-6 * scale)
     assert s.predict_array(x[:0])[0].shape == (0,)
     with pytest.raises(ValueError, match=r"\(rows, 4\)"):
         s.predict_array(x[:, :3])
+
 
 def test_fast_dev_run(tmp_path, dataset):
     value = train(train_cfg(tmp_path, dataset, "case=3", "data.test_replicates=1",
