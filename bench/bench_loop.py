@@ -15,7 +15,7 @@ size, 30 dB noise, the gear set's error phases drawn from the seed; the loop is 
 gearbox's bearing-support mode as estimated from its drawings); its true model is not ours,
 so the floor column is empty there. Prints and writes
 ``loop_runs.csv`` (one row per bundle: truth, choice, held-out error before/after and that of
-the data-generating model itself, wear-estimate error, seconds, and the first round's best
+the data-generating model itself, wear-estimate error and skill, seconds, and the first round's best
 candidate with the null test's figures on it) and ``loop_confusion.csv``
 (truth x choice counts), plus the rates the issue asks for: right effect named, held-out error
 at least halved, nothing added on clean bundles.
@@ -86,6 +86,7 @@ def one(job: tuple[str, str | None, int, int, bool, str]) -> dict:
             "error_true_model": floor,
             "wear_error_before_pct": r["wear_error_before_pct"],
             "wear_error_after_pct": r["wear_error_after_pct"],
+            "wear_skill_before": r["wear_skill_before"], "wear_skill_after": r["wear_skill_after"],
             "seconds": seconds, **best_candidate(r)}
 
 

@@ -79,7 +79,9 @@ its run folder.
    standardised signature residual (noise alone: the figure the report leads with; noise and
    discrepancy) and in dB, as the mean relative error of the Table 13 features [%], and,
    where the wear is known, as the error of a model-based wear estimate (the wear state whose
-   simulated signature is nearest) [%].
+   simulated signature is nearest) [%] and as its skill against the train records' mean wear
+   (:func:`wear_skill`; at or below 0 the estimate reads no wear on these records, and the wear
+   check above then compares noise).
 """
 
 from __future__ import annotations
@@ -90,6 +92,7 @@ import logging
 import math
 import re
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -990,26 +993,49 @@ def wear_estimates(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | 
     return np.array(out)
 
 
-def wear_error(rec: Records, nuisance: dict, eff: Effect | None, values: dict) -> float | None:
-    """Error of the model-based wear estimate (:func:`wear_estimates`) over the held-out records
-    whose wear is known: mean relative error [%] (mean absolute error [mm] if every such
-    record is unworn); None if no held-out record's wear is known."""
-    man = rec.bundle.manifest
-    known = np.array([i for i in rec.test if not pd.isna(man.wear_mm.iloc[i])
-                      and rec.wear_states[i]], int)
-    if not known.size:
+class WearScore(NamedTuple):
+    """How well the model-based wear estimate (:func:`wear_estimates`) reads the held-out
+    records whose wear is known."""
+
+    #: mean relative error over the worn ones [%] (mean absolute error [mm] if none is worn)
+    error: float
+    #: ``1 - MAE / MAE of the constant guess`` (the train records' mean known wear): <= 0 says
+    #: the estimate carries no wear information on these records; None without such a guess
+    skill: float | None
+
+
+def wear_error(rec: Records, nuisance: dict, eff: Effect | None, values: dict
+               ) -> WearScore | None:
+    """Error and skill of the model-based wear estimate over the held-out records whose wear is
+    known; None if there is no such record."""
+    wear = rec.bundle.manifest.wear_mm.to_numpy(float)
+
+    def known(idx: np.ndarray) -> np.ndarray:
+        return np.array([i for i in idx if not np.isnan(wear[i]) and rec.wear_states[i]], int)
+
+    test, train = known(rec.test), known(rec.train)
+    if not test.size:
         return None
-    true = man.wear_mm.to_numpy(float)[known]
-    est = wear_estimates(rec, known, nuisance, eff, values)
+    true = wear[test]
+    est = wear_estimates(rec, test, nuisance, eff, values)
     ok = true > 0
-    return (float(np.mean(np.abs(est[ok] - true[ok]) / true[ok]) * 100) if ok.any()
-            else float(np.mean(np.abs(est - true))))
+    error = (float(np.mean(np.abs(est[ok] - true[ok]) / true[ok]) * 100) if ok.any()
+             else float(np.mean(np.abs(est - true))))
+    return WearScore(error, wear_skill(est, true, wear[train]))
 
 
-def wear_kept(before: float | None, after: float | None, max_loss: float) -> bool:
+def wear_skill(est: np.ndarray, true: np.ndarray, train_wear: np.ndarray) -> float | None:
+    """Skill of wear estimates ``est`` of records of wear ``true`` against the constant guess,
+    the mean of ``train_wear`` (Murphy 1988's skill score on the mean absolute error): 1 exact,
+    <= 0 no better than the guess; None without train wear or if the guess is exact."""
+    guess = float(np.mean(np.abs(np.mean(train_wear) - true))) if train_wear.size else 0.0
+    return 1 - float(np.mean(np.abs(est - true))) / guess if guess > 0 else None
+
+
+def wear_kept(before: WearScore | None, after: WearScore | None, max_loss: float) -> bool:
     """Whether an effect keeps the wear estimate (issue 16, item 6): its held-out error may
     grow by at most ``max_loss`` of its value; without known wear there is nothing to keep."""
-    return before is None or after is None or after <= (1 + max_loss) * before
+    return before is None or after is None or after.error <= (1 + max_loss) * before.error
 
 
 def by_group(rec: Records, idx: np.ndarray) -> dict[int, list[int]]:
@@ -1085,9 +1111,9 @@ class Round:
     # the null test's conditions on the best (:func:`physics.loop.report.null_test`), with the
     # wear check where the others held and the held-out records' wear is known
     checks: dict
-    # held-out wear-estimate error [%] without and with the best, where the rest of the null
-    # test passed it (:func:`wear_kept`)
-    wear: tuple[float | None, float | None] = (None, None)
+    # held-out wear-estimate error and skill without and with the best, where the rest of the
+    # null test passed it (:func:`wear_kept`)
+    wear: tuple[WearScore | None, WearScore | None] = (None, None)
 
     @property
     def best(self) -> Candidate:
@@ -1149,15 +1175,17 @@ def attribute(rec: Records, judged: Records, declared: Effect | None, declared_v
                        settings.min_delta_bic, min(best.explained.values(), default=0.0),
                        allowed)
     adopted = holds(checks)
-    wear: tuple[float | None, float | None] = (None, None)
+    wear: tuple[WearScore | None, WearScore | None] = (None, None)
     if adopted:  # last: it costs a simulation per wear state and record
         wear = (wear_error(rec, nuisance, declared, declared_values),
                 wear_error(rec, best.nuisance, effects[best.name], best.values))
         adopted = wear_kept(*wear, settings.max_wear_loss)
         if None not in wear:
-            checks["wear"] = {"before": wear[0], "value": wear[1],
-                              "bound": (1 + settings.max_wear_loss) * wear[0], "holds": adopted}
-        log.info("%s: held-out wear-estimate error %s -> %s %%%s", best.name, *wear,
+            checks["wear"] = {"before": wear[0].error, "value": wear[1].error,
+                              "bound": (1 + settings.max_wear_loss) * wear[0].error,
+                              "holds": adopted, "skill_before": wear[0].skill,
+                              "skill": wear[1].skill}
+        log.info("%s: held-out wear estimate %s -> %s%s", best.name, *wear,
                  "" if adopted else ": worse, not adopted")
     return Round(ranking, effects, null_bic, allowed, adopted, base_test, checks, wear)
 
@@ -1233,7 +1261,7 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
     adopted = [r.best for r in rounds if r.adopted]
     # each adopted round's check already has the estimates (the null test's last condition)
     wear_before = first.wear[0] if first.adopted else wear_error(rec, nuisance, None, {})
-    wear_err = {"before": wear_before, "after": last.wear[1] if last else wear_before}
+    wear_after = last.wear[1] if last else wear_before
     rec.cache.clear()  # the report keeps the records, not the simulations
     return LoopReport(
         mode="bundle",
@@ -1249,8 +1277,8 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
                    "discrepancy in quadrature: error_before_with_discrepancy",
         feature_error_before_pct=feature_error(rec, rec.test, base_test),
         feature_error_after_pct=feature_error(rec, rec.test, after_test),
-        wear_error_before_pct=wear_err.get("before"),
-        wear_error_after_pct=wear_err.get("after"),
+        wear_error_before_pct=wear_before.error if wear_before else None,
+        wear_error_after_pct=wear_after.error if wear_after else None,
         calibration=nuisance,
         calibrated_on="the train records",
         nuisance_after=after_nui,
@@ -1270,6 +1298,8 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
             "groups": group_summary(judged, base_test, after_test),
             "residual_before": residual_table(rec, rec.test, base_test),
             "residual_after": residual_table(rec, rec.test, after_test),
+            "wear_skill_before": wear_before.skill if wear_before else None,
+            "wear_skill_after": wear_after.skill if wear_after else None,
             "verdicts": [{"effect": r.best.name, "adopted": r.adopted, "checks": r.checks}
                          for r in rounds],
             "second_round": ({"on": first.best.name, "adopted": rounds[1].adopted,

@@ -122,6 +122,13 @@ def markdown(r: dict) -> str:
     if r.get("wear_error_before_pct") is not None:
         lines.append(f"| wear estimate [% mean rel.] | {r['wear_error_before_pct']:.2f} | "
                      f"{r['wear_error_after_pct']:.2f} |")
+        if r.get("wear_skill_before") is not None:
+            lines.append(f"| wear estimate's skill [1 - MAE / MAE of the train records' mean "
+                         f"wear] | {r['wear_skill_before']:.2f} | {r['wear_skill_after']:.2f} |")
+    if r.get("wear_skill_before") is not None and r["wear_skill_before"] <= 0:
+        lines += ["", "The model-based wear estimate reads these records no better than the "
+                  "train records' mean wear (skill <= 0): its change, and the null test's wear "
+                  "check on it, rest on noise."]
     cal = ", ".join(f"{k} = {v:.4g}" for k, v in r["calibration"].items())
     lines += ["", f"Calibrated nuisance parameters ({r['calibrated_on']}): {cal}."]
     if r.get("not_identifiable"):

@@ -21,6 +21,7 @@ from physics.loop.bundle_loop import (
     SUPPORT,
     Group,
     LoopSettings,
+    WearScore,
     calibrate,
     declared_model_form,
     declared_nuisance,
@@ -37,6 +38,7 @@ from physics.loop.bundle_loop import (
     split_records,
     stacked,
     wear_kept,
+    wear_skill,
     with_discrepancy,
     with_model_form,
     with_modulation,
@@ -190,9 +192,24 @@ def test_the_null_test_is_one_rule_for_both_loops_and_says_what_stopped_it():
 @given(before=st.floats(0.1, 500.0), loss=st.floats(0.0, 1.0), share=st.floats(0.0, 1.0))
 def test_wear_check_allows_only_the_stated_loss(before, loss, share):
     limit = (1 + loss) * before
-    assert wear_kept(before, share * limit, loss)  # better, or worse within the stated loss
-    assert not wear_kept(before, 1.001 * limit, loss)  # worse beyond it
-    assert wear_kept(None, 3 * before, loss) and wear_kept(before, None, loss)  # wear unknown
+    ref = WearScore(before, None)
+    assert wear_kept(ref, WearScore(share * limit, None), loss)  # better, or within the loss
+    assert not wear_kept(ref, WearScore(1.001 * limit, None), loss)  # worse beyond it
+    assert wear_kept(None, WearScore(3 * before, 0.5), loss) and wear_kept(ref, None, loss)
+
+
+def test_wear_skill_by_hand():
+    # the independent simulator's tooth-defect bundle, model form free (docs/measured-data.md):
+    # held-out wear 9, 12, 3, 15 um read as 12.63, 13.56, 4.61, 0 um; train wear mean 6.375 um
+    true, est = np.array([9.0, 12.0, 3.0, 15.0]), np.array([12.63, 13.56, 4.61, 0.0])
+    train = np.array([0.0, 3.0, 6.0, 15.0, 0.0, 6.0, 9.0, 12.0])
+    # MAE (3.63 + 1.56 + 1.61 + 15) / 4 = 5.45 um against the constant guess's
+    # (2.625 + 5.625 + 3.375 + 8.625) / 4 = 5.0625 um
+    assert wear_skill(est, true, train) == pytest.approx(1 - 5.45 / 5.0625)
+    assert wear_skill(true, true, train) == 1.0  # exact
+    assert wear_skill(np.full(4, 6.375), true, train) == pytest.approx(0.0)  # the guess itself
+    assert wear_skill(est, true, np.empty(0)) is None
+    assert wear_skill(est, np.full(4, 6.375), train) is None  # nothing for the guess to miss
 
 
 def test_split_is_stratified_and_unchanged_for_one_group():
