@@ -1004,7 +1004,7 @@ class WearScore(NamedTuple):
     skill: float | None
 
 
-def wear_error(rec: Records, nuisance: dict, eff: Effect | None, values: dict
+def wear_score(rec: Records, nuisance: dict, eff: Effect | None, values: dict
                ) -> WearScore | None:
     """Error and skill of the model-based wear estimate over the held-out records whose wear is
     known; None if there is no such record."""
@@ -1177,8 +1177,8 @@ def attribute(rec: Records, judged: Records, declared: Effect | None, declared_v
     adopted = holds(checks)
     wear: tuple[WearScore | None, WearScore | None] = (None, None)
     if adopted:  # last: it costs a simulation per wear state and record
-        wear = (wear_error(rec, nuisance, declared, declared_values),
-                wear_error(rec, best.nuisance, effects[best.name], best.values))
+        wear = (wear_score(rec, nuisance, declared, declared_values),
+                wear_score(rec, best.nuisance, effects[best.name], best.values))
         adopted = wear_kept(*wear, settings.max_wear_loss)
         if None not in wear:
             checks["wear"] = {"before": wear[0].error, "value": wear[1].error,
@@ -1260,7 +1260,7 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
                   else base_test)
     adopted = [r.best for r in rounds if r.adopted]
     # each adopted round's check already has the estimates (the null test's last condition)
-    wear_before = first.wear[0] if first.adopted else wear_error(rec, nuisance, None, {})
+    wear_before = first.wear[0] if first.adopted else wear_score(rec, nuisance, None, {})
     wear_after = last.wear[1] if last else wear_before
     rec.cache.clear()  # the report keeps the records, not the simulations
     return LoopReport(
