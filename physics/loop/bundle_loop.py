@@ -63,8 +63,9 @@ its run folder.
    strong" on Kass & Raftery's scale), and, in every group where it shows, removes more
    standardised sum of squares per held-out record than the discrepancy lets a candidate of its
    size absorb by chance (:func:`discrepancy_allowance`), and, last, where the held-out
-   records' wear is known, if it does not worsen the model-based wear estimate by more than
-   ``max_wear_loss`` (10 %) of its error (:func:`wear_kept`). The rule is designed for a false-add
+   records' wear is known, if it does not lower the model-based wear estimate's skill by more
+   than ``max_wear_loss`` (0.1: its mean absolute error may grow by a tenth of the constant
+   guess's; :func:`wear_check`). The rule is designed for a false-add
    rate of ``false_add_rate`` (1 %) per bundle when the declared model's form error is
    unstructured (no effect of the library resembles it); a form error that looks like an effect
    is not separable from it by any rule on these data. Each candidate's **separability** is
@@ -79,7 +80,8 @@ its run folder.
    standardised signature residual (noise alone: the figure the report leads with; noise and
    discrepancy) and in dB, as the mean relative error of the Table 13 features [%], and,
    where the wear is known, as the error of a model-based wear estimate (the wear state whose
-   simulated signature is nearest) [%] and as its skill against the train records' mean wear
+   simulated signature is nearest, relative to the group's train records of known wear:
+   :func:`wear_estimates`) [%] and as its skill against the train records' mean wear
    (:func:`wear_skill`; at or below 0 the estimate reads no wear on these records, and the wear
    check above then compares noise).
 """
@@ -230,10 +232,10 @@ class LoopSettings:
     false_add_rate: float = bounded(0.01, 0.0, 1.0, "share of bundles without an effect that "
                                     "may get one")
     candidates: tuple[str, ...] | None = None  # effects to try; None: the whole library
-    # an effect is not adopted if it worsens the model-based wear estimate of the held-out
-    # records (where their wear is known) by more than this share of its error
-    max_wear_loss: float = bounded(0.1, 0.0, 100.0, "share of the wear estimate's held-out "
-                                   "error an adopted effect may add", closed=True)
+    # an effect is not adopted if it lowers the skill of the model-based wear estimate of the
+    # held-out records (where their wear is known) by more than this (:func:`wear_check`)
+    max_wear_loss: float = bounded(0.1, 0.0, 100.0, "skill of the wear estimate an adopted "
+                                   "effect may cost", closed=True)
     # calibrate the declared model's form uncertainty (:data:`MODEL_FORM`) with the nuisance;
     # off by default: better on the independent simulator's bundles, but on the project's own
     # it absorbs a friction, leaves a tooth defect's error above half and lets the greedy
@@ -376,8 +378,7 @@ def prepare(bundle: Bundle, base: Scenario, settings: LoopSettings) -> Records:
     for idx in keyed.values():
         scn = scenarios[idx[0]]
         cycles = {i: record_cycles(scn, man.iloc[i]) for i in idx}
-        known = [c for c in cycles.values() if c > 0]
-        grid = list(np.linspace(0, 1.2 * max(known), settings.wear_grid)) if known else []
+        grid = wear_grid_cycles(scn, max(cycles.values()), settings.wear_grid)
         by_cycles, root = worn_models(scn, ms, [*cycles.values(), *grid])
         for i in idx:
             models[i] = by_cycles[cycles[i]]
@@ -427,6 +428,27 @@ def cycles_for_wear(scn: Scenario, wear_mm: np.ndarray, cycles_max: float = 1.5e
     raise ValueError(f"the model's root wear reaches only {root[-1]:.4g} mm in {cycles_max:.3g} "
                      f"cycles, below {np.max(wear_mm):g} mm: check the operating point and "
                      "tribology.regime")
+
+
+def wear_grid_cycles(scn: Scenario, cycles_max: float, n: int) -> list[float]:
+    """Cycle counts of ``n`` wear states of one operating point whose pinion root wear is
+    spread evenly from 0 to 1.2 times the model's at ``cycles_max`` (the most worn record);
+    none if no record is worn. Even in wear, not in cycles: the lubricated law wears the root
+    fastest while it runs in (case 3: 6.9 of 15.7 um in the first ninth of its cycles), so states
+    even in cycles leave the records below that without a state to read them by."""
+    if cycles_max <= 0:
+        return []
+    span = 2.0 * cycles_max
+    for _ in range(5):
+        life = span * np.linspace(0.0, 1.0, 33) ** 2  # dense where the wear rises fastest
+        root = root_wear_evolution(scn, life)[0]
+        top = 1.2 * float(np.interp(cycles_max, life, root))
+        if root[-1] >= top:
+            return [float(c) for c in np.interp(np.linspace(0.0, top, n), root, life)]
+        span *= 2
+    raise ValueError(f"the model's root wear does not grow by a fifth beyond its value at "
+                     f"{cycles_max:.3g} cycles within {span / 2:.3g}: check the operating point "
+                     "and tribology.regime")
 
 
 def record_cycles(scn: Scenario, row: pd.Series) -> float:
@@ -969,9 +991,44 @@ def feature_error(rec: Records, idx: np.ndarray, signals: list[np.ndarray]) -> f
     return float(np.mean(errs))
 
 
+def wear_reference(rec: Records, nuisance: dict, eff: Effect | None, values: dict
+                   ) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+    """What the model misses of each group's records whatever their wear, read from the
+    group's train records of known wear at their own worn models: per entry, the mean
+    residual [dB] and its spread beyond the noise [dB^2] (method of moments, ``var - entry_sd^2``
+    clipped at 0; zero with a single record). Keyed by group index; groups without such records
+    left out.
+
+    The residual of a record is read as ``r = mu + delta + eps``: ``mu`` what the model misses
+    in every record of the group (its form error there, an undeclared effect), ``delta`` the
+    part that changes from record to record, chiefly with wear (where the model's wear
+    signature is not the gearbox's), ``eps`` the noise (Kennedy & O'Hagan's discrepancy with a
+    mean, J. R. Stat. Soc. B 63 (2001) 425, estimated where the wear is known)."""
+    wear = rec.bundle.manifest.wear_mm.to_numpy(float)
+    known = np.array([i for i in rec.train if not np.isnan(wear[i])], int)
+    if not known.size:
+        return {}
+    res = residuals_db(rec, known, model_signals(rec, known, nuisance, eff, values))
+    out = {}
+    for g, pos in by_group(rec, known).items():
+        r = np.array([res[j] for j in pos])
+        spread = (np.maximum(r.var(axis=0, ddof=1) - rec.groups[g].entry_sd**2, 0.0)
+                  if len(pos) > 1 else np.zeros(r.shape[1]))
+        out[g] = (r.mean(axis=0), spread)
+    return out
+
+
 def wear_estimates(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | None,
                    values: dict) -> np.ndarray:
-    """Model-based wear estimate of each record: the wear state of nearest signature [mm]."""
+    """Model-based wear estimate of each record [mm]: the wear state whose simulated signature
+    is nearest, the residuals taken relative to the group's train records of known wear
+    (:func:`wear_reference`: their mean residual removed, each entry weighed by the noise and
+    the residual's spread between them). A record is so read by how it differs from records
+    of its own gearbox, operating point and sensor, with the entries where the model's wear
+    signature tracks the gearbox's weighed most: what the model misses in all of them (its
+    form error, an undeclared effect) does not move the estimate. Measured on the
+    independent simulator's bundles: docs/measured-data.md."""
+    reference = wear_reference(rec, nuisance, eff, values)
     out = []
     for i in idx:
         states = rec.wear_states[i]
@@ -981,7 +1038,11 @@ def wear_estimates(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | 
         wear = np.array([w for w, _ in states])
         sig = model_signals(rec, np.array([i] * len(states)), nuisance, eff, values,
                             models=[m for _, m in states])
-        cost = np.array([rms(residuals(rec, np.array([i]), [s])) for s in sig])
+        group = rec.group(i)
+        mean, spread = reference.get(int(rec.group_of[i]), (0.0, 0.0))
+        sd = np.sqrt(group.sd**2 + spread)
+        res = residuals_db(rec, np.array([i] * len(states)), sig)
+        cost = np.array([rms((r - mean) / sd) for r in res])
         j = int(np.argmin(cost))
         if 0 < j < len(cost) - 1:  # parabolic refinement between grid states
             c0, c1, c2 = cost[j - 1:j + 2]
@@ -1032,10 +1093,25 @@ def wear_skill(est: np.ndarray, true: np.ndarray, train_wear: np.ndarray) -> flo
     return 1 - float(np.mean(np.abs(est - true))) / guess if guess > 0 else None
 
 
-def wear_kept(before: WearScore | None, after: WearScore | None, max_loss: float) -> bool:
-    """Whether an effect keeps the wear estimate (issue 16, item 6): its held-out error may
-    grow by at most ``max_loss`` of its value; without known wear there is nothing to keep."""
-    return before is None or after is None or after.error <= (1 + max_loss) * before.error
+def wear_check(before: WearScore | None, after: WearScore | None, max_loss: float
+               ) -> dict | None:
+    """The null test's wear condition (issue 16, item 6): an adopted effect may lower the wear
+    estimate's skill by at most ``max_loss``, i.e. raise its mean absolute error by at most
+    that share of the constant guess's (the spread of the wear it reads), not of its own
+    error, which on a good estimate is finer than the estimate's resolution (a torque ripple
+    of our own records was refused at 3.9 -> 5.3 % of error, skill 0.85 -> 0.79). Where the
+    skill is undefined (no train records of known wear) the held-out mean relative error may
+    grow by at most ``max_loss`` of its value. None without known held-out wear: nothing to
+    keep. Both scores carry the same guess, so their skills are both defined or both not."""
+    if before is None or after is None:
+        return None
+    if before.skill is not None and after.skill is not None:
+        bound = before.skill - max_loss
+        return {"measure": "skill", "before": before.skill, "value": after.skill,
+                "bound": bound, "holds": after.skill >= bound}
+    bound = (1 + max_loss) * before.error
+    return {"measure": "error", "before": before.error, "value": after.error, "bound": bound,
+            "holds": after.error <= bound}
 
 
 def by_group(rec: Records, idx: np.ndarray) -> dict[int, list[int]]:
@@ -1112,7 +1188,7 @@ class Round:
     # wear check where the others held and the held-out records' wear is known
     checks: dict
     # held-out wear-estimate error and skill without and with the best, where the rest of the
-    # null test passed it (:func:`wear_kept`)
+    # null test passed it (:func:`wear_check`)
     wear: tuple[WearScore | None, WearScore | None] = (None, None)
 
     @property
@@ -1179,12 +1255,10 @@ def attribute(rec: Records, judged: Records, declared: Effect | None, declared_v
     if adopted:  # last: it costs a simulation per wear state and record
         wear = (wear_score(rec, nuisance, declared, declared_values),
                 wear_score(rec, best.nuisance, effects[best.name], best.values))
-        adopted = wear_kept(*wear, settings.max_wear_loss)
-        if None not in wear:
-            checks["wear"] = {"before": wear[0].error, "value": wear[1].error,
-                              "bound": (1 + settings.max_wear_loss) * wear[0].error,
-                              "holds": adopted, "skill_before": wear[0].skill,
-                              "skill": wear[1].skill}
+        check = wear_check(*wear, settings.max_wear_loss)
+        adopted = check is None or check["holds"]
+        if check is not None:
+            checks["wear"] = check | {"error_before": wear[0].error, "error": wear[1].error}
         log.info("%s: held-out wear estimate %s -> %s%s", best.name, *wear,
                  "" if adopted else ": worse, not adopted")
     return Round(ranking, effects, null_bic, allowed, adopted, base_test, checks, wear)

@@ -51,15 +51,26 @@ def holds(checks: dict[str, dict]) -> bool:
     return all(c["holds"] for c in checks.values())
 
 
+#: how a verdict writes each condition: its value, then its bound (``wear_error``: the wear
+#: check where the estimate's skill is undefined, ``measure: error``)
+CONDITION_WORDS = {"gain": ("held-out error cut by {value:.0%}", "needs >= {bound:.0%}"),
+                   "delta_bic": ("dBIC {value:.4g}", "needs <= {bound:g}"),
+                   "explained": ("explained {value:.1f}", "needs > {bound:.1f}"),
+                   "wear": ("wear-estimate skill {before:.2f} -> {value:.2f}",
+                            "needs >= {bound:.2f}"),
+                   "wear_error": ("wear-estimate error {before:.1f} -> {value:.1f} %",
+                                  "needs <= {bound:.1f} %")}
+
+
+def condition_text(name: str, c: dict) -> str:
+    """One condition of a verdict: its value, its bound and whether it held."""
+    value, bound = CONDITION_WORDS["wear_error" if c.get("measure") == "error" else name]
+    return f"{value.format(**c)} ({bound.format(**c)}: {'yes' if c['holds'] else 'no'})"
+
+
 def verdict_line(v: dict) -> str:
     """One round's verdict as a sentence: each condition, its value against its bound."""
-    words = {"gain": ("held-out error cut by {value:.0%}", "needs >= {bound:.0%}"),
-             "delta_bic": ("dBIC {value:.4g}", "needs <= {bound:g}"),
-             "explained": ("explained {value:.1f}", "needs > {bound:.1f}"),
-             "wear": ("wear-estimate error {before:.1f} -> {value:.1f} %",
-                      "needs <= {bound:.1f} %")}
-    parts = [f"{words[k][0].format(**c)} ({words[k][1].format(**c)}: "
-             f"{'yes' if c['holds'] else 'no'})" for k, c in v["checks"].items()]
+    parts = [condition_text(k, c) for k, c in v["checks"].items()]
     return (f"Best candidate {v['effect']}: {'; '.join(parts)}: "
             f"{'adopted' if v['adopted'] else 'not adopted'}.")
 
@@ -159,8 +170,8 @@ def markdown(r: dict) -> str:
                       f"squares per held-out record, in every group), what the discrepancy "
                       f"allows at a false-add rate of {rule['false_add_rate']:.0%}")
     if "max_wear_loss" in rule:
-        lines[-1] += (f", and, where the held-out records' wear is known, does not worsen the "
-                      f"wear estimate's error by more than {rule['max_wear_loss']:.0%} of it")
+        lines[-1] += (f", and, where the held-out records' wear is known, does not lower the "
+                      f"wear estimate's skill by more than {rule['max_wear_loss']:g}")
     lines[-1] += "."
     lines += ["", *[f"Round {k + 1}. {verdict_line(v)}" for k, v in enumerate(r["verdicts"])]]
     second = r.get("second_round")

@@ -459,12 +459,14 @@ def test_loop_app_finds_an_undeclared_transfer_path(tmp_path, scn):
     assert report["second_round"] is None
     verdict = report["verdicts"][0]  # every condition held, the wear check last
     assert verdict["adopted"] and all(c["holds"] for c in verdict["checks"].values())
-    wear = verdict["checks"]["wear"]  # the adopted effect kept the wear estimate
-    assert wear["value"] == report["wear_error_after_pct"]
-    assert wear["value"] <= (1 + report["decision_rule"]["max_wear_loss"]) * wear["before"]
-    # with the right effect our model reads the wear of its own records nearly exactly, far
-    # better than the train records' mean wear and than without it (measured: -0.25 -> 0.98)
-    assert report["wear_skill_after"] == wear["skill"] > max(0.9, wear["skill_before"])
+    wear = verdict["checks"]["wear"]  # the adopted effect kept the wear estimate's skill
+    assert wear["error"] == report["wear_error_after_pct"] and wear["measure"] == "skill"
+    assert wear["value"] >= wear["before"] - report["decision_rule"]["max_wear_loss"]
+    # read against the train records of its group, the wear estimate is not taken away by the
+    # undeclared effect (the same in every record) and stays with the adopted one (measured:
+    # skill 0.91 -> 0.92; the nearest signature alone read -0.25 -> 0.98)
+    assert report["wear_skill_after"] == wear["value"] and min(
+        wear["before"], wear["value"]) > 0.8
     assert report["error_after"] < 0.5 * report["error_before"]
     assert report["not_identifiable"] == ["eccentricity1_um"]
     assert set(report["nuisance_after"]) == set(report["calibration"])

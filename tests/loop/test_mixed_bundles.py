@@ -37,7 +37,7 @@ from physics.loop.bundle_loop import (
     second_candidates,
     split_records,
     stacked,
-    wear_kept,
+    wear_check,
     wear_skill,
     with_discrepancy,
     with_model_form,
@@ -189,13 +189,27 @@ def test_the_null_test_is_one_rule_for_both_loops_and_says_what_stopped_it():
     assert line.endswith("not adopted.")
 
 
+@given(before=st.floats(-2.0, 1.0), loss=st.floats(0.0, 1.0), share=st.floats(0.0, 1.0),
+       error=st.floats(0.1, 500.0))
+def test_wear_check_allows_only_the_stated_loss_of_skill(before, loss, share, error):
+    ref = WearScore(error, before)
+    within = wear_check(ref, WearScore(3 * error, before - share * loss), loss)
+    assert within["measure"] == "skill" and within["holds"]  # its own error may triple
+    beyond = wear_check(ref, WearScore(error, before - loss - 1e-3), loss)
+    assert beyond["bound"] == pytest.approx(before - loss) and not beyond["holds"]
+    assert wear_check(None, WearScore(3 * error, 0.5), loss) is None
+    assert wear_check(ref, None, loss) is None
+
+
 @given(before=st.floats(0.1, 500.0), loss=st.floats(0.0, 1.0), share=st.floats(0.0, 1.0))
-def test_wear_check_allows_only_the_stated_loss(before, loss, share):
+def test_wear_check_without_skill_allows_only_the_stated_share_of_error(before, loss, share):
     limit = (1 + loss) * before
     ref = WearScore(before, None)
-    assert wear_kept(ref, WearScore(share * limit, None), loss)  # better, or within the loss
-    assert not wear_kept(ref, WearScore(1.001 * limit, None), loss)  # worse beyond it
-    assert wear_kept(None, WearScore(3 * before, 0.5), loss) and wear_kept(ref, None, loss)
+    assert wear_check(ref, WearScore(share * limit, None), loss)["holds"]
+    worse = wear_check(ref, WearScore(1.001 * limit, None), loss)
+    assert worse["measure"] == "error" and not worse["holds"]
+    line = verdict_line({"effect": "friction", "adopted": False, "checks": {"wear": worse}})
+    assert f"needs <= {limit:.1f} %: no" in line
 
 
 def test_wear_skill_by_hand():
