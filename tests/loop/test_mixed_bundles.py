@@ -38,6 +38,8 @@ from physics.loop.bundle_loop import (
     split_records,
     stacked,
     wear_check,
+    wear_estimates,
+    wear_reference,
     wear_skill,
     with_discrepancy,
     with_model_form,
@@ -210,6 +212,35 @@ def test_wear_check_without_skill_allows_only_the_stated_share_of_error(before, 
     assert worse["measure"] == "error" and not worse["holds"]
     line = verdict_line({"effect": "friction", "adopted": False, "checks": {"wear": worse}})
     assert f"needs <= {limit:.1f} %: no" in line
+
+
+def test_wear_states_are_even_in_root_wear(mixed):
+    # the lubricated law wears the root fastest while it runs in: states even in cycles left
+    # no state between 0 and 6.9 um; even in wear, up to 1.2 times the most worn record
+    rec, _ = mixed
+    for i in rec.test:
+        wear = np.array([w for w, _ in rec.wear_states[i]])
+        step = np.diff(wear)
+        assert wear[0] == 0 and np.ptp(step) < 0.1 * step.mean()
+        assert wear[-1] == pytest.approx(1.2 * 0.012, rel=0.05)
+
+
+def test_what_every_record_of_a_group_shares_does_not_move_the_wear_estimate(mixed):
+    # read against the group's train records of known wear: a residual common to them (a
+    # form error, an undeclared effect, a calibration offset) cancels; the estimate's states
+    # are the same models, so the estimates are the same to round-off
+    rec, nuisance = mixed
+    before = wear_estimates(rec, rec.test, nuisance, None, {})
+    rng = np.random.default_rng(0)
+    offsets = [rng.normal(0.0, 6.0, len(g.names)) for g in rec.groups]  # dB, per group
+    shifted = dataclasses.replace(rec, measured=[m + offsets[g] for m, g in
+                                                 zip(rec.measured, rec.group_of, strict=True)])
+    assert np.allclose(wear_estimates(shifted, rec.test, nuisance, None, {}), before,
+                       rtol=0, atol=1e-9)
+    # the reference is what the train records share: their mean residual moves by the offset
+    ref, moved = (wear_reference(r, nuisance, None, {}) for r in (rec, shifted))
+    for g, (mean, spread) in ref.items():
+        assert np.allclose(moved[g][0] - mean, offsets[g]) and np.allclose(moved[g][1], spread)
 
 
 def test_wear_skill_by_hand():
