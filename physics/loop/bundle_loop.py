@@ -377,7 +377,7 @@ def prepare(bundle: Bundle, base: Scenario, settings: LoopSettings) -> Records:
     wear_states: list[list[tuple[float, PairModel]]] = [[] for _ in range(len(man))]
     for idx in keyed.values():
         scn = scenarios[idx[0]]
-        cycles = {i: record_cycles(scn, man.iloc[i]) for i in idx}
+        cycles = dict(zip(idx, records_cycles(scn, man.iloc[idx]), strict=True))
         grid = wear_grid_cycles(scn, max(cycles.values()), settings.wear_grid)
         by_cycles, root = worn_models(scn, ms, [*cycles.values(), *grid])
         for i in idx:
@@ -451,13 +451,15 @@ def wear_grid_cycles(scn: Scenario, cycles_max: float, n: int) -> list[float]:
                      "and tribology.regime")
 
 
-def record_cycles(scn: Scenario, row: pd.Series) -> float:
-    """A record's load cycles: stated, else those at which the model reaches its wear, else 0."""
-    if not pd.isna(row.cycles):
-        return float(row.cycles)
-    if not pd.isna(row.wear_mm) and row.wear_mm > 0:
-        return float(cycles_for_wear(scn, np.array([float(row.wear_mm)]))[0])
-    return 0.0
+def records_cycles(scn: Scenario, rows: pd.DataFrame) -> np.ndarray:
+    """Load cycles of records of one operating point: stated, else those at which the model
+    reaches their wear (one wear simulation for them all), else 0."""
+    cycles = rows.cycles.to_numpy(float).copy()
+    wear = rows.wear_mm.to_numpy(float)
+    find = np.isnan(cycles) & (np.nan_to_num(wear) > 0)
+    if find.any():
+        cycles[find] = cycles_for_wear(scn, wear[find])
+    return np.nan_to_num(cycles)
 
 
 def shaft_rates(scn: Scenario) -> tuple[float, float]:
