@@ -1065,6 +1065,10 @@ class WearScore(NamedTuple):
     #: ``1 - MAE / MAE of the constant guess`` (the train records' mean known wear): <= 0 says
     #: the estimate carries no wear information on these records; None without such a guess
     skill: float | None
+    #: the records scored (bundle indices), their known wear and its estimate [mm]
+    records: tuple[int, ...] = ()
+    true_mm: tuple[float, ...] = ()
+    estimate_mm: tuple[float, ...] = ()
 
 
 def wear_score(rec: Records, nuisance: dict, eff: Effect | None, values: dict
@@ -1084,7 +1088,8 @@ def wear_score(rec: Records, nuisance: dict, eff: Effect | None, values: dict
     ok = true > 0
     error = (float(np.mean(np.abs(est[ok] - true[ok]) / true[ok]) * 100) if ok.any()
              else float(np.mean(np.abs(est - true))))
-    return WearScore(error, wear_skill(est, true, wear[train]))
+    return WearScore(error, wear_skill(est, true, wear[train]), tuple(int(i) for i in test),
+                     tuple(map(float, true)), tuple(map(float, est)))
 
 
 def wear_skill(est: np.ndarray, true: np.ndarray, train_wear: np.ndarray) -> float | None:
@@ -1376,6 +1381,11 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
             "residual_after": residual_table(rec, rec.test, after_test),
             "wear_skill_before": wear_before.skill if wear_before else None,
             "wear_skill_after": wear_after.skill if wear_after else None,
+            "wear_estimates": ({"records": [bundle.records[i] for i in wear_before.records],
+                                "true_mm": list(wear_before.true_mm),
+                                "before_mm": list(wear_before.estimate_mm),
+                                "after_mm": list(wear_after.estimate_mm)}
+                               if wear_before and wear_after else None),
             "verdicts": [{"effect": r.best.name, "adopted": r.adopted, "checks": r.checks}
                          for r in rounds],
             "second_round": ({"on": first.best.name, "adopted": rounds[1].adopted,

@@ -258,6 +258,30 @@ def figures(report: LoopReport, out: Path) -> None:
     fig.tight_layout()
     atomic_write(out / "residuals.png", lambda p: fig.savefig(p, dpi=110, format="png"))
     plt.close(fig)
+    if report["wear_estimates"]:
+        _wear_parity(report.to_dict(), out)
+
+
+def _wear_parity(report: dict, out: Path) -> None:
+    """wear_estimates.png: the model-based wear estimate of each held-out record against its
+    known wear, with the calibrated and with the extended model."""
+    plt = pyplot()
+    w = report["wear_estimates"]
+    um = {k: np.array(w[k]) * 1e3 for k in ("true_mm", "before_mm", "after_mm")}
+    top = 1.1 * max(float(v.max()) for v in um.values()) or 1.0
+    fig, ax = plt.subplots(figsize=(5, 5))
+    ax.plot([0, top], [0, top], "k:", lw=1, label="exact")
+    for key, style, label in (("before", "C0s", "calibrated model"),
+                              ("after", "C1^", "extended model")):
+        ax.plot(um["true_mm"], um[f"{key}_mm"], style, ms=6, alpha=0.8,
+                label=f"{label} (skill {_num(report[f'wear_skill_{key}'])})")
+    ax.set(xlim=(0, top), ylim=(0, top), xlabel="known root wear [um]",
+           ylabel="model-based estimate [um]",
+           title=f"held-out wear; chosen effect: {report['chosen_effect']}")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    atomic_write(out / "wear_estimates.png", lambda p: fig.savefig(p, dpi=110, format="png"))
+    plt.close(fig)
 
 
 def _feature_trends(report: dict, out: Path) -> None:

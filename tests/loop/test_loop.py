@@ -39,6 +39,7 @@ from physics.loop.bundle_loop import (
     separable_share,
     split_records,
     train_cost,
+    wear_skill,
     with_level,
 )
 from physics.loop.effects import EFFECTS, effect
@@ -472,7 +473,15 @@ def test_loop_app_finds_an_undeclared_transfer_path(tmp_path, scn):
     assert set(report["nuisance_after"]) == set(report["calibration"])
     fitted = report["chosen_parameters"]["fn_hz"]
     assert fitted == pytest.approx(truth["values"]["fn_hz"], rel=0.15)
-    for name in ("report.md", "order_spectra.png", "residuals.png"):
+    # each held-out record's estimate, as the skill was computed from (the guess: the mean
+    # known wear of the train records)
+    est = report["wear_estimates"]
+    true, after = np.array(est["true_mm"]), np.array(est["after_mm"])
+    assert est["records"] == report["test_records"] and len(est["before_mm"]) == len(true)
+    man = read_bundle(path).manifest.set_index("record")
+    train = man.loc[report["train_records"], "wear_mm"].to_numpy(float)
+    assert wear_skill(after, true, train) == pytest.approx(wear["value"])
+    for name in ("report.md", "order_spectra.png", "residuals.png", "wear_estimates.png"):
         assert (tmp_path / "run" / name).stat().st_size > 0
     assert "| wear estimate's skill" in (tmp_path / "run" / "report.md").read_text()
 
