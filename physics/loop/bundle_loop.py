@@ -93,6 +93,7 @@ import itertools
 import logging
 import math
 import re
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -416,18 +417,32 @@ def entry_scatter(segments: list[np.ndarray], floor_db: float) -> np.ndarray:
     return np.sqrt(var + floor_db**2)
 
 
+def wear_curve(scn: Scenario, span: float, points: int, power: float,
+               enough: Callable[[np.ndarray, np.ndarray], bool]
+               ) -> tuple[np.ndarray, np.ndarray, bool]:
+    """The model's pinion root wear [m] on the life grid ``span * u**power`` (``points`` values
+    of u from 0 to 1), the span doubled up to four times until ``enough(life, root)``; returns
+    the last grid, its wear and whether it was enough."""
+    for _ in range(5):
+        life = span * np.linspace(0.0, 1.0, points) ** power
+        root = root_wear_evolution(scn, life)[0]
+        if enough(life, root):
+            return life, root, True
+        span *= 2
+    return life, root, False
+
+
 def cycles_for_wear(scn: Scenario, wear_mm: np.ndarray, cycles_max: float = 1.5e7
                     ) -> np.ndarray:
     """Cycle counts at which the model's pinion root wear reaches ``wear_mm``."""
-    for _ in range(5):
-        grid = np.linspace(0.0, cycles_max, 16)
-        root = root_wear_evolution(scn, grid)[0] * 1e3
-        if root[-1] >= np.max(wear_mm):
-            return np.interp(wear_mm, root, grid)
-        cycles_max *= 2
-    raise ValueError(f"the model's root wear reaches only {root[-1]:.4g} mm in {cycles_max:.3g} "
-                     f"cycles, below {np.max(wear_mm):g} mm: check the operating point and "
-                     "tribology.regime")
+    life, root_m, ok = wear_curve(scn, cycles_max, 16, 1,
+                                  lambda _, root: root[-1] * 1e3 >= np.max(wear_mm))
+    root = root_m * 1e3
+    if not ok:
+        raise ValueError(f"the model's root wear reaches only {root[-1]:.4g} mm in "
+                         f"{life[-1]:.3g} cycles, below {np.max(wear_mm):g} mm: check the "
+                         "operating point and tribology.regime")
+    return np.interp(wear_mm, root, life)
 
 
 def wear_grid_cycles(scn: Scenario, cycles_max: float, n: int) -> list[float]:
@@ -438,17 +453,18 @@ def wear_grid_cycles(scn: Scenario, cycles_max: float, n: int) -> list[float]:
     even in cycles leave the records below that without a state to read them by."""
     if cycles_max <= 0:
         return []
-    span = 2.0 * cycles_max
-    for _ in range(5):
-        life = span * np.linspace(0.0, 1.0, 33) ** 2  # dense where the wear rises fastest
-        root = root_wear_evolution(scn, life)[0]
-        top = 1.2 * float(np.interp(cycles_max, life, root))
-        if root[-1] >= top:
-            return [float(c) for c in np.interp(np.linspace(0.0, top, n), root, life)]
-        span *= 2
-    raise ValueError(f"the model's root wear does not grow by a fifth beyond its value at "
-                     f"{cycles_max:.3g} cycles within {span / 2:.3g}: check the operating point "
-                     "and tribology.regime")
+
+    def top(life: np.ndarray, root: np.ndarray) -> float:
+        return 1.2 * float(np.interp(cycles_max, life, root))
+
+    # the life grid dense where the wear rises fastest
+    life, root, ok = wear_curve(scn, 2.0 * cycles_max, 33, 2,
+                                lambda life, root: root[-1] >= top(life, root))
+    if not ok:
+        raise ValueError(f"the model's root wear does not grow by a fifth beyond its value at "
+                         f"{cycles_max:.3g} cycles within {life[-1]:.3g}: check the operating "
+                         "point and tribology.regime")
+    return [float(c) for c in np.interp(np.linspace(0.0, top(life, root), n), root, life)]
 
 
 def records_cycles(scn: Scenario, rows: pd.DataFrame) -> np.ndarray:
