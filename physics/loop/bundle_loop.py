@@ -114,7 +114,7 @@ from physics.params import PhysicsConfig, Scenario, bounded, validate_fields
 from physics.signals.features import FEATURES, features
 from physics.signals.measurement import declared_chain, sensed
 from physics.signals.order_analysis import (
-    signature,
+    mean_signatures,
     signature_names,
     signature_segments,
     white_noise_std,
@@ -635,14 +635,20 @@ def model_signals(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | N
 
 def residuals_db(rec: Records, idx: np.ndarray, signals: list[np.ndarray]
                  ) -> list[np.ndarray]:
-    """Measured minus model signature of each of records ``idx`` (its group's entries) [dB]."""
+    """Measured minus model signature of each of records ``idx`` (its group's entries) [dB];
+    the records of one operating point, quantity and sampling rate analysed in one batch."""
     man = rec.bundle.manifest
-    res = []
+    batches: dict[tuple, list[int]] = {}
     for k, i in enumerate(idx):
         scn = rec.scenarios[i]
-        sig = signature(signals[k], float(man.fs_hz.iloc[i]), *shaft_rates(scn), scn.gear.z1,
-                        man.quantity.iloc[i] == "dte_m", rec.settings.segment_s)
-        res.append(rec.measured[i] - sig)
+        key = (float(man.fs_hz.iloc[i]), *shaft_rates(scn), scn.gear.z1,
+               man.quantity.iloc[i] == "dte_m")
+        batches.setdefault(key, []).append(k)
+    res: list[np.ndarray] = [np.empty(0)] * len(idx)
+    for key, ks in batches.items():
+        sig = mean_signatures([signals[k] for k in ks], *key, rec.settings.segment_s)
+        for k, s in zip(ks, sig, strict=True):
+            res[k] = rec.measured[idx[k]] - s
     return res
 
 

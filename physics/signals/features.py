@@ -70,11 +70,12 @@ def features(x: np.ndarray) -> dict[str, np.ndarray]:
     mean_abs = absx.mean(axis=-1)
     rms = np.sqrt(np.mean(x * x, axis=-1))
     centred = x - x.mean(axis=-1, keepdims=True)
-    var = np.mean(centred**2, axis=-1)
+    squared = centred * centred  # ``centred**4`` would call pow(): ten times the time
+    var = np.mean(squared, axis=-1)
     return {
         "rms": rms,
         "peak_to_peak": x.max(axis=-1) - x.min(axis=-1),
-        "kurtosis": np.mean(centred**4, axis=-1) / var**2,
+        "kurtosis": np.mean(squared * squared, axis=-1) / var**2,
         "crest": peak / rms,
         "margin": peak / np.mean(np.sqrt(absx), axis=-1) ** 2,
         "impulse": peak / mean_abs,

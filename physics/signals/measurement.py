@@ -13,6 +13,7 @@
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -82,9 +83,15 @@ def transfer_path(x: np.ndarray, fs: float, fn_hz: float, zeta: float) -> np.nda
     if not 0 < fn_hz < fs / 2 or not 0 < zeta < 1:
         raise ValueError(f"transfer path fn_hz = {fn_hz!r} must lie in (0, fs/2 = {fs / 2:g}) and "
                          f"zeta = {zeta!r} in (0, 1)")
+    return signal.lfilter(*_resonance_filter(float(fs), float(fn_hz), float(zeta)), x, axis=-1)
+
+
+@lru_cache(maxsize=64)
+def _resonance_filter(fs: float, fn_hz: float, zeta: float) -> tuple[np.ndarray, np.ndarray]:
+    """The digital filter of :func:`transfer_path` (``scipy.signal.bilinear`` takes a
+    millisecond; the loop applies one path to every record of an evaluation)."""
     wn = 2 * fs * math.tan(math.pi * fn_hz / fs)
-    b, a = signal.bilinear([2 * zeta * wn, wn**2], [1.0, 2 * zeta * wn, wn**2], fs)
-    return signal.lfilter(b, a, x, axis=-1)
+    return signal.bilinear([2 * zeta * wn, wn**2], [1.0, 2 * zeta * wn, wn**2], fs)
 
 
 def add_noise(x: np.ndarray, snr_db: float, rng: np.random.Generator) -> np.ndarray:

@@ -32,15 +32,22 @@ from physics.signals.features import features
 
 @lru_cache(maxsize=16)
 def _basis(n: int, fs: float, freqs: tuple[float, ...]) -> np.ndarray:
+    """Hann-weighted cosines and sines at ``freqs``, (n, 2 lines), in single precision: the
+    record is real, so two real products cost half of one complex one."""
     t = np.arange(n) / fs
     w = np.hanning(n)
-    return (np.exp(-2j * np.pi * np.outer(freqs, t)) * (2 * w / w.sum())).T.astype(np.complex64)
+    phase = 2 * np.pi * np.outer(t, freqs)
+    basis = np.hstack([np.cos(phase), np.sin(phase)]) * (2 * w / w.sum())[:, None]
+    basis = basis.astype(np.float32)
+    basis.flags.writeable = False
+    return basis
 
 
 def line_amplitudes(x: np.ndarray, fs: float, freqs: np.ndarray) -> np.ndarray:
     """Amplitudes of sinusoids at ``freqs`` [Hz] in ``x`` (..., n): Hann-windowed projection."""
     basis = _basis(x.shape[-1], float(fs), tuple(float(f) for f in freqs))
-    return np.abs((x - x.mean(axis=-1, keepdims=True)).astype(np.complex64) @ basis)
+    proj = (x - x.mean(axis=-1, keepdims=True)).astype(np.float32) @ basis
+    return np.hypot(proj[..., :len(freqs)], proj[..., len(freqs):])
 
 
 @lru_cache(maxsize=16)
@@ -78,30 +85,35 @@ def white_noise_std(x: np.ndarray, fs: float, f_low: float) -> float:
 
 
 def synchronous_average(x: np.ndarray, fs: float, f_shaft: float, bins: int = 256) -> np.ndarray:
-    """Time-synchronous average over whole shaft revolutions (``bins`` angular samples each).
+    """Time-synchronous average over whole shaft revolutions (``bins`` angular samples each) of
+    each record along the last axis of ``x``.
 
     The record is resampled to ``bins`` points per revolution by linear interpolation at
     constant speed and the revolutions are averaged; at least one revolution is needed.
     """
-    n_rev = int(x.shape[-1] / fs * f_shaft)
+    n = x.shape[-1]
+    n_rev = int(n / fs * f_shaft)
     if n_rev < 1:
-        raise ValueError(f"the record holds {x.shape[-1] / fs:.3g} s, less than one revolution "
+        raise ValueError(f"the record holds {n / fs:.3g} s, less than one revolution "
                          f"at {f_shaft:.3g} Hz: a longer record is needed")
-    t = np.arange(x.shape[-1]) / fs
-    grid = np.arange(n_rev * bins) / (bins * f_shaft)
-    resampled = np.interp(grid, t, x)
-    return resampled.reshape(n_rev, bins).mean(axis=0)
+    pos = np.arange(n_rev * bins) * (fs / (bins * f_shaft))  # in samples
+    i = np.minimum(pos.astype(int), n - 2)
+    frac = np.minimum(pos - i, 1.0)  # held at the last sample, as np.interp does
+    resampled = x[..., i] * (1 - frac) + x[..., i + 1] * frac
+    return resampled.reshape(*x.shape[:-1], n_rev, bins).mean(axis=-2)
 
 
-def _tsa_residual_kurtosis(x: np.ndarray, fs: float, f1: float, z1: int) -> float:
+def _tsa_residual_kurtosis(x: np.ndarray, fs: float, f1: float, z1: int) -> np.ndarray:
     avg = synchronous_average(x, fs, f1)
-    spec = np.fft.rfft(avg - avg.mean())
-    for k in range(1, spec.size):  # remove the mesh harmonics and their first neighbours
-        if min(k % z1, z1 - k % z1) <= 1:
-            spec[k] = 0.0
-    res = np.fft.irfft(spec, avg.size)
-    var = np.mean(res**2)
-    return float(np.mean(res**4) / var**2) if var > 0 else 3.0
+    spec = np.fft.rfft(avg - avg.mean(axis=-1, keepdims=True), axis=-1)
+    k = np.arange(spec.shape[-1])
+    mesh = np.minimum(k % z1, z1 - k % z1) <= 1  # the mesh harmonics and their first neighbours
+    mesh[0] = False
+    spec[..., mesh] = 0.0
+    res = np.fft.irfft(spec, avg.shape[-1], axis=-1)
+    var = np.mean(res**2, axis=-1)
+    fourth = np.mean(res**4, axis=-1)
+    return np.where(var > 0, fourth / np.where(var > 0, var, 1.0) ** 2, 3.0)
 
 
 def line_frequencies(f1: float, f2: float, z1: int, fs: float) -> dict[str, float]:
@@ -130,32 +142,49 @@ def signature_names(f1: float, f2: float, z1: int, fs: float, dte: bool) -> list
     return names + ["rms", "kurtosis", "crest", "tsa_kurtosis"] + (["mean"] if dte else [])
 
 
-def _segment_signature(x: np.ndarray, fs: float, f1: float, f2: float, z1: int,
-                       dte: bool) -> np.ndarray:
+def signatures(x: np.ndarray, fs: float, f1: float, f2: float, z1: int,
+               dte: bool) -> np.ndarray:
+    """The signature of each row of ``x`` (rows, samples), one analysis segment each [dB]
+    (names: :func:`signature_names`); all rows at once."""
+    x = np.atleast_2d(np.asarray(x, float))
     lines = line_frequencies(f1, f2, z1, fs)
     amp = line_amplitudes(x, fs, np.array(list(lines.values())))
     f, spec = power_spectrum(x, fs)
     edges = band_edges(z1 * f1, fs)
-    bands = [spec[(f >= lo) & (f < hi)].sum() for lo, hi in itertools.pairwise(edges)]
+    bands = np.column_stack([spec[:, (f >= lo) & (f < hi)].sum(axis=1)
+                             for lo, hi in itertools.pairwise(edges)] or [np.empty((len(x), 0))])
     feat = features(x)
-    stats = [float(feat["rms"]), float(feat["kurtosis"]), float(feat["crest"]),
-             _tsa_residual_kurtosis(x, fs, f1, z1)] + ([abs(float(x.mean()))] if dte else [])
-    return np.concatenate([20 * np.log10(amp + 1e-30), 10 * np.log10(np.array(bands) + 1e-300),
-                           20 * np.log10(np.array(stats) + 1e-30)])
+    stats = [feat["rms"], feat["kurtosis"], feat["crest"], _tsa_residual_kurtosis(x, fs, f1, z1)]
+    stats += [np.abs(x.mean(axis=1))] if dte else []
+    return np.concatenate([20 * np.log10(amp + 1e-30), 10 * np.log10(bands + 1e-300),
+                           20 * np.log10(np.column_stack(stats) + 1e-30)], axis=1)
+
+
+def _segments(x: np.ndarray, fs: float, segment_s: float) -> np.ndarray:
+    n = round(segment_s * fs)
+    if x.size < n:
+        raise ValueError(f"record of {x.size / fs:.3g} s is shorter than one analysis segment "
+                         f"({segment_s:g} s)")
+    return x[:x.size // n * n].reshape(-1, n)
 
 
 def signature_segments(x: np.ndarray, fs: float, f1: float, f2: float, z1: int, dte: bool,
                        segment_s: float) -> np.ndarray:
     """Signatures of the whole segments of record ``x``, (segments, entries) [dB]."""
-    n = round(segment_s * fs)
-    if x.size < n:
-        raise ValueError(f"record of {x.size / fs:.3g} s is shorter than one analysis segment "
-                         f"({segment_s:g} s)")
-    return np.array([_segment_signature(x[i:i + n], fs, f1, f2, z1, dte)
-                     for i in range(0, x.size - n + 1, n)])
+    return signatures(_segments(x, fs, segment_s), fs, f1, f2, z1, dte)
 
 
 def signature(x: np.ndarray, fs: float, f1: float, f2: float, z1: int, dte: bool,
               segment_s: float) -> np.ndarray:
     """The segment-averaged signature of record ``x`` [dB] (names: :func:`signature_names`)."""
     return signature_segments(x, fs, f1, f2, z1, dte, segment_s).mean(axis=0)
+
+
+def mean_signatures(xs: list[np.ndarray], fs: float, f1: float, f2: float, z1: int, dte: bool,
+                    segment_s: float) -> np.ndarray:
+    """:func:`signature` of each record of ``xs`` (one operating point and sampling rate),
+    (records, entries): the segments of all records analysed in one batch."""
+    cut = [_segments(x, fs, segment_s) for x in xs]
+    sig = signatures(np.concatenate(cut), fs, f1, f2, z1, dte)
+    ends = np.cumsum([len(c) for c in cut])
+    return np.array([s.mean(axis=0) for s in np.split(sig, ends[:-1])])
