@@ -15,7 +15,8 @@ measurement and model, each in decibels so that gains become offsets:
 - for DTE records (which keep their mean), the mean.
 
 A record is cut into segments of ``segment_s``; :func:`signature_segments` gives one signature per
-segment (their scatter is the entries' noise), :func:`signature` their mean.
+segment (their scatter is the entries' noise), :func:`mean_signatures` their mean, for a batch
+of records at once.
 """
 
 from __future__ import annotations
@@ -174,16 +175,10 @@ def signature_segments(x: np.ndarray, fs: float, f1: float, f2: float, z1: int, 
     return signatures(_segments(x, fs, segment_s), fs, f1, f2, z1, dte)
 
 
-def signature(x: np.ndarray, fs: float, f1: float, f2: float, z1: int, dte: bool,
-              segment_s: float) -> np.ndarray:
-    """The segment-averaged signature of record ``x`` [dB] (names: :func:`signature_names`)."""
-    return signature_segments(x, fs, f1, f2, z1, dte, segment_s).mean(axis=0)
-
-
 def mean_signatures(xs: list[np.ndarray], fs: float, f1: float, f2: float, z1: int, dte: bool,
                     segment_s: float) -> np.ndarray:
-    """:func:`signature` of each record of ``xs`` (one operating point and sampling rate),
-    (records, entries): the segments of all records analysed in one batch."""
+    """The segment-averaged signature [dB] of each record of ``xs`` (one operating point and
+    sampling rate), (records, entries): the segments of all records analysed in one batch."""
     cut = [_segments(x, fs, segment_s) for x in xs]
     sig = signatures(np.concatenate(cut), fs, f1, f2, z1, dte)
     ends = np.cumsum([len(c) for c in cut])
