@@ -213,7 +213,6 @@ def test_synchronous_average_keeps_the_periodic_part_and_averages_noise_out():
     assert np.sqrt(np.mean((avg - ref) ** 2)) < 0.25  # noise 1 averaged over 50 revolutions
 
 
-
 @settings(max_examples=15, deadline=None)
 @given(rows=st.integers(1, 4), f1=st.floats(10.0, 60.0), seed=st.integers(0, 2**16))
 def test_synchronous_average_of_a_batch_is_linear_interpolation_row_by_row(rows, f1, seed):
@@ -240,6 +239,7 @@ def test_signatures_of_a_batch_equal_those_of_each_record_alone():
     alone = [signature_segments(x, FS, f1, f2, z1, False, 0.25).mean(axis=0) for x in xs]
     assert batch.shape == (4, len(signature_names(f1, f2, z1, FS, False)))
     np.testing.assert_allclose(batch, alone, atol=1e-3)
+
 
 # --- the effect library: each effect's physical signature -------------------------------------
 
