@@ -327,6 +327,12 @@ class Dynamics:
       it, and the measured-data loop calibrates it around that value. 0.05: a lightly damped
       mode (rolling bearings add little damping: SKF Evolution, "Damping in a rolling bearing
       arrangement"; the loop fits it within 0.005-0.3).
+    - ``stiffness_factor``, ``double_contact_factor``, ``resonance_factor`` 1: the model's form
+      uncertainty (:mod:`physics.dynamics.model_form`): the mesh stiffness level, the
+      double/single stiffness ratio and the mesh resonance relative to the declared model (the
+      potential-energy stiffness, the blanks' inertias). 1 is the thesis model; a dataset
+      draws them per trajectory where its ``data.nuisance`` ranges say so, the measured-data
+      loop calibrates them (``loop.model_form``).
     """
 
     damping_ratio: float = bounded(0.07, 0.0, 1.0, "fraction of critical damping; 0.03-0.17 "
@@ -348,6 +354,10 @@ class Dynamics:
     support_hz: float = bounded(0.0, 0.0, 1e6, "0: a rigid support; else the bearing-support "
                                 "mode [Hz]", closed=True)
     support_damping: float = bounded(0.05, 0.0, 1.0, "fraction of critical damping")
+    stiffness_factor: float = bounded(1.0, 0.0, 100.0, "mesh stiffness over the declared one")
+    double_contact_factor: float = bounded(1.0, 0.0, 100.0, "double-contact stiffness over the "
+                                           "declared one")
+    resonance_factor: float = bounded(1.0, 0.0, 100.0, "mesh resonance over the declared one")
 
     def __post_init__(self) -> None:
         validate_fields(self, "dynamics")

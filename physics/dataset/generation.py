@@ -25,6 +25,7 @@ import math
 import numbers
 import re
 import warnings
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from importlib.metadata import version
 from pathlib import Path
@@ -39,6 +40,7 @@ from tqdm import tqdm
 
 from physics.dynamics.evolution import simulate_dynamic_wear
 from physics.dynamics.model import build_model, simulate
+from physics.dynamics.model_form import FACTORS
 from physics.files import atomic_write
 from physics.gear.stiffness import MeshStiffness, SainsotRangeWarning
 from physics.params import (
@@ -66,12 +68,12 @@ BASE_COLUMNS = {
 }
 #: the dynamics parameters a trajectory draws (:class:`NuisanceRanges`)
 DYNAMIC_NUISANCE = ("damping_ratio", "eccentricity1_um", "profile_error_um", "half_backlash_um",
-                    "housing_mass_kg")
+                    "housing_mass_kg", *FACTORS)
 #: the drawn nuisance kept as columns (for analysis; not network inputs), with their units
 NUISANCE_COLUMNS = {"damping_ratio": "1", "eccentricity1_um": "um", "profile_error_um": "um",
                     "half_backlash_um": "um", "housing_mass_kg": "kg", "transfer_fn_hz": "Hz",
                     "transfer_zeta": "1", "snr_db": "dB", "wear_coeff_factor": "1",
-                    "boundary_share": "1"}
+                    "boundary_share": "1", **{f: "1" for f in FACTORS}}
 
 
 @dataclass(frozen=True)
@@ -102,6 +104,12 @@ class NuisanceRanges:
       after 1.5e7 cycles: root wear 6.7 times the path average under the lubricated law, 2.6
       times under the dry law), so ``[0, 1]``, the thesis's two laws as end members, trains a
       network on every shape between; what that costs and buys: docs/surrogate.md.
+    - ``stiffness_factor``, ``double_contact_factor``, ``resonance_factor``: the declared
+      model's form uncertainty (:mod:`physics.dynamics.model_form`; log-uniform), 1 (the
+      thesis model) by default. ISO 6336-1, the potential-energy method and finite-element or
+      measured stiffnesses of one pair differ by 10-30 %, a mount's compliance lowers it, the
+      blanks' inertias leave out shafts and couplings (``python train.py experiment=model_form``
+      draws them over a stated wide range); what that costs and buys: docs/surrogate.md.
     """
 
     speed_pct: float = bounded(10.0, 0.0, 50.0, closed=True)
@@ -116,6 +124,9 @@ class NuisanceRanges:
     snr_db: list[float] = field(default_factory=lambda: [20.0, 40.0])
     wear_coeff_factor: list[float] = field(default_factory=lambda: [0.5, 2.0])
     boundary_share: list[float] = field(default_factory=lambda: [0.0, 0.0])
+    stiffness_factor: list[float] = field(default_factory=lambda: [1.0, 1.0])
+    double_contact_factor: list[float] = field(default_factory=lambda: [1.0, 1.0])
+    resonance_factor: list[float] = field(default_factory=lambda: [1.0, 1.0])
 
     #: the physical limits each range must lie in
     LIMITS: ClassVar[dict[str, tuple[float, float]]] = {
@@ -123,7 +134,9 @@ class NuisanceRanges:
         "profile_error_um": (0.0, 1000.0), "half_backlash_um": (0.0, 1e4),
         "housing_mass_kg": (1e-3, 1e5), "transfer_fn_hz": (10.0, 20000.0),
         "transfer_zeta": (1e-3, 0.9), "snr_db": (-20.0, 200.0), "wear_coeff_factor": (1e-3, 1e3),
-        "boundary_share": (0.0, 1.0)}
+        "boundary_share": (0.0, 1.0), **{f: (0.1, 10.0) for f in FACTORS}}
+    #: the ranges drawn log-uniformly (factors); the rest uniformly
+    LOG: ClassVar[tuple[str, ...]] = ("wear_coeff_factor", *FACTORS)
 
     def __post_init__(self) -> None:
         validate_fields(self, "data.nuisance")
@@ -144,7 +157,7 @@ class NuisanceRanges:
         for name in self.LIMITS:
             lo, hi = getattr(self, name)
             u = rng.uniform()
-            out[name] = lo * (hi / lo) ** u if name == "wear_coeff_factor" else lo + u * (hi - lo)
+            out[name] = lo * (hi / lo) ** u if name in self.LOG else lo + u * (hi - lo)
         return out
 
 
@@ -171,7 +184,7 @@ class DatasetSpec:
         object.__setattr__(self, "cases", tuple(int(c) for c in self.cases))
         if len(set(self.cases)) != len(self.cases) or not self.cases:
             raise ValueError(f"data.cases = {list(self.cases)} must be distinct, from {valid}")
-        if isinstance(self.nuisance, dict):
+        if isinstance(self.nuisance, Mapping):  # a dict or a Hydra DictConfig
             object.__setattr__(self, "nuisance", NuisanceRanges(**self.nuisance))
         if self.chunks > self.units:
             raise ValueError(f"data.chunks = {self.chunks} must lie in [1, {self.units}] (one "

@@ -49,6 +49,7 @@ import numba
 import numpy as np
 from scipy import signal
 
+from physics.dynamics.model_form import FACTORS, with_model_form
 from physics.gear.geometry import MeshGeometry
 from physics.gear.stiffness import MeshStiffness
 from physics.params import Dynamics, Scenario
@@ -124,7 +125,8 @@ def blank_inertia(radius: float, bore: float, width: float, density: float) -> f
 def build_model(scn: Scenario, stiffness: MeshStiffness | None = None,
                 s_grid: np.ndarray | None = None, wear1: np.ndarray | None = None,
                 wear2: np.ndarray | None = None, n_phase: int = 1024) -> PairModel:
-    """The reduced model of ``scn`` for the teeth worn by ``wear1, wear2`` on ``s_grid``."""
+    """The reduced model of ``scn`` for the teeth worn by ``wear1, wear2`` on ``s_grid``, with
+    the scenario's form factors (:mod:`physics.dynamics.model_form`; neutral by default)."""
     dyn, g, op = check_scope(scn).dynamics, scn.gear, scn.operating
     ms = stiffness or MeshStiffness(g, scn.material)
     geom = ms.geometry
@@ -147,13 +149,14 @@ def build_model(scn: Scenario, stiffness: MeshStiffness | None = None,
     mass = j1 * j2 / (j1 * geom.rb2**2 + j2 * geom.rb1**2)
     k_mean = float(np.mean(k_a + k_b))
     omega1 = op.omega1
-    return PairModel(
+    declared = PairModel(
         geometry=geom, mass=mass, damping=2 * dyn.damping_ratio * math.sqrt(k_mean * mass),
         static_force=w0, half_backlash=dyn.half_backlash_um * 1e-6,
         long_error=dyn.eccentricity1_um * 1e-6 * math.sin(geom.alpha_w),
         short_error=dyn.profile_error_um * 1e-6, omega1=omega1, omega_mesh=omega1 * g.z1,
         roll_speed=geom.rb1 * omega1, k_a=k_a, k_b=k_b, g_a=g_a, g_b=g_b, inertias=(j1, j2),
     )
+    return with_model_form(declared, {f: getattr(dyn, f) for f in FACTORS})
 
 
 @dataclass(frozen=True)

@@ -115,6 +115,8 @@ CASES: dict[str, Case] = {
         check=_files("optuna_case3.db")),
     "python train.py experiment=all_cases": Case(tuple(TINY_DATA + FAST_TRAIN),
                                                  check=_files("logs/train/runs/caseall_*")),
+    "python train.py experiment=model_form": Case(tuple(TINY_DATA + FAST_TRAIN), check=_files(
+        "data/dataset_case3_model_form.parquet", "logs/train/runs/case3_*/wear_surrogate.pt")),
     "python -m surrogate.summarise logs/train/multiruns/<time>": Case(
         before=("python train.py -m case=1,2,3,4,5",), check=_summary),
     "python -m surrogate.predict ckpt=logs/train/runs/<run>/wear_surrogate.pt "

@@ -10,6 +10,7 @@ import numpy as np
 import pandas as pd
 import pyarrow.parquet as pq
 import pytest
+from omegaconf import OmegaConf
 
 from physics.dataset.generation import (
     DatasetSpec,
@@ -77,15 +78,31 @@ def test_draws_stay_within_their_documented_ranges(single):
 
 
 def test_a_trajectorys_draws_reach_its_physics():
-    spec = spec_from_config({**SMALL, "chunks": 1, "nuisance": {"boundary_share": [0.2, 0.8]}})
+    spec = spec_from_config({**SMALL, "chunks": 1, "nuisance": {
+        "boundary_share": [0.2, 0.8], "stiffness_factor": [0.6, 1.6],
+        "resonance_factor": [0.9, 0.9]}})
     d = unit_draw(spec, 3, 1)
     scn = unit_scenario(BASE, spec, 3, 1)
+    assert 0.6 <= scn.dynamics.stiffness_factor == d["stiffness_factor"] <= 1.6
+    assert scn.dynamics.resonance_factor == pytest.approx(0.9)
+    assert scn.dynamics.double_contact_factor == 1.0  # its default range: the declared model
     assert scn.dynamics.damping_ratio == d["damping_ratio"]
     assert scn.dynamics.housing_mass_kg == d["housing_mass_kg"]
     assert scn.tribology.dry_wear_coeff == pytest.approx(
         BASE.tribology.dry_wear_coeff * d["wear_coeff_factor"])
     assert 0.2 <= scn.tribology.boundary_share == d["boundary_share"] <= 0.8
     assert scn.operating.n1_rpm == pytest.approx(case_values(3)["n1_rpm"] * d["speed_factor"])
+
+
+def test_ranges_come_from_a_hydra_config_as_from_a_dict():
+    """``python train.py +data.generate.nuisance.boundary_share=[0,1]`` hands the ranges over
+    as an OmegaConf node, not a dict."""
+    cfg = OmegaConf.create({**SMALL, "chunks": 1, "nuisance": {"boundary_share": [0.2, 0.8]}})
+    spec = spec_from_config(cfg)
+    assert isinstance(spec.nuisance, NuisanceRanges)
+    assert spec.nuisance.boundary_share == [0.2, 0.8]
+    assert unit_draw(spec, 3, 1) == unit_draw(spec_from_config(
+        {**SMALL, "chunks": 1, "nuisance": {"boundary_share": [0.2, 0.8]}}), 3, 1)
 
 
 def test_ranges_are_refused_outside_their_limits():

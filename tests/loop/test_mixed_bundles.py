@@ -12,6 +12,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from physics.dynamics.model import build_model, simulate
+from physics.dynamics.model_form import with_model_form
 from physics.gear.stiffness import MeshStiffness
 from physics.loop.bundle import read_bundle, write_bundle
 from physics.loop.bundle_loop import (
@@ -42,7 +43,6 @@ from physics.loop.bundle_loop import (
     wear_reference,
     wear_skill,
     with_discrepancy,
-    with_model_form,
     with_modulation,
     with_nuisance,
     worn_models,
@@ -350,30 +350,6 @@ def test_model_form_at_its_neutral_values_is_the_declared_model(scn):
         a, b = getattr(plain, f.name), getattr(neutral, f.name)
         assert np.array_equal(a, b) if isinstance(a, np.ndarray) else a == b, f.name
     np.testing.assert_array_equal(_dte([plain], scn), _dte([neutral], scn))  # bit for bit
-
-
-def test_model_form_factors_move_stiffness_mass_and_keep_the_damping_ratio(scn):
-    m = build_model(scn)
-    out = with_model_form(m, {"stiffness_factor": 1.5, "resonance_factor": 0.8,
-                              "double_contact_factor": 1.2, "half_backlash_um": 10.0})
-    double = m.k_b > 0
-    np.testing.assert_allclose(out.k_a[~double], 1.5 * m.k_a[~double])  # single contact
-    np.testing.assert_allclose((out.k_a + out.k_b)[double], 1.8 * (m.k_a + m.k_b)[double])
-    # the mesh resonance sqrt(k_mean / m_e) moves by the resonance factor alone
-    assert np.sqrt(np.mean(out.k_a + out.k_b) / out.mass) == pytest.approx(
-        0.8 * np.sqrt(np.mean(m.k_a + m.k_b) / m.mass))
-    # m_e = J1 J2 / (J1 rb2^2 + J2 rb1^2) of the scaled inertias is the scaled mass
-    (j1, j2), g = out.inertias, m.geometry
-    assert j1 * j2 / (j1 * g.rb2**2 + j2 * g.rb1**2) == pytest.approx(out.mass)
-
-    def ratio(x):
-        return x.damping / (2 * np.sqrt(np.mean(x.k_a + x.k_b) * x.mass))
-
-    assert ratio(out) == pytest.approx(ratio(m))
-    assert out.half_backlash == pytest.approx(10e-6)
-    # the declared DTE is measured from the centre of the backlash: the datum moves its mean
-    base, moved = _dte([m, dataclasses.replace(m, half_backlash=10e-6)], scn)
-    assert np.mean(base) - np.mean(moved) == pytest.approx(m.half_backlash - 10e-6, rel=1e-3)
 
 
 def test_mesh_modulation_makes_pinion_sidebands_and_keeps_the_mean_stiffness(scn):

@@ -18,7 +18,9 @@ from physics.dataset.generation import (
     NuisanceRanges,
     build_dataset,
     plan_dataset,
+    spec_from_config,
 )
+from physics.dynamics.model_form import FACTORS
 from physics.params import Dynamics, Scenario, WearSolver
 from surrogate import settings
 from surrogate.data import DEFAULT_INPUTS, split_trajectories
@@ -93,8 +95,19 @@ def test_every_config_group_composes_and_instantiates(tmp_path, group, choice):
 
 @pytest.mark.parametrize("experiment", groups("experiment"))
 def test_experiments_compose(tmp_path, experiment):
+    """Every named experiment composes into a data module whose dataset build is valid."""
     cfg = train_cfg(tmp_path, tmp_path / "x.parquet", f"experiment={experiment}")
-    assert cfg.case == "all" and cfg.data.case == "all"
+    assert str(cfg.data.case) == str(cfg.case)
+    instantiate(cfg.data)  # checks the build's settings (cases, nuisance ranges) before work
+
+
+def test_the_model_form_experiment_draws_the_form_factors_around_the_declared_model(tmp_path):
+    cfg = train_cfg(tmp_path, tmp_path / "x.parquet", "experiment=model_form")
+    spec = spec_from_config(cfg.data.generate)
+    for name in FACTORS:
+        low, high = getattr(spec.nuisance, name)
+        assert low < 1.0 < high, name
+    assert spec.nuisance.damping_ratio == NuisanceRanges().damping_ratio  # the rest as default
 
 
 def test_optuna_search_composes_with_a_failure_budget(tmp_path):
