@@ -262,7 +262,7 @@ def run(out: Path, root: Path, max_epochs: int | None = None) -> pd.DataFrame:
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m surrogate.benchmark",
                                      description=__doc__.split("\n\n")[0],
-                                     epilog="Takes about 20 minutes on 2 cores the first time "
+                                     epilog="Takes about 15 minutes on 2 cores the first time "
                                             "(the case-3, all-case and shifted datasets are "
                                             "generated once into data/; 6 trainings and 4 "
                                             "fine-tunes).")
