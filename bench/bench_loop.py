@@ -4,7 +4,8 @@
                                [--records 12] [--jobs 2] [--model-form] [--out DIR]
 
 For every effect of the library (acceleration bundles; ``sensor``, which only DTE records show,
-on DTE bundles) and for bundles without any effect, a generator writes a bundle and
+on DTE bundles) and for bundles without any effect (of both quantities: what a clean bundle of
+one sensor passes says nothing about the other's), a generator writes a bundle and
 :func:`physics.loop.run_loop` analyses it. ``own`` (default): this project's model,
 :func:`physics.synthetic.make_bundle` (case 3, nuisance parameters off their defaults, the
 effect at a seeded realistic size, 30 dB noise, ``--records`` records of 1 s). ``independent``:
@@ -62,16 +63,14 @@ def base_scenario(generator: str = "own"):
     return scenario_from_config({"case": 3, "dynamics": {"support_hz": support}})
 
 
-def one(job: tuple[str, str | None, int, int, bool, str]) -> dict:
-    generator, name, seed, records, model_form, tmp = job
+def one(job: tuple[str, str | None, int, int, bool, str, str]) -> dict:
+    generator, name, seed, records, model_form, tmp, quantity = job
     base = base_scenario(generator)
-    quantity = "dte_m" if name == "sensor" else "accel_m_s2"
+    folder = Path(tmp) / f"{generator}_{name}_{seed}_{quantity}"
     if generator == "independent":
-        path, truth = make_independent_bundle(Path(tmp) / f"ind_{name}_{seed}", name,
-                                              quantities=(quantity,), seed=seed)
+        path, truth = make_independent_bundle(folder, name, quantities=(quantity,), seed=seed)
     else:
-        path, truth = make_bundle(Path(tmp) / f"{name}_{seed}", base, name, seed,
-                                  quantity=quantity, records=records)
+        path, truth = make_bundle(folder, base, name, seed, quantity=quantity, records=records)
     t = time.perf_counter()
     r = run_loop(read_bundle(path), base, LoopSettings(seed=seed, model_form=model_form))
     seconds = time.perf_counter() - t
@@ -80,7 +79,7 @@ def one(job: tuple[str, str | None, int, int, bool, str]) -> dict:
     if generator == "own":  # the data-generating model's own held-out error (noise, scatter)
         floor = rms(residuals(rec, rec.test, model_signals(
             rec, rec.test, truth["nuisance"], EFFECTS.get(name), truth["values"])))
-    return {"generator": generator, "truth": name or "none", "seed": seed,
+    return {"generator": generator, "truth": name or "none", "quantity": quantity, "seed": seed,
             "chosen": r["chosen_effect"] or "none",
             "effect_to_noise_db": truth["effect_to_noise_db"],
             "error_before": r["error_before"], "error_after": r["error_after"],
@@ -126,7 +125,8 @@ def main() -> None:
     ap.add_argument("--generator", choices=("own", "independent"), default="own",
                     help="who makes the bundles: this project's model or the independent one")
     ap.add_argument("--seeds", type=int, default=3, help="bundles per effect")
-    ap.add_argument("--null-seeds", type=int, default=6, help="bundles without an effect")
+    ap.add_argument("--null-seeds", type=int, default=6,
+                    help="bundles without an effect, of each quantity")
     ap.add_argument("--records", type=int, default=12,
                     help="records (1 s each) per bundle of the own generator")
     ap.add_argument("--jobs", type=int, default=2, help="bundles analysed in parallel")
@@ -139,10 +139,11 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         solo_timing(args.generator, args.model_form, Path(tmp))
         names = EFFECTS if args.generator == "own" else EFFECT_NAMES
-        jobs = [(args.generator, n, s, args.records, args.model_form, tmp) for n in names
-                for s in range(args.seeds)]
-        jobs += [(args.generator, None, 100 + s, args.records, args.model_form, tmp)
-                 for s in range(args.null_seeds)]
+        jobs = [(args.generator, n, s, args.records, args.model_form, tmp,
+                 "dte_m" if n == "sensor" else "accel_m_s2")
+                for n in names for s in range(args.seeds)]
+        jobs += [(args.generator, None, 100 + s, args.records, args.model_form, tmp, q)
+                 for s in range(args.null_seeds) for q in ("accel_m_s2", "dte_m")]
         spawn = multiprocessing.get_context("spawn")  # numba's OpenMP threads do not survive fork
         with ProcessPoolExecutor(args.jobs, mp_context=spawn) as pool:
             rows = list(pool.map(one, jobs))
@@ -169,6 +170,8 @@ def main() -> None:
     print(f"nothing added on bundles without an effect in the records: "
           f"{(clean.chosen == 'none').mean():.0%} of {len(clean)} ({n_clean} clean, "
           f"{len(clean) - n_clean} with an effect below round-off; target >= 95 %)")
+    for quantity, rows_q in clean.groupby("quantity"):
+        print(f"  {quantity}: nothing added on {(rows_q.chosen == 'none').sum()} of {len(rows_q)}")
     print(f"median loop time: {runs.seconds.median():.1f} s per bundle")
 
 
