@@ -145,6 +145,11 @@ BOUNDS = NUISANCE | SUPPORT | {n: b[:3] for n, b in MODEL_FORM.items()}
 #: form's only with ``loop.model_form``
 SCENARIO_DYNAMIC = ("damping_ratio", "eccentricity1_um", "profile_error_um")
 DYNAMIC_NUISANCE = (*SCENARIO_DYNAMIC, *MODEL_FORM)
+#: the once-per-revolution mesh modulation that the declared pinion run-out makes in every
+#: real gearbox (:func:`with_modulation`), calibrated with or without ``loop.model_form``: the
+#: thesis's run-out on the line of action alone is dynamically inert, and a mesh without it
+#: left every independent DTE bundle's pinion sidebands to ``torque_ripple``, the clean ones too
+RUNOUT_MODULATION = ("mesh_modulation", "modulation_phase_rad")
 #: the parameters a Sobol sample explores before least squares (their residual surface has
 #: several basins): the dynamic ones and the support mode's (a basin per mesh harmonic it can
 #: sit on)
@@ -817,9 +822,10 @@ def search(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[s
 
 
 def screened(settings: LoopSettings) -> tuple[str, ...]:
-    """The dynamic parameters the calibration may free: the model form's with
-    ``loop.model_form`` only."""
-    return DYNAMIC_NUISANCE if settings.model_form else SCENARIO_DYNAMIC
+    """The dynamic parameters the calibration may free: the scenario's nuisance and the mesh
+    modulation of the pinion's run-out (:data:`RUNOUT_MODULATION`); the rest of the model form
+    with ``loop.model_form`` only."""
+    return DYNAMIC_NUISANCE if settings.model_form else (*SCENARIO_DYNAMIC, *RUNOUT_MODULATION)
 
 
 def calibrate(rec: Records, start: dict) -> tuple[dict, list[str]]:
