@@ -14,10 +14,11 @@ its run folder.
    where given, else seeded), never by windows of one record.
 2. **Calibration** of the declared nuisance parameters on the train records of all groups at
    once, before any effect is considered: the physical ones (mesh damping ratio, pinion
-   run-out and profile error amplitudes, and the model's own form uncertainty,
-   :data:`MODEL_FORM`: mesh-stiffness level, double/single stiffness ratio, effective mass,
-   backlash and a once-per-revolution mesh modulation with its phase, :func:`with_model_form`
-   and :func:`with_modulation`) are one value for the whole bundle; the measurement chain's
+   run-out and profile error amplitudes, the once-per-revolution mesh modulation that the
+   run-out makes, with its phase, :data:`RUNOUT_MODULATION` and :func:`with_modulation`, and
+   with ``loop.model_form`` the rest of the model's own form uncertainty, :data:`MODEL_FORM`:
+   mesh-stiffness level, double/single stiffness ratio, effective mass and backlash,
+   :func:`with_model_form`) are one value for the whole bundle; the measurement chain's
    (the housing's effective mass ``m_h`` and, where the scenario declares one, the bearing
    support's mode and damping, :data:`SUPPORT`) belong to the acceleration records only; the
    groups' standardised residuals are concatenated into one cost. A parameter that does not
@@ -248,7 +249,8 @@ class LoopSettings:
     # held-out records (where their wear is known) by more than this (:func:`wear_check`)
     max_wear_loss: float = bounded(0.1, 0.0, 100.0, "skill of the wear estimate an adopted "
                                    "effect may cost", closed=True)
-    # calibrate the declared model's form uncertainty (:data:`MODEL_FORM`) with the nuisance;
+    # calibrate the rest of the declared model's form uncertainty (:data:`MODEL_FORM`: the run-out
+    # modulation is calibrated either way) with the nuisance;
     # off by default: better on the independent simulator's bundles, but on the project's own
     # it absorbs a friction, leaves a tooth defect's error above half and lets the greedy
     # second round stack a spurious effect (docs/measured-data.md, 2026-11-24)
@@ -783,7 +785,7 @@ def explore(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[
     # to), around the calibration with an effect
     scn = rec.scenarios[0]
     prior = completed(c.nuisance, scn) | declared_nuisance(scn) | declared_support(scn)
-    span = {n: (0.5 if eff is None and n in MODEL_FORM else EXPLORE_SPAN) for n in dyn}
+    span = {n: (0.5 if wide(rec, eff) and n in MODEL_FORM else EXPLORE_SPAN) for n in dyn}
     centres = {n: (0.5 if span[n] == 0.5 else to_unit(prior[n], *BOUNDS[n])) for n in dyn}
     dim = len(params) + len(dyn)
     n_points = rec.settings.explore * (CALIBRATION_EXPLORE if wide(rec, eff) else 1)

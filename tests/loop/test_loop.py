@@ -500,7 +500,9 @@ def test_loop_app_finds_an_undeclared_transfer_path(tmp_path, scn):
     assert report["wear_skill_after"] == wear["value"] and min(
         wear["before"], wear["value"]) > 0.8
     assert report["error_after"] < 0.5 * report["error_before"]
-    assert report["not_identifiable"] == ["eccentricity1_um"]
+    # the run-out on the line of action is dynamically inert, and no amplitude of the signature
+    # sees the phase of its mesh modulation without another once-per-revolution feature
+    assert report["not_identifiable"] == ["eccentricity1_um", "modulation_phase_rad"]
     assert set(report["nuisance_after"]) == set(report["calibration"])
     fitted = report["chosen_parameters"]["fn_hz"]
     assert fitted == pytest.approx(truth["values"]["fn_hz"], rel=0.15)
