@@ -14,20 +14,17 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import TYPE_CHECKING
 
 import numpy as np
-
-if TYPE_CHECKING:
-    from physics.dynamics.model import PairModel
 
 #: the factors' names (each neutral at 1)
 FACTORS = ("stiffness_factor", "double_contact_factor", "resonance_factor")
 
 
-def with_model_form(m: PairModel, v: dict) -> PairModel:
-    """``m`` with the form factors and backlash of ``v`` (missing names are neutral; at the
-    neutral values ``m`` itself).
+def with_model_form(m, v: dict):
+    """The :class:`~physics.dynamics.model.PairModel` ``m`` with the form factors and backlash
+    of ``v`` (missing names are neutral; at the neutral values ``m`` itself; this module
+    imports nothing of the model, which builds with it).
 
     - ``stiffness_factor`` ``s_k`` multiplies both pairs' stiffness. The declared stiffness
       is the potential-energy method's (:mod:`physics.gear.stiffness`); ISO 6336-1 (2006, cl.
