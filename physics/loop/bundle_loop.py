@@ -773,16 +773,17 @@ def explore(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[
             ) -> list[Candidate]:
     """``c`` and a scrambled Sobol sample (``settings.explore`` points) over the effect's whole
     range and the dynamic nuisance within ``EXPLORE_SPAN`` (unit coordinates) of its declared
-    values (the model form: of ``c``'s; in the calibration, ``eff`` None,
-    ``CALIBRATION_EXPLORE`` times as many points and the model form over its whole range),
+    values (the model form: of ``c``'s; in the calibration with ``loop.model_form``,
+    :func:`wide`, ``CALIBRATION_EXPLORE`` times as many points and the model form over its
+    whole range; the default loop's run-out modulation around its declared value, none),
     ``m_h`` levelled at each; best first. A missing effect drags the calibration
     (to the bounds, at worst), and least squares from a single start stays in its basin; the
     declared values are the prior that does not depend on the fit."""
     params = eff.params if eff is not None else ()
     dyn = [n for n in free_nuisance if n in EXPLORED]
     # the scenario's nuisance (and support mode) around its declared values; the model form
-    # over its whole range in the calibration (its neutral value is no prior worth holding
-    # to), around the calibration with an effect
+    # over its whole range in the model-form calibration (its neutral value is no prior worth
+    # holding to), around the calibration with an effect
     scn = rec.scenarios[0]
     prior = completed(c.nuisance, scn) | declared_nuisance(scn) | declared_support(scn)
     span = {n: (0.5 if wide(rec, eff) and n in MODEL_FORM else EXPLORE_SPAN) for n in dyn}
