@@ -18,8 +18,10 @@ so the floor column is empty there. Prints and writes
 ``loop_runs.csv`` (one row per bundle: truth, choice, held-out error before/after and that of
 the data-generating model itself, wear-estimate error and skill, seconds, and the first round's best
 candidate with the null test's figures on it) and ``loop_confusion.csv``
-(truth x choice counts), plus the rates the issue asks for: right effect named, held-out error
-at least halved, nothing added on clean bundles.
+(truth x choice counts), each bundle's ``report.json`` and ``report.md`` under
+``reports/<generator>_<effect>_<seed>_<quantity>/`` (every candidate's figures), plus the
+rates the issue asks for: right effect named, held-out error at least halved, nothing added on
+clean bundles.
 Also times one bundle alone (:func:`solo_timing`); the per-bundle seconds of the table are
 those of ``--jobs`` bundles sharing the machine.
 """
@@ -44,6 +46,7 @@ from physics.loop.independent_simulator import (
     IndependentPair,
     make_independent_bundle,
 )
+from physics.loop.report import write_report
 from physics.loop.synthetic import make_bundle
 from physics.params import scenario_from_config
 
@@ -63,10 +66,11 @@ def base_scenario(generator: str = "own"):
     return scenario_from_config({"case": 3, "dynamics": {"support_hz": support}})
 
 
-def one(job: tuple[str, str | None, int, int, bool, str, str]) -> dict:
-    generator, name, seed, records, model_form, tmp, quantity = job
+def one(job: tuple[str, str | None, int, int, bool, str, str, str]) -> dict:
+    generator, name, seed, records, model_form, tmp, quantity, out = job
     base = base_scenario(generator)
-    folder = Path(tmp) / f"{generator}_{name}_{seed}_{quantity}"
+    label = f"{generator}_{name or 'none'}_{seed}_{quantity}"
+    folder = Path(tmp) / label
     if generator == "independent":
         path, truth = make_independent_bundle(folder, name, quantities=(quantity,), seed=seed)
     else:
@@ -74,6 +78,7 @@ def one(job: tuple[str, str | None, int, int, bool, str, str]) -> dict:
     t = time.perf_counter()
     r = run_loop(read_bundle(path), base, LoopSettings(seed=seed, model_form=model_form))
     seconds = time.perf_counter() - t
+    write_report(r, Path(out) / "reports" / label, with_figures=False)
     rec = r.signals["rec"]
     floor = float("nan")
     if generator == "own":  # the data-generating model's own held-out error (noise, scatter)
@@ -132,7 +137,8 @@ def main() -> None:
     ap.add_argument("--jobs", type=int, default=2, help="bundles analysed in parallel")
     ap.add_argument("--model-form", action="store_true",
                     help="calibrate the declared model's form uncertainty (loop.model_form=true)")
-    ap.add_argument("--out", default="bench_loop_out", help="folder for the CSV files")
+    ap.add_argument("--out", default="bench_loop_out",
+                    help="folder for the CSV files and the reports")
     args = ap.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -140,9 +146,9 @@ def main() -> None:
         solo_timing(args.generator, args.model_form, Path(tmp))
         names = EFFECTS if args.generator == "own" else EFFECT_NAMES
         jobs = [(args.generator, n, s, args.records, args.model_form, tmp,
-                 "dte_m" if n == "sensor" else "accel_m_s2")
+                 "dte_m" if n == "sensor" else "accel_m_s2", str(out))
                 for n in names for s in range(args.seeds)]
-        jobs += [(args.generator, None, 100 + s, args.records, args.model_form, tmp, q)
+        jobs += [(args.generator, None, 100 + s, args.records, args.model_form, tmp, q, str(out))
                  for s in range(args.null_seeds) for q in ("accel_m_s2", "dte_m")]
         spawn = multiprocessing.get_context("spawn")  # numba's OpenMP threads do not survive fork
         with ProcessPoolExecutor(args.jobs, mp_context=spawn) as pool:

@@ -303,10 +303,12 @@ def _feature_trends(report: dict, out: Path) -> None:
     plt.close(fig)
 
 
-def write_report(report: LoopReport, out: Path) -> None:
-    """report.json, report.md and the figures into ``out``."""
+def write_report(report: LoopReport, out: Path, with_figures: bool = True) -> None:
+    """report.json, report.md and (unless ``with_figures`` is false) the figures into ``out``."""
     plain = report.to_dict()
     text = json.dumps(plain, indent=2, default=float)
+    out.mkdir(parents=True, exist_ok=True)
     atomic_write(out / "report.json", lambda p: p.write_text(text + "\n"))
     atomic_write(out / "report.md", lambda p: p.write_text(markdown(plain)))
-    figures(report, out)
+    if with_figures:
+        figures(report, out)
