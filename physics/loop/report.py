@@ -47,32 +47,40 @@ def null_test(heldout: float, null_heldout: float, delta_bic: float, min_gain: f
 
 
 def holds(checks: dict[str, dict]) -> bool:
-    """Whether every condition of a :func:`null_test` (and the wear check, if added) holds."""
+    """Whether every condition of a :func:`null_test` holds."""
     return all(c["holds"] for c in checks.values())
 
 
-#: how a verdict writes each condition: its value, then its bound (``wear_error``: the wear
-#: check where the estimate's skill is undefined, ``measure: error``)
+#: how a verdict writes each condition: its value, then its bound
 CONDITION_WORDS = {"gain": ("held-out error cut by {value:.0%}", "needs >= {bound:.0%}"),
                    "delta_bic": ("dBIC {value:.4g}", "needs <= {bound:g}"),
-                   "explained": ("explained {value:.1f}", "needs > {bound:.1f}"),
-                   "wear": ("wear-estimate skill {before:.2f} -> {value:.2f}",
-                            "needs >= {bound:.2f}"),
-                   "wear_error": ("wear-estimate error {before:.1f} -> {value:.1f} %",
-                                  "needs <= {bound:.1f} %")}
+                   "explained": ("explained {value:.1f}", "needs > {bound:.1f}")}
+
+#: how a verdict writes which model reads the wear after an adopted effect, by the measure of
+#: :func:`physics.loop.bundle_loop.wear_check` (``error`` where the skill is undefined)
+WEAR_WORDS = {"skill": "its leave-one-out skill on the train records {before:.2f} -> {value:.2f}"
+                       " (the adopted effect reads it if >= {bound:.2f})",
+              "error": "its leave-one-out error on the train records {before:.1f} -> "
+                       "{value:.1f} % (the adopted effect reads it if <= {bound:.1f} %)"}
 
 
 def condition_text(name: str, c: dict) -> str:
     """One condition of a verdict: its value, its bound and whether it held."""
-    value, bound = CONDITION_WORDS["wear_error" if c.get("measure") == "error" else name]
+    value, bound = CONDITION_WORDS[name]
     return f"{value.format(**c)} ({bound.format(**c)}: {'yes' if c['holds'] else 'no'})"
 
 
 def verdict_line(v: dict) -> str:
-    """One round's verdict as a sentence: each condition, its value against its bound."""
+    """One round's verdict as a sentence: each condition, its value against its bound, and,
+    after an adoption, which model reads the wear and why."""
     parts = [condition_text(k, c) for k, c in v["checks"].items()]
-    return (f"Best candidate {v['effect']}: {'; '.join(parts)}: "
+    line = (f"Best candidate {v['effect']}: {'; '.join(parts)}: "
             f"{'adopted' if v['adopted'] else 'not adopted'}.")
+    w = v.get("wear_reading")
+    if w:
+        line += (f" The wear estimate is read with {w['reads_with']}: "
+                 f"{WEAR_WORDS[w['measure']].format(**w)}.")
+    return line
 
 
 @dataclass
@@ -169,10 +177,11 @@ def markdown(r: dict) -> str:
         lines[-1] += (f", and explains more than {rule['allowed']:.1f} (standardised sum of "
                       f"squares per held-out record, in every group), what the discrepancy "
                       f"allows at a false-add rate of {rule['false_add_rate']:.0%}")
-    if "max_wear_loss" in rule:
-        lines[-1] += (f", and, where the held-out records' wear is known, does not lower the "
-                      f"wear estimate's skill by more than {rule['max_wear_loss']:g}")
     lines[-1] += "."
+    if "max_wear_loss" in rule:
+        lines[-1] += (f" An adopted effect reads the wear unless it lowers the wear estimate's "
+                      f"leave-one-out skill on the train records of known wear by more than "
+                      f"{rule['max_wear_loss']:g}; the held-out records' wear only scores it.")
     lines += ["", *[f"Round {k + 1}. {verdict_line(v)}" for k, v in enumerate(r["verdicts"])]]
     second = r.get("second_round")
     if second:

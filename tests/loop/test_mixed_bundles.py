@@ -22,6 +22,7 @@ from physics.loop.bundle_loop import (
     SUPPORT,
     Group,
     LoopSettings,
+    Reader,
     WearScore,
     calibrate,
     declared_model_form,
@@ -32,6 +33,7 @@ from physics.loop.bundle_loop import (
     model_signals,
     noise_only,
     prepare,
+    reads_wear,
     residuals,
     rms,
     run_loop,
@@ -41,6 +43,7 @@ from physics.loop.bundle_loop import (
     wear_check,
     wear_estimates,
     wear_reference,
+    wear_score,
     wear_skill,
     with_discrepancy,
     with_modulation,
@@ -210,8 +213,12 @@ def test_wear_check_without_skill_allows_only_the_stated_share_of_error(before, 
     assert wear_check(ref, WearScore(share * limit, None), loss)["holds"]
     worse = wear_check(ref, WearScore(1.001 * limit, None), loss)
     assert worse["measure"] == "error" and not worse["holds"]
-    line = verdict_line({"effect": "friction", "adopted": False, "checks": {"wear": worse}})
-    assert f"needs <= {limit:.1f} %: no" in line
+    reading = worse | {"reads_with": "the declared model"}
+    line = verdict_line({"effect": "friction", "adopted": True, "checks": {},
+                         "wear_reading": reading})
+    assert line.startswith("Best candidate friction: : adopted.")
+    assert "read with the declared model" in line
+    assert f"(the adopted effect reads it if <= {limit:.1f} %)" in line
 
 
 def test_wear_states_are_even_in_root_wear(mixed):
@@ -241,6 +248,31 @@ def test_what_every_record_of_a_group_shares_does_not_move_the_wear_estimate(mix
     ref, moved = (wear_reference(r, nuisance, None, {}) for r in (rec, shifted))
     for g, (mean, spread) in ref.items():
         assert np.allclose(moved[g][0] - mean, offsets[g]) and np.allclose(moved[g][1], spread)
+
+
+def test_the_wear_reader_is_chosen_on_the_train_records_alone(mixed):
+    # item 6 without the held-out wear: each train record of known wear read against the
+    # others of its group; the held-out records are not among those scored
+    rec, nuisance = mixed
+    wear = rec.bundle.manifest.wear_mm.to_numpy(float)
+    loo = wear_score(rec, nuisance, None, {}, on_train=True)
+    assert sorted(loo.records) == sorted(int(i) for i in rec.train)
+    assert not set(loo.records) & {int(i) for i in rec.test}
+    assert np.allclose(loo.true_mm, wear[list(loo.records)])
+    # read against itself a record would be read better: leaving it out is what is measured
+    inside = wear_estimates(rec, np.array(loo.records), nuisance, None, {})
+    assert not np.allclose(inside, loo.estimate_mm)
+    declared = Reader("the declared model", nuisance)
+    same = Reader("the model with nothing", nuisance)
+    chosen, check = reads_wear(rec, declared, same, 0.0)
+    assert chosen is same and check["value"] == check["before"] and check["holds"]
+    # a profile error ten times the calibrated one (every mesh harmonic moves): it
+    # reads the train records worse and does not take the reading over
+    off = Reader("the model with ten times the profile error", nuisance | {
+        "profile_error_um": 10 * nuisance["profile_error_um"]})
+    chosen, check = reads_wear(rec, declared, off, 0.0)
+    assert check["value"] < check["before"] and chosen is declared
+    assert check["reads_with"] == "the declared model" and check["after_model"] == off.name
 
 
 def test_wear_skill_by_hand():
