@@ -14,10 +14,10 @@ the independent spur-pair simulator of another model form,
 1800 r/min / 290 N m, six wear states each: 12 records of 0.5 s, the effect at its typical
 size, 30 dB noise, the gear set's error phases drawn from the seed; the loop is told the
 gearbox's bearing-support mode as estimated from its drawings); its true model is not ours,
-so the floor column is empty there. Prints and writes
-``loop_runs.csv`` (one row per bundle: truth, choice, held-out error before/after and that of
-the data-generating model itself, wear-estimate error and skill, seconds, and the first round's best
-candidate with the null test's figures on it) and ``loop_confusion.csv``
+so the floor column is empty there. Prints and writes ``loop_runs.csv`` (one row per
+bundle: truth, choice, held-out error before/after and that of the data-generating model
+itself, wear-estimate error and skill and the model that reads it, seconds, and the first
+round's best candidate with the null test's figures on it) and ``loop_confusion.csv``
 (truth x choice counts), each bundle's ``report.json`` and ``report.md`` under
 ``reports/<generator>_<effect>_<seed>_<quantity>/`` (every candidate's figures), plus the
 rates the issue asks for: right effect named, held-out error at least halved, nothing added on
@@ -92,6 +92,7 @@ def one(job: tuple[str, str | None, int, int, bool, str, str, str]) -> dict:
             "wear_error_before_pct": r["wear_error_before_pct"],
             "wear_error_after_pct": r["wear_error_after_pct"],
             "wear_skill_before": r["wear_skill_before"], "wear_skill_after": r["wear_skill_after"],
+            "wear_read_by": r["wear_read_by"],
             "seconds": seconds, **best_candidate(r)}
 
 
