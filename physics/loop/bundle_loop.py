@@ -87,8 +87,8 @@ its run folder.
    where the wear is known, as the error of a model-based wear estimate (the wear state whose
    simulated signature is nearest, relative to the group's train records of known wear:
    :func:`wear_estimates`) [%] and as its skill against the train records' mean wear
-   (:func:`wear_skill`; at or below 0 the estimate reads no wear on these records, and the wear
-   check above then compares noise).
+   (:func:`wear_skill`; at or below 0 the estimate reads no wear on these records, and the
+   choice of the model that reads it above then compares noise).
 """
 
 from __future__ import annotations
