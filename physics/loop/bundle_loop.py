@@ -991,31 +991,42 @@ def feature_error(rec: Records, idx: np.ndarray, signals: list[np.ndarray]) -> f
     return float(np.mean(errs))
 
 
-def wear_reference(rec: Records, nuisance: dict, eff: Effect | None, values: dict,
-                   leave_out: int | None = None) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+def train_wear_residuals(rec: Records, nuisance: dict, eff: Effect | None, values: dict
+                         ) -> dict[int, dict[int, np.ndarray]]:
+    """The dB residual of each train record of known wear at its own worn model, keyed by
+    group index, then by record (bundle index); groups without such records left out."""
+    wear = rec.bundle.manifest.wear_mm.to_numpy(float)
+    known = np.array([i for i in rec.train if not np.isnan(wear[i])], int)
+    if not known.size:
+        return {}
+    res = residuals_db(rec, known, model_signals(rec, known, nuisance, eff, values))
+    return {g: {int(known[j]): res[j] for j in pos} for g, pos in by_group(rec, known).items()}
+
+
+def reference_moments(group: Group, rows: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """Per entry, the mean of the residual ``rows`` [dB] and their spread beyond the group's
+    noise [dB^2] (method of moments, ``var - entry_sd^2`` clipped at 0; zero with one row)."""
+    r = np.array(rows)
+    spread = (np.maximum(r.var(axis=0, ddof=1) - group.entry_sd**2, 0.0) if len(rows) > 1
+              else np.zeros(r.shape[1]))
+    return r.mean(axis=0), spread
+
+
+def wear_reference(rec: Records, nuisance: dict, eff: Effect | None, values: dict
+                   ) -> dict[int, tuple[np.ndarray, np.ndarray]]:
     """What the model misses of each group's records whatever their wear, read from the
-    group's train records of known wear at their own worn models (record ``leave_out`` left
-    out): per entry, the mean residual [dB] and its spread beyond the noise [dB^2] (method of
-    moments, ``var - entry_sd^2`` clipped at 0; zero with a single record). Keyed by group
-    index; groups without such records left out.
+    group's train records of known wear at their own worn models
+    (:func:`train_wear_residuals`): per entry, their mean residual [dB] and its spread beyond
+    the noise [dB^2] (:func:`reference_moments`). Keyed by group index; groups without such
+    records left out.
 
     The residual of a record is read as ``r = mu + delta + eps``: ``mu`` what the model misses
     in every record of the group (its form error there, an undeclared effect), ``delta`` the
     part that changes from record to record, chiefly with wear (where the model's wear
     signature is not the gearbox's), ``eps`` the noise (Kennedy & O'Hagan's discrepancy with a
     mean, J. R. Stat. Soc. B 63 (2001) 425, estimated where the wear is known)."""
-    wear = rec.bundle.manifest.wear_mm.to_numpy(float)
-    known = np.array([i for i in rec.train if not np.isnan(wear[i]) and i != leave_out], int)
-    if not known.size:
-        return {}
-    res = residuals_db(rec, known, model_signals(rec, known, nuisance, eff, values))
-    out = {}
-    for g, pos in by_group(rec, known).items():
-        r = np.array([res[j] for j in pos])
-        spread = (np.maximum(r.var(axis=0, ddof=1) - rec.groups[g].entry_sd**2, 0.0)
-                  if len(pos) > 1 else np.zeros(r.shape[1]))
-        out[g] = (r.mean(axis=0), spread)
-    return out
+    return {g: reference_moments(rec.groups[g], list(rows.values()))
+            for g, rows in train_wear_residuals(rec, nuisance, eff, values).items()}
 
 
 def wear_estimates(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | None,
@@ -1029,20 +1040,20 @@ def wear_estimates(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | 
     form error, an undeclared effect) does not move the estimate. ``leave_one_out``: each
     record read against the others (for train records of known wear). Measured on the
     independent simulator's bundles: docs/measured-data.md."""
-    reference = {} if leave_one_out else wear_reference(rec, nuisance, eff, values)
+    train = train_wear_residuals(rec, nuisance, eff, values)
     out = []
     for i in idx:
         states = rec.wear_states[i]
         if not states:
             out.append(np.nan)
             continue
-        if leave_one_out:  # the train residuals are cached simulations: cheap to redo
-            reference = wear_reference(rec, nuisance, eff, values, leave_out=int(i))
         wear = np.array([w for w, _ in states])
         sig = model_signals(rec, np.array([i] * len(states)), nuisance, eff, values,
                             models=[m for _, m in states])
         group = rec.group(i)
-        mean, spread = reference.get(int(rec.group_of[i]), (0.0, 0.0))
+        rows = [r for j, r in train.get(int(rec.group_of[i]), {}).items()
+                if not (leave_one_out and j == i)]
+        mean, spread = reference_moments(group, rows) if rows else (0.0, 0.0)
         sd = np.sqrt(group.sd**2 + spread)
         res = residuals_db(rec, np.array([i] * len(states)), sig)
         cost = np.array([rms((r - mean) / sd) for r in res])
@@ -1300,7 +1311,9 @@ def attribute(rec: Records, judged: Records, declared: Effect | None, declared_v
     adopted_reader = Reader(f"the model with {best.name}", best.nuisance, effects[best.name],
                             best.values)
     after, reading = reads_wear(rec, reader, adopted_reader, settings.max_wear_loss)
-    wear = tuple(wear_score(rec, r.nuisance, r.effect, r.values) for r in (reader, after))
+    before = wear_score(rec, reader.nuisance, reader.effect, reader.values)
+    wear = (before, before if after is reader else
+            wear_score(rec, after.nuisance, after.effect, after.values))
     log.info("%s adopted; the wear read by %s (train leave-one-out %s), held-out %s -> %s",
              best.name, after.name, reading, *wear)
     return Round(ranking, effects, null_bic, allowed, adopted, base_test, checks, after,
