@@ -327,6 +327,15 @@ class Dynamics:
       it, and the measured-data loop calibrates it around that value. 0.05: a lightly damped
       mode (rolling bearings add little damping: SKF Evolution, "Damping in a rolling bearing
       arrangement"; the loop fits it within 0.005-0.3).
+    - ``mount_hz`` 0 and ``mount_damping`` 0.1: a declared mode of the housing on its mounting
+      (:func:`physics.signals.measurement.housing_mount`): below it the housing's acceleration
+      is stiffness-controlled, so shaft-order and drive-line-order lines are far weaker than
+      the free mass ``m_h`` makes them; the mesh harmonics lie well above it. 0 declares a free
+      housing; a user states ``sqrt(k_m / m)`` of the mounts' stiffness and the housing's mass
+      (resilient mounts 5-30 Hz, a housing bolted to a frame 50-300 Hz). 0.1: elastomer
+      mounts' loss factor of 0.1-0.3 (Harris & Piersol, Shock and Vibration Handbook, 5th ed.,
+      ch. 32: natural rubber and neoprene) is a damping ratio of 0.05-0.15; the loop fits it
+      within 0.02-0.5.
     - ``stiffness_factor``, ``double_contact_factor``, ``resonance_factor`` 1: the model's form
       uncertainty (:mod:`physics.dynamics.model_form`): the mesh stiffness level, the
       double/single stiffness ratio and the mesh resonance relative to the declared model (the
@@ -354,6 +363,9 @@ class Dynamics:
     support_hz: float = bounded(0.0, 0.0, 1e6, "0: a rigid support; else the bearing-support "
                                 "mode [Hz]", closed=True)
     support_damping: float = bounded(0.05, 0.0, 1.0, "fraction of critical damping")
+    mount_hz: float = bounded(0.0, 0.0, 1e6, "0: a free housing; else the housing's mode on its "
+                              "mounting [Hz]", closed=True)
+    mount_damping: float = bounded(0.1, 0.0, 1.0, "fraction of critical damping")
     stiffness_factor: float = bounded(1.0, 0.0, 100.0, "mesh stiffness over the declared one")
     double_contact_factor: float = bounded(1.0, 0.0, 100.0, "double-contact stiffness over the "
                                            "declared one")

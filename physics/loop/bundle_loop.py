@@ -13,26 +13,26 @@ its run folder.
    split into train and test by record within each group (the manifest's ``split`` column
    where given, else seeded), never by windows of one record.
 2. **Calibration** of the declared nuisance parameters on the train records of all groups at
-   once, before any effect is considered: the physical ones (mesh damping ratio, pinion
-   run-out and profile error amplitudes, the once-per-revolution mesh modulation that the
-   run-out makes, with its phase, :data:`RUNOUT_MODULATION` and :func:`with_modulation`, and
-   with ``loop.model_form`` the rest of the model's own form uncertainty, :data:`MODEL_FORM`:
+   once, before any effect is considered: the physical ones (mesh damping ratio, pinion run-out
+   and profile error amplitudes, the once-per-revolution mesh modulation that the run-out makes,
+   with its phase, :data:`RUNOUT_MODULATION` and :func:`with_modulation`, and with
+   ``loop.model_form`` the rest of the model's own form uncertainty, :data:`MODEL_FORM`:
    mesh-stiffness level, double/single stiffness ratio, effective mass and backlash,
-   :func:`with_model_form`) are one value for the whole bundle; the measurement chain's
-   (the housing's effective mass ``m_h`` and, where the scenario declares one, the bearing
-   support's mode and damping, :data:`SUPPORT`) belong to the acceleration records only; the
-   groups' standardised residuals are concatenated into one cost. A parameter that does not
-   move the residuals (the pinion run-out on the line of action: a shaft-rate error is
-   dynamically inert in the torsional model; the modulation's phase, which no amplitude of
-   the signature sees unless another once-per-revolution feature is in the model; the
-   backlash in acceleration records whose flanks never part) is held at its declared value
-   and reported as not identifiable. Every candidate effect is then fitted jointly with the
-   free parameters, model form included. The search
-   (:func:`search`): a scrambled Sobol sample around the declared values, ``m_h`` levelled at
-   each point, the best refined by bounded least squares on the standardised signature
-   residuals. Measurement noise is not fitted: its level is read off each record's spectral
-   floor (:func:`physics.order_analysis.white_noise_std`) and white noise of that level
-   (seeded per record) is added to the model's record.
+   :func:`with_model_form`) are one value for the whole bundle; the measurement chain's (the
+   housing's effective mass ``m_h`` and, where the scenario declares them, the bearing support's
+   mode and the housing mounting's, each with its damping, :data:`CHAIN_MODES`) belong to the
+   acceleration records only; the groups' standardised residuals are concatenated into one cost.
+   A parameter that does not move the residuals (the pinion run-out on the line of action: a
+   shaft-rate error is dynamically inert in the torsional model; the modulation's phase, which
+   no amplitude of the signature sees unless another once-per-revolution feature is in the
+   model; the backlash in acceleration records whose flanks never part) is held at its declared
+   value and reported as not identifiable. Every candidate effect is then fitted jointly with
+   the free parameters, model form included. The search (:func:`search`): a scrambled Sobol
+   sample around the declared values, ``m_h`` levelled at each point, the best refined by
+   bounded least squares on the standardised signature residuals. Measurement noise is not
+   fitted: its level is read off each record's spectral floor
+   (:func:`physics.order_analysis.white_noise_std`) and white noise of that level (seeded per
+   record) is added to the model's record.
 3. **Residual and model discrepancy**: the signature of :mod:`physics.order_analysis` (mesh
    harmonics with pinion and gear sidebands up to 0.45 fs, half-octave bands, statistics,
    synchronous-average kurtosis, all in dB) of measurement minus calibrated model, per entry,
@@ -144,8 +144,17 @@ MODEL_FORM = {"stiffness_factor": (0.5, 2.0, True, 1.0),
 #: (:func:`physics.signals.measurement.support_path`): name, bounds, log-scaled. Calibrated with
 #: ``m_h`` where the scenario declares one (``dynamics.support_hz`` > 0), around that value.
 SUPPORT = {"support_hz": (200.0, 20000.0, True), "support_damping": (0.005, 0.3, True)}
+#: the declared mode of the housing on its mounting
+#: (:func:`physics.signals.measurement.housing_mount`) where the scenario states one
+#: (``dynamics.mount_hz`` > 0): held at the stated values, not calibrated. Its own lines, the
+#: shaft orders, carry little, and above it the mode tilts the lowest mesh harmonics: freed,
+#: on records of a housing mounted at 55 Hz stated as 90 Hz, the fit took it to 330 Hz
+MOUNT = {"mount_hz": (5.0, 1000.0, True), "mount_damping": (0.02, 0.5, True)}
+#: the acceleration chain's modes, each by the frequency that declares it
+CHAIN_MODES = {"support_hz": SUPPORT, "mount_hz": MOUNT}
+CHAIN = SUPPORT | MOUNT
 #: bounds of every calibrated parameter of the declared model
-BOUNDS = NUISANCE | SUPPORT | {n: b[:3] for n, b in MODEL_FORM.items()}
+BOUNDS = NUISANCE | CHAIN | {n: b[:3] for n, b in MODEL_FORM.items()}
 #: the nuisance parameters the dynamics see (``m_h`` acts on the measurement chain); the model
 #: form's only with ``loop.model_form``
 SCENARIO_DYNAMIC = ("damping_ratio", "eccentricity1_um", "profile_error_um")
@@ -195,25 +204,29 @@ def declared_model_form(scn: Scenario) -> dict[str, float]:
             for n, b in MODEL_FORM.items()}
 
 
-def declared_support(scn: Scenario) -> dict[str, float]:
-    """The declared bearing-support mode (:data:`SUPPORT`), none for a rigid support
-    (``dynamics.support_hz`` = 0); a declared mode outside the loop's bounds is refused."""
+def declared_modes(scn: Scenario) -> dict[str, float]:
+    """The acceleration chain's declared modes (:data:`CHAIN_MODES`: the bearing support's,
+    none for a rigid support, ``dynamics.support_hz`` = 0; the mounting's, none for a free
+    housing, ``dynamics.mount_hz`` = 0); a declared mode outside the loop's bounds is
+    refused."""
     dyn = scn.dynamics
-    if dyn.support_hz == 0:
-        return {}
-    for n in SUPPORT:
-        lo, hi, _ = SUPPORT[n]
-        if not lo <= getattr(dyn, n) <= hi:
-            raise ValueError(f"dynamics.{n} = {getattr(dyn, n)!r} must lie in [{lo:g}, {hi:g}] "
-                             "for the loop to calibrate it; state the mode inside that range "
-                             "or set dynamics.support_hz=0 (a rigid support)")
-    return {n: float(getattr(dyn, n)) for n in SUPPORT}
+    out = {}
+    for key, mode in CHAIN_MODES.items():
+        if getattr(dyn, key) == 0:
+            continue
+        for n, (lo, hi, _) in mode.items():
+            if not lo <= getattr(dyn, n) <= hi:
+                raise ValueError(f"dynamics.{n} = {getattr(dyn, n)!r} must lie in [{lo:g}, "
+                                 f"{hi:g}] for the loop to calibrate it; state the mode inside "
+                                 f"that range or set dynamics.{key}=0 (no such mode)")
+        out |= {n: float(getattr(dyn, n)) for n in mode}
+    return out
 
 
-def support_of(nuisance: dict) -> dict[str, float]:
-    """The support mode's entries of ``nuisance`` (none: a rigid support), as
+def modes_of(nuisance: dict) -> dict[str, float]:
+    """The chain modes' entries of ``nuisance`` (none: a rigid support and a free housing), as
     :func:`physics.signals.measurement.declared_chain` takes them."""
-    return {n: nuisance[n] for n in SUPPORT if n in nuisance}
+    return {n: nuisance[n] for n in CHAIN if n in nuisance}
 
 
 def completed(nuisance: dict, scn: Scenario) -> dict:
@@ -237,7 +250,10 @@ class LoopSettings:
                              whole=True)
     # least-squares evaluations per fit (finite-difference Jacobians not counted)
     max_nfev: int = bounded(20, 1, 100_000, whole=True)
-    refine: int = bounded(3, 1, 100, "screened candidates refined jointly with the nuisance",
+    # screened candidates refined jointly with the nuisance (the library has at most nine per
+    # bundle: by default every one; the screen alone, on a calibration that has absorbed part of
+    # an effect, ranked an independent bundle's friction below three others)
+    refine: int = bounded(100, 1, 100, "screened candidates refined jointly with the nuisance",
                           whole=True)
     explore: int = 32  # Sobol points searched before each refinement (0 or a power of 2)
     floor_db: float = bounded(0.3, 0.0, 100.0, "model error floor added to each entry's scatter",
@@ -593,7 +609,7 @@ def model_signals(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | N
         quantity = man.quantity.iloc[i]
         fs = float(man.fs_hz.iloc[i])
         x = declared_chain(raw[k], quantity, nuisance["housing_mass_kg"], fs=fs,
-                           **support_of(nuisance))
+                           **modes_of(nuisance))
         if eff is not None and eff.record is not None and quantity in eff.quantities:
             x = eff.record(x, fs, values)
         rng = np.random.default_rng([rec.settings.seed, int(i)])  # common numbers per record
@@ -790,7 +806,7 @@ def explore(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[
     # over its whole range in the model-form calibration (its neutral value is no prior worth
     # holding to), around the calibration with an effect
     scn = rec.scenarios[0]
-    prior = completed(c.nuisance, scn) | declared_nuisance(scn) | declared_support(scn)
+    prior = completed(c.nuisance, scn) | declared_nuisance(scn) | declared_modes(scn)
     span = {n: (0.5 if wide(rec, eff) and n in MODEL_FORM else EXPLORE_SPAN) for n in dyn}
     centres = {n: (0.5 if span[n] == 0.5 else to_unit(prior[n], *BOUNDS[n])) for n in dyn}
     dim = len(params) + len(dyn)
@@ -1369,7 +1385,7 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
     """The whole loop on one bundle; returns its report (see the module text)."""
     settings = settings or LoopSettings()
     candidates = candidates_for(set(bundle.manifest.quantity), settings)
-    start = declared_nuisance(base) | declared_support(base)  # a bad support mode: before work
+    start = declared_nuisance(base) | declared_modes(base)  # a bad chain mode: before work
     rec = prepare(bundle, base, settings)
     nuisance, free_nuisance = calibrate(rec, start)
     judged = with_discrepancy(rec, nuisance)

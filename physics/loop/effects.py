@@ -32,8 +32,9 @@ transfer_path      measure    a structural mode (``f_n``, ``zeta`` 0.01-0.1) bet
                               higher kurtosis and crest (impulse response ringing)
 backlash_growth    dynamics   backlash grown by ``kappa`` times the wear thickness lost: visible
                               only where the teeth separate (light load, rattle)
-torque_ripple      dynamics   input torque ripple ``r`` at shaft order 1 or 2 (motor, Cardan
-                              joint): lines at ``q f_1``, sidebands ``k f_m +- q f_1``
+torque_ripple      dynamics   input torque ripple ``r`` at a drive-line order ``q`` of the pinion
+                              shaft, 1/2, 1 or 2 (a 2:1 stage or belt upstream, a motor, a
+                              Cardan joint): lines at ``q f_1``, sidebands ``k f_m +- q f_1``
 sensor             measure    sensor gain ``G`` on the record (for acceleration it is absorbed by
                               the calibrated ``m_h``; only DTE records show it)
 =================  =========  =====================================================================
@@ -207,7 +208,7 @@ EFFECTS: dict[str, Effect] = {e.name: e for e in (
     Effect("backlash_growth", "dynamics", (Param("kappa", "1", 0.1, 20.0, 1.0),),
            grows_with_wear=True, model=_backlash_growth),
     Effect("torque_ripple", "dynamics", (Param("ripple_pct", "%", 0.2, 30.0, 5.0),),
-           options=({"order": 1}, {"order": 2}), model=_torque_ripple),
+           options=({"order": 1}, {"order": 2}, {"order": 0.5}), model=_torque_ripple),
     Effect("sensor", "measurement", (Param("gain", "1", 0.3, 3.0, 1.3),),
            quantities=("dte_m",), record=_sensor),
 )}

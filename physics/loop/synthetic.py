@@ -2,7 +2,7 @@
 
 :func:`make_bundle` simulates records of the full model with one effect of the library switched
 on at a realistic size (its ``typical`` value times a seeded factor in [0.7, 1.4]), with the
-declared nuisance parameters (and a declared support mode) moved off their defaults (each
+declared nuisance parameters (and the declared chain modes) moved off their defaults (each
 times a seeded factor in [0.6, 1.6]) and white measurement noise at ``snr_db``. Records span
 the wear life of one operating case (wear and cycles known), so the loop also has a wear
 estimate to judge.
@@ -20,10 +20,10 @@ from physics.dynamics.model import simulate
 from physics.gear.stiffness import MeshStiffness
 from physics.loop.bundle import write_bundle
 from physics.loop.bundle_loop import (
+    declared_modes,
     declared_nuisance,
-    declared_support,
+    modes_of,
     shaft_rates,
-    support_of,
     with_nuisance,
     worn_models,
 )
@@ -39,7 +39,7 @@ def make_bundle(path: str | Path, base: Scenario, effect_name: str | None, seed:
     rng = np.random.default_rng([seed, 7])
     dyn = base.dynamics
     nuisance = {k: v * rng.uniform(0.6, 1.6)
-                for k, v in (declared_nuisance(base) | declared_support(base)).items()}
+                for k, v in (declared_nuisance(base) | declared_modes(base)).items()}
     eff = effect(effect_name) if effect_name else None
     values = {}
     if eff is not None:
@@ -59,7 +59,7 @@ def make_bundle(path: str | Path, base: Scenario, effect_name: str | None, seed:
     def chain(ms):
         return declared_chain(sensed(simulate(ms, run), quantity), quantity,
                               nuisance["housing_mass_kg"], fs=dyn.sample_rate_hz,
-                              **support_of(nuisance))
+                              **modes_of(nuisance))
 
     clean = chain(models)
     plain = chain(declared) if models is not declared else clean

@@ -117,7 +117,8 @@ def model_features(td: TableData, rows: np.ndarray, nuisance: dict, eff: Effect 
     resp = simulate(ms, run)
     x = declared_chain(sensed(resp, td.quantity), td.quantity, nuisance["housing_mass_kg"],
                        fs=dyn.sample_rate_hz, support_hz=dyn.support_hz,
-                       support_damping=dyn.support_damping)
+                       support_damping=dyn.support_damping, mount_hz=dyn.mount_hz,
+                       mount_damping=dyn.mount_damping)
     if eff is not None and eff.record is not None:
         x = eff.record(x, dyn.sample_rate_hz, values)
     rng = np.random.default_rng(td.settings.seed)

@@ -2,11 +2,12 @@
 
 - DTE: the relative displacement on the line of action, ``x(t)`` of :mod:`physics.dynamics`.
 - Housing acceleration: a rigid housing of effective mass ``m_h`` driven by the fluctuating mesh
-  force, ``a(t) = (F_d(t) - mean F_d) / m_h`` (``dynamics.housing_mass_kg``), optionally through
-  a declared bearing-support mode (:func:`support_path`, ``dynamics.support_hz``; 0, the
-  default: a rigid support). Further structural resonances of the transfer path
-  (:func:`transfer_path`) are not part of the declared chain of the loop (there they are an
-  effect of :mod:`physics.loop.effects`); the dataset draws one per trajectory.
+  force, ``a(t) = (F_d(t) - mean F_d) / m_h`` (``dynamics.housing_mass_kg``), optionally through a
+  declared bearing-support mode (:func:`support_path`, ``dynamics.support_hz``; 0, the default: a
+  rigid support), and optionally on its mounting (:func:`housing_mount`, ``dynamics.mount_hz``; 0,
+  the default: a free housing). Further structural resonances of the transfer path
+  (:func:`transfer_path`) are not part of the declared chain of the loop (there they are an effect
+  of :mod:`physics.loop.effects`); the dataset draws one per trajectory.
 - Measurement noise: white Gaussian at a signal-to-noise ratio relative to the AC power.
 """
 
@@ -38,17 +39,19 @@ def sensed(resp: Response, quantity: str) -> np.ndarray:
 
 def declared_chain(x: np.ndarray, quantity: str, housing_mass_kg: float, *,
                    fs: float | None = None, support_hz: float = 0.0,
-                   support_damping: float = 0.05) -> np.ndarray:
+                   support_damping: float = 0.05, mount_hz: float = 0.0,
+                   mount_damping: float = 0.1) -> np.ndarray:
     """The declared chain applied to :func:`sensed`: DTE as it is, the force through the
     bearing support (``support_hz`` > 0, sampled at ``fs``; :func:`support_path`) and the rigid
-    housing."""
+    housing, on its mounting (``mount_hz`` > 0; :func:`housing_mount`)."""
     if quantity == "dte_m":
         return x
+    if (support_hz > 0 or mount_hz > 0) and fs is None:
+        raise ValueError("a declared support or mount mode needs the record's sampling rate fs")
     if support_hz > 0:
-        if fs is None:
-            raise ValueError("a declared support mode needs the record's sampling rate fs")
         x = support_path(x, fs, support_hz, support_damping)
-    return housing_acceleration(x, housing_mass_kg)
+    a = housing_acceleration(x, housing_mass_kg)
+    return housing_mount(a, fs, mount_hz, mount_damping) if mount_hz > 0 else a
 
 
 def transmissibility(f: np.ndarray, fn_hz: float, zeta: float) -> np.ndarray:
@@ -73,6 +76,21 @@ def support_path(x: np.ndarray, fs: float, fn_hz: float, zeta: float) -> np.ndar
     n = x.shape[-1]
     spec = np.fft.rfft(x, axis=-1) * transmissibility(np.fft.rfftfreq(n, 1 / fs), fn_hz, zeta)
     return np.fft.irfft(spec, n, axis=-1)
+
+
+def housing_mount(a: np.ndarray, fs: float, fn_hz: float, zeta: float) -> np.ndarray:
+    """The free housing's acceleration ``a`` as the housing on its mounting moves: a mass on a
+    spring and damper driven by a force, ``s^2 / (s^2 + 2 zeta wn s + wn^2)`` times the free
+    mass's (Rao, Mechanical Vibrations, 5th ed., 3.4): the free mass's above the mounting mode
+    ``fn_hz``, stiffness-controlled (lowered by ``(f / fn)^2``) below it, where the shaft
+    orders and drive-line orders lie. Applied along the last axis in the frequency domain (one
+    period of ``a`` assumed, as :func:`support_path`)."""
+    if not fn_hz > 0 or not 0 < zeta < 1:
+        raise ValueError(f"mount fn_hz = {fn_hz!r} must be > 0 and zeta = {zeta!r} in (0, 1)")
+    n = a.shape[-1]
+    r = np.fft.rfftfreq(n, 1 / fs) / fn_hz
+    return np.fft.irfft(np.fft.rfft(a, axis=-1) * (r**2 / (r**2 - 1 - 2j * zeta * r)), n,
+                        axis=-1)
 
 
 def transfer_path(x: np.ndarray, fs: float, fn_hz: float, zeta: float) -> np.ndarray:

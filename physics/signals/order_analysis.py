@@ -3,11 +3,12 @@
 The *signature* of a record is the vector of quantities the measured-data loop compares between
 measurement and model, each in decibels so that gains become offsets:
 
-- amplitudes of the mesh harmonics ``k f_m`` up to 0.45 ``f_s``, of their pinion-shaft sidebands
-  ``k f_m +- j f_1`` (j = 1, 2) and gear-shaft sidebands ``k f_m +- f_2``, and of the shaft orders
-  ``f_1, 2 f_1, f_2``; an amplitude is the Hann-windowed projection of the record on
-  ``exp(i 2 pi f t)`` at the exact line frequency (order analysis without resampling, valid at
-  constant speed; McFadden & Smith, Tribology Int. 17 (1984) 3);
+- amplitudes of the mesh harmonics ``k f_m`` up to 0.45 ``f_s``, of their pinion-shaft sidebands ``k
+  f_m +- j f_1`` (j = 1/2, 1, 2) and gear-shaft sidebands ``k f_m +- f_2``, and of the shaft orders
+  ``f_1 / 2, f_1, 2 f_1, f_2`` (the half order: a drive-line order upstream of the pinion, e.g. a
+  2:1 stage or belt, or a sub-harmonic of looseness or rub); an amplitude is the Hann-windowed
+  projection of the record on ``exp(i 2 pi f t)`` at the exact line frequency (order analysis
+  without resampling, valid at constant speed; McFadden & Smith, Tribology Int. 17 (1984) 3);
 - band power in half-octave bands from ``f_m / 2`` to ``0.45 f_s`` (structural resonances);
 - RMS, Pearson kurtosis and crest factor of the record, and the kurtosis of the residual of the
   pinion time-synchronous average once its mesh harmonics are removed (a local tooth defect;
@@ -120,12 +121,12 @@ def _tsa_residual_kurtosis(x: np.ndarray, fs: float, f1: float, z1: int) -> np.n
 def line_frequencies(f1: float, f2: float, z1: int, fs: float) -> dict[str, float]:
     """The named lines of the signature [Hz]: mesh harmonics below 0.45 fs with sidebands."""
     fm = z1 * f1
-    lines = {"shaft1": f1, "shaft1x2": 2 * f1, "shaft2": f2}
+    lines = {"shaft1/2": f1 / 2, "shaft1": f1, "shaft1x2": 2 * f1, "shaft2": f2}
     for k in range(1, max(1, int(0.45 * fs / fm)) + 1):
         lines[f"mesh{k}"] = k * fm
-        for j in (1, 2):
-            lines[f"mesh{k}+{j}p"] = k * fm + j * f1
-            lines[f"mesh{k}-{j}p"] = k * fm - j * f1
+        for j, name in ((0.5, "p/2"), (1, "1p"), (2, "2p")):
+            lines[f"mesh{k}+{name}"] = k * fm + j * f1
+            lines[f"mesh{k}-{name}"] = k * fm - j * f1
         lines[f"mesh{k}+g"] = k * fm + f2
         lines[f"mesh{k}-g"] = k * fm - f2
     return lines

@@ -25,18 +25,20 @@ from physics.loop.bundle_loop import (
     calibrate,
     candidates_for,
     completed,
+    declared_modes,
     declared_nuisance,
-    declared_support,
     free_directions,
     identifiable,
     model_signals,
     prepare,
     residuals,
+    residuals_db,
     responses,
     rms,
     run_loop,
     search,
     separable_share,
+    shaft_rates,
     split_records,
     train_cost,
     wear_skill,
@@ -387,10 +389,10 @@ def test_calibration_finds_a_declared_support_mode(tmp_path):
     scn = scenario_from_config({"case": 3, "dynamics": {"support_hz": 3000.0}})
     path, truth = make_bundle(tmp_path / "b", scn, None, seed=4, records=4, duration_s=0.5)
     rec = prepare(read_bundle(path), scn, LoopSettings(seed=4, explore=8, max_nfev=8))
-    nuisance, free = calibrate(rec, declared_nuisance(scn) | declared_support(scn))
+    nuisance, free = calibrate(rec, declared_nuisance(scn) | declared_modes(scn))
     assert {"housing_mass_kg", "support_hz", "support_damping"} <= set(free)
     assert nuisance["support_hz"] == pytest.approx(truth["nuisance"]["support_hz"], rel=0.05)
-    assert declared_support(scenario_from_config({"case": 3})) == {}  # rigid by default
+    assert declared_modes(scenario_from_config({"case": 3})) == {}  # rigid by default
 
 
 def test_a_support_mode_outside_the_loop_bounds_is_refused_before_work(clean_records):
@@ -399,6 +401,36 @@ def test_a_support_mode_outside_the_loop_bounds_is_refused_before_work(clean_rec
     with pytest.raises(ValueError, match=r"dynamics.support_hz = 50.0 must lie in \[200, "
                                          r"20000\].*support_hz=0"):
         run_loop(rec.bundle, bad)
+    bad = scenario_from_config({"case": 3, "dynamics": {"mount_hz": 150.0,
+                                                        "mount_damping": 0.9}})
+    with pytest.raises(ValueError, match=r"dynamics.mount_damping = 0.9 must lie in \[0.02, "
+                                         r"0.5\].*mount_hz=0"):
+        run_loop(rec.bundle, bad)
+
+
+def test_a_stated_mounting_mode_is_held_and_lowers_the_shaft_lines(tmp_path):
+    # a housing on mounts at 90 Hz: the mode is stated, not calibrated (m_h is); the model's
+    # shaft-order lines fall with it, its mesh harmonics stay
+    scn = scenario_from_config({"case": 3, "dynamics": {"mount_hz": 90.0}})
+    path, _ = make_bundle(tmp_path / "b", scn, None, seed=4, records=4, duration_s=0.5)
+    rec = prepare(read_bundle(path), scn, LoopSettings(seed=4, explore=8, max_nfev=8))
+    nuisance, free = calibrate(rec, declared_nuisance(scn) | declared_modes(scn))
+    assert "housing_mass_kg" in free and not {"mount_hz", "mount_damping"} & set(free)
+    assert (nuisance["mount_hz"], nuisance["mount_damping"]) == (90.0, 0.1)
+    # a torque ripple at the pinion order puts a line at f1 into the mesh force
+    free_housing = {k: v for k, v in nuisance.items() if not k.startswith("mount")}
+    ripple, values = effect("torque_ripple"), {"ripple_pct": 10.0, "order": 1}
+    idx = rec.train[:1]
+    mounted, free_res = (residuals_db(rec, idx, model_signals(rec, idx, n, ripple, values))[0]
+                         for n in (nuisance, free_housing))
+    names = rec.group(idx[0]).names
+    shaft, mesh = names.index("line_shaft1"), names.index("line_mesh1")
+    f1 = shaft_rates(rec.scenarios[idx[0]])[0]
+    # measured minus model: the model's line lower by the mount's gain, by hand
+    r = f1 / 90.0
+    gain = r * r / math.hypot(1 - r * r, 2 * 0.1 * r)
+    assert mounted[shaft] - free_res[shaft] == pytest.approx(-20 * math.log10(gain), abs=0.5)
+    assert mounted[mesh] == pytest.approx(free_res[mesh], abs=0.5)
 
 
 @settings(max_examples=40, deadline=None)

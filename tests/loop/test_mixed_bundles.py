@@ -17,9 +17,9 @@ from physics.gear.stiffness import MeshStiffness
 from physics.loop.bundle import read_bundle, write_bundle
 from physics.loop.bundle_loop import (
     BOUNDS,
+    CHAIN,
     MODEL_FORM,
     NUISANCE,
-    SUPPORT,
     Group,
     LoopSettings,
     Reader,
@@ -105,7 +105,7 @@ def test_a_mixed_bundle_is_accepted_and_grouped(mixed):
 def test_one_calibration_shares_the_physical_parameters(mixed):
     rec, nuisance = mixed
     # a rigid support (the default) declares no support mode to calibrate
-    assert set(nuisance) == set(NUISANCE) | set(MODEL_FORM) == set(BOUNDS) - set(SUPPORT)
+    assert set(nuisance) == set(NUISANCE) | set(MODEL_FORM) == set(BOUNDS) - set(CHAIN)
     assert all(isinstance(v, float) for v in nuisance.values())  # one value each, all groups
     every = np.arange(len(rec.models))
     acc = rec.bundle.manifest.quantity.to_numpy() == "accel_m_s2"

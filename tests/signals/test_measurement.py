@@ -1,4 +1,5 @@
-"""The declared measurement chain: the bearing-support mode against hand calculations."""
+"""The declared measurement chain: the bearing-support and mounting modes against hand
+calculations."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ from hypothesis import strategies as st
 
 from physics.signals.measurement import (
     declared_chain,
+    housing_mount,
     support_path,
     transfer_path,
     transmissibility,
@@ -65,3 +67,24 @@ def test_a_support_mode_needs_its_sampling_rate_and_a_valid_damping():
         declared_chain(tone(100.0), "accel_m_s2", 20.0, support_hz=2000.0)
     with pytest.raises(ValueError, match="zeta"):
         support_path(tone(100.0), FS, 2000.0, 1.5)
+
+
+@settings(max_examples=30, deadline=None)
+@given(fn=st.floats(5.0, 1000.0), zeta=st.floats(0.02, 0.5), ratio=st.floats(0.05, 20.0))
+def test_mount_gain_is_that_of_a_force_driven_mass_on_a_spring(fn, zeta, ratio):
+    # by hand: |a / a_free| = r^2 / sqrt((1 - r^2)^2 + (2 zeta r)^2)
+    f = max(round(ratio * fn * N / FS), 1) * FS / N
+    r = f / fn
+    by_hand = r * r / math.sqrt((1 - r * r) ** 2 + (2 * zeta * r) ** 2)
+    assert amplitude(housing_mount(tone(f), FS, fn, zeta), f) == pytest.approx(by_hand,
+                                                                                rel=1e-9)
+
+
+def test_a_mount_lowers_the_shaft_orders_and_leaves_the_mesh_band():
+    x = tone(15.0) + tone(2000.0)  # a half shaft order and a mesh harmonic, 1 N each
+    free = declared_chain(x, "accel_m_s2", 20.0)
+    mounted = declared_chain(x, "accel_m_s2", 20.0, fs=FS, mount_hz=150.0, mount_damping=0.2)
+    assert amplitude(mounted, 15.0) < 0.011 * amplitude(free, 15.0)  # (15 / 150)^2 = 0.01
+    assert amplitude(mounted, 2000.0) == pytest.approx(amplitude(free, 2000.0), rel=0.01)
+    with pytest.raises(ValueError, match="sampling rate"):
+        declared_chain(x, "accel_m_s2", 20.0, mount_hz=150.0)
