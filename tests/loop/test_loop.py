@@ -466,7 +466,9 @@ def test_a_dte_gain_is_not_separable_from_the_stiffness_level(tmp_path, scn):
                                                         values))
         return separable_share(directions, moved - base)
 
-    assert share("sensor", {"gain": 1.3}) < 0.01
+    # (not exactly 0: the model's noise, added after the chain, is not scaled by the gain, and
+    # the half-order lines of unworn records sit near that floor)
+    assert share("sensor", {"gain": 1.3}) < 0.02
     assert share("tooth_defect", {"depth_um": 20.0} | EFFECTS["tooth_defect"].options[0]) > 0.9
 
 
