@@ -99,11 +99,12 @@ def one(job: tuple[str, str | None, int, int, bool, str, str, str]) -> dict:
 
 
 def best_candidate(r) -> dict:
-    """The first round's best candidate and the null test's figures on it: why it was or was
-    not adopted (own-entry error before/after, the least sum of squares it explains per
-    held-out record over the groups against what the discrepancy allows, its BIC change, the
-    share of its change the free nuisance cannot mimic)."""
-    best = r["ranking"][0]
+    """The first round's judged candidate (the adopted one, else the best by held-out error)
+    and the null test's figures on it: why it was or was not adopted (own-entry error
+    before/after, the least sum of squares it explains per held-out record over the groups
+    against what the discrepancy allows, its BIC change, the share of its change the free
+    nuisance cannot mimic)."""
+    best = r["ranking"][r["verdicts"][0]["rank"]]
     return {"best": best["effect"], "own_before": best["own_entries_error"][0],
             "own_after": best["own_entries_error"][1],
             "explained": min(best["explained"].values(), default=0.0),

@@ -50,20 +50,22 @@ its run folder.
 4. **Attribution**: every effect of :mod:`physics.effects` that can show in the bundle's
    quantities is added in turn (a measurement-chain effect acts only on its own quantities).
    Screening: the effect at a grid of sizes, nuisance at the calibration, the best size
-   polished by a short least squares. The best ``refine`` candidates by train chi-square
-   then get the same search as the calibration, their parameters jointly with the
+   polished by a short least squares. Every candidate (or the best ``refine`` by train
+   chi-square) then gets the same search as the calibration, their parameters jointly with the
    identifiable nuisance (a missing effect biases the calibration, at worst to its bounds,
    so the nuisance must move with the effect). Candidates are ranked by held-out error (RMS
    standardised residual, with discrepancy, over the test records) with the Bayesian
    information criterion on the train records beside it (chi-square plus k ln n, the scatter
    being known, k the effect's parameters).
-   The **null test** (:func:`physics.loop.report.null_test`), judged where the best candidate's own
+   The **null test** (:func:`physics.loop.report.null_test`), judged where each candidate's own
    signature lives (the entries its model moves by more than their noise,
-   :func:`signature_gain`): it is adopted only if it lowers the held-out error there (in units of
-   the noise) by at least ``min_gain`` (20 %), its BIC by at least ``min_delta_bic`` (10, "very
-   strong" on Kass & Raftery's scale), and, in every group where it shows, removes more
-   standardised sum of squares per held-out record than the discrepancy lets a candidate of its
-   size absorb by chance (:func:`discrepancy_allowance`). The records' wear takes no part in
+   :func:`signature_gain`): the best by held-out error of those that pass it is adopted (a
+   candidate that soaks up form error across the spectrum can rank first and fail it while the
+   effect in the data passes); a candidate passes only if it lowers the held-out error there (in
+   units of the noise) by at least ``min_gain`` (20 %), its BIC by at least ``min_delta_bic``
+   (10, "very strong" on Kass & Raftery's scale), and, in every group where it shows, removes
+   more standardised sum of squares per held-out record than the discrepancy lets a candidate of
+   its size absorb by chance (:func:`discrepancy_allowance`). The records' wear takes no part in
    this decision: an adopted effect **reads the wear** (item 6) only if, where the train
    records' wear is known, it does not lower the model-based wear estimate's leave-one-out
    skill on them by more than ``max_wear_loss`` (0.1: its mean absolute error may grow by a
@@ -115,7 +117,7 @@ from physics.dynamics.model_form import with_model_form
 from physics.gear.stiffness import MeshStiffness
 from physics.loop.bundle import Bundle, record_scenario
 from physics.loop.effects import EFFECTS, Effect, revolution_tables
-from physics.loop.report import LoopReport, holds, null_test
+from physics.loop.report import LoopReport, first_passing, holds, null_test
 from physics.params import PhysicsConfig, Scenario, bounded, validate_fields
 from physics.signals.features import FEATURES, features
 from physics.signals.measurement import declared_chain, sensed
@@ -933,8 +935,9 @@ def discrepancy_allowance(k: int, n_candidates: int, rate: float) -> float:
     it also absorbs on the held-out ones), least squares of k parameters removes from a
     record's standardised sum of squares at most the projection of ``delta + eps`` on k
     directions: a chi-square of k degrees of freedom. Its upper ``rate / n_candidates``
-    quantile, Bonferroni over the candidates, bounds the chance that the best of them passes
-    by ``rate``, the false-add rate per bundle.
+    quantile, Bonferroni over the candidates, bounds the chance that any of them passes by
+    ``rate``, the false-add rate per bundle (so each may be judged, the best passing one
+    adopted).
     """
     return float(chi2.isf(rate / max(n_candidates, 1), max(k, 1)))
 
@@ -1242,27 +1245,32 @@ def reads_wear(rec: Records, reader: Reader, adopted: Reader, max_loss: float
 @dataclass
 class Round:
     """One round of attribution: the candidates ranked by held-out error and the verdict of
-    the null test on the best."""
+    the null test on the judged one (:attr:`best`)."""
 
     ranking: list[Candidate]
     effects: dict[str, Effect]  # each candidate's effect, by name
     null_bic: float
-    allowed: float  # what the discrepancy allows the best (:func:`discrepancy_allowance`)
+    allowed: float  # what the discrepancy allows the judged (:func:`discrepancy_allowance`)
     adopted: bool
     base_test: list[np.ndarray]  # the test signals of the model the candidates were added to
-    # the null test's conditions on the best (:func:`physics.loop.report.null_test`)
+    # the null test's conditions on the judged (:func:`physics.loop.report.null_test`)
     checks: dict
     # the model that reads the wear after this round (:class:`Reader`)
     reader: Reader
-    # where the best was adopted: which model reads the wear, from the leave-one-out scores on
+    # where the judged was adopted: which model reads the wear, from the leave-one-out scores on
     # the train records (:func:`wear_check`, with ``reads_with``), None without them
     wear_reading: dict | None = None
     # held-out wear-estimate scores of the reader before and after this round (adopted only)
     wear: tuple[WearScore | None, WearScore | None] = (None, None)
+    # the judged candidate's place in the ranking: the first that passes the null test, else
+    # the first
+    pick: int = 0
 
     @property
     def best(self) -> Candidate:
-        return self.ranking[0]
+        """The judged candidate: the adopted one, or the first by held-out error if none
+        passes."""
+        return self.ranking[self.pick]
 
     def table(self) -> list[dict]:
         """The ranking as the report writes it."""
@@ -1280,7 +1288,8 @@ def attribute(rec: Records, judged: Records, declared: Effect | None, declared_v
               reader: Reader, progress: bool = False) -> Round:
     """Screen, refine and judge ``candidates`` against the model ``declared`` (None: the
     calibrated declared model; else it with an adopted effect at ``declared_values``) at
-    ``nuisance``; the null test on the best (see the module text); if adopted, which model
+    ``nuisance``; the null test on each, the best that passes adopted (see the module text);
+    if one is, which model
     reads the wear after it (:func:`reads_wear`; ``reader`` reads it before). Fits weigh the
     residuals of ``rec`` (noise alone); the held-out judgement uses ``judged`` (the same
     records with the model discrepancy, :func:`with_discrepancy`)."""
@@ -1315,11 +1324,17 @@ def attribute(rec: Records, judged: Records, declared: Effect | None, declared_v
                  c.own_before, c.own_after, {k: round(v, 1) for k, v in c.explained.items()},
                  c.bic - null_bic, c.separable, "" if c.refined else " (screened)")
     ranking.sort(key=lambda c: c.heldout)
-    best = ranking[0]
-    allowed = discrepancy_allowance(best.n_params, len(ranking), settings.false_add_rate)
-    checks = null_test(best.own_after, best.own_before, best.bic - null_bic, settings.min_gain,
-                       settings.min_delta_bic, min(best.explained.values(), default=0.0),
-                       allowed)
+
+    def verdict(c: Candidate) -> tuple[float, dict]:
+        allowed = discrepancy_allowance(c.n_params, len(ranking), settings.false_add_rate)
+        return allowed, null_test(c.own_after, c.own_before, c.bic - null_bic,
+                                  settings.min_gain, settings.min_delta_bic,
+                                  min(c.explained.values(), default=0.0), allowed)
+
+    verdicts = [verdict(c) for c in ranking]
+    pick = first_passing([checks for _, checks in verdicts])
+    best = ranking[pick]
+    allowed, checks = verdicts[pick]
     adopted = holds(checks)
     if not adopted:
         return Round(ranking, effects, null_bic, allowed, adopted, base_test, checks, reader)
@@ -1333,7 +1348,7 @@ def attribute(rec: Records, judged: Records, declared: Effect | None, declared_v
     log.info("%s adopted; the wear read by %s (train leave-one-out %s), held-out %s -> %s",
              best.name, after.name, reading, *wear)
     return Round(ranking, effects, null_bic, allowed, adopted, base_test, checks, after,
-                 reading, wear)
+                 reading, wear, pick)
 
 
 def stacked(first: Effect, values: dict, second: Effect) -> Effect:
@@ -1453,10 +1468,11 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
                                 "before_mm": list(wear_before.estimate_mm),
                                 "after_mm": list(wear_after.estimate_mm)}
                                if wear_before and wear_after else None),
-            "verdicts": [{"effect": r.best.name, "adopted": r.adopted, "checks": r.checks,
-                          "wear_reading": r.wear_reading} for r in rounds],
+            "verdicts": [{"effect": r.best.name, "rank": r.pick, "adopted": r.adopted,
+                          "checks": r.checks, "wear_reading": r.wear_reading} for r in rounds],
             "wear_read_by": (last.reader if last else declared).name,
-            "second_round": ({"on": first.best.name, "adopted": rounds[1].adopted,
+            "second_round": ({"on": first.best.name, "rank": rounds[1].pick,
+                              "adopted": rounds[1].adopted,
                               "allowed": rounds[1].allowed, "ranking": rounds[1].table()}
                              if len(rounds) > 1 else None),
         },

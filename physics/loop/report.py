@@ -51,6 +51,13 @@ def holds(checks: dict[str, dict]) -> bool:
     return all(c["holds"] for c in checks.values())
 
 
+def first_passing(verdicts: list[dict[str, dict]]) -> int:
+    """The place of the candidate a round judges, from the :func:`null_test` conditions of its
+    candidates in ranking order: the first whose conditions all hold (the best that passes),
+    else the first."""
+    return next((k for k, checks in enumerate(verdicts) if holds(checks)), 0)
+
+
 #: how a verdict writes each condition: its value, then its bound
 CONDITION_WORDS = {"gain": ("held-out error cut by {value:.0%}", "needs >= {bound:.0%}"),
                    "delta_bic": ("dBIC {value:.4g}", "needs <= {bound:g}"),
@@ -74,7 +81,10 @@ def verdict_line(v: dict) -> str:
     """One round's verdict as a sentence: each condition, its value against its bound, and,
     after an adoption, which model reads the wear and why."""
     parts = [condition_text(k, c) for k, c in v["checks"].items()]
-    line = (f"Best candidate {v['effect']}: {'; '.join(parts)}: "
+    rank = v.get("rank", 0)
+    who = ("Best candidate" if rank == 0 else
+           f"Candidate {rank + 1} by held-out error (the first that passes)")
+    line = (f"{who} {v['effect']}: {'; '.join(parts)}: "
             f"{'adopted' if v['adopted'] else 'not adopted'}.")
     w = v.get("wear_reading")
     if w:
@@ -170,9 +180,10 @@ def markdown(r: dict) -> str:
                      f"{c['delta_bic']:.1f} | {p} |{fit}")
     rule = r["decision_rule"]
     own = " (in its own signature entries)" if "allowed" in rule else ""
-    lines += ["", f"Decision rule: adopt the best candidate only if it cuts the held-out error"
-              f"{own} by at least {rule['min_gain']:.0%} and the BIC by at least "
-              f"{rule['min_delta_bic']:g}"]
+    which = ("the best (by held-out error) of the candidates that cut the held-out error"
+             if "allowed" in rule else "the best candidate only if it cuts the held-out error")
+    lines += ["", f"Decision rule: adopt {which}{own} by at least {rule['min_gain']:.0%} "
+              f"and the BIC by at least {rule['min_delta_bic']:g}"]
     if "allowed" in rule:
         lines[-1] += (f", and explains more than {rule['allowed']:.1f} (standardised sum of "
                       f"squares per held-out record, in every group), what the discrepancy "
@@ -185,8 +196,8 @@ def markdown(r: dict) -> str:
     lines += ["", *[f"Round {k + 1}. {verdict_line(v)}" for k, v in enumerate(r["verdicts"])]]
     second = r.get("second_round")
     if second:
-        top = second["ranking"][0]
-        lines += ["", f"Greedy second round on the residual of {second['on']}: best "
+        top = second["ranking"][second["rank"]]
+        lines += ["", f"Greedy second round on the residual of {second['on']}: judged "
                   f"{top['effect']} (held-out error {top['heldout_error']:.3f}, explained "
                   f"{_least(top['explained'])} against {second['allowed']:.1f} allowed): "
                   f"{'adopted' if second['adopted'] else 'not adopted'}."]

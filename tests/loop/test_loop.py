@@ -469,7 +469,7 @@ def test_a_dte_gain_is_not_separable_from_the_stiffness_level(tmp_path, scn):
     # (not exactly 0: the model's noise, added after the chain, is not scaled by the gain, and
     # the half-order lines of unworn records sit near that floor)
     assert share("sensor", {"gain": 1.3}) < 0.02
-    assert share("tooth_defect", {"depth_um": 20.0} | EFFECTS["tooth_defect"].options[0]) > 0.9
+    assert share("tooth_defect", EFFECTS["tooth_defect"].defaults() | {"depth_um": 20.0}) > 0.9
 
 
 def test_search_never_ends_above_its_start(clean_records, scn):

@@ -52,7 +52,7 @@ from physics.loop.bundle_loop import (
 )
 from physics.loop.effects import EFFECTS
 from physics.loop.independent_simulator import make_independent_bundle
-from physics.loop.report import holds, null_test, verdict_line, write_report
+from physics.loop.report import first_passing, holds, null_test, verdict_line, write_report
 from physics.loop.synthetic import make_bundle
 from physics.params import scenario_from_config
 from physics.signals.measurement import add_noise, declared_chain, sensed
@@ -192,6 +192,13 @@ def test_the_null_test_is_one_rule_for_both_loops_and_says_what_stopped_it():
     line = verdict_line({"effect": "friction", "adopted": False, "checks": checks})
     assert "held-out error cut by 15% (needs >= 20%: no)" in line
     assert line.endswith("not adopted.")
+    # a round judges the best candidate that passes, the first by held-out error if none does
+    passing = null_test(0.5, 1.0, -20.0, 0.2, 10.0, explained=50.0, allowed=10.0)
+    assert first_passing([checks, passing, passing]) == 1
+    assert first_passing([checks, checks]) == 0 and first_passing([passing, checks]) == 0
+    line = verdict_line({"effect": "tooth_defect", "rank": 1, "adopted": True,
+                         "checks": passing})
+    assert line.startswith("Candidate 2 by held-out error (the first that passes) tooth_defect")
 
 
 @given(before=st.floats(-2.0, 1.0), loss=st.floats(0.0, 1.0), share=st.floats(0.0, 1.0),
