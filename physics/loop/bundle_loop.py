@@ -155,7 +155,8 @@ MOUNT = {"mount_hz": (5.0, 1000.0, True), "mount_damping": (0.02, 0.5, True)}
 #: the acceleration chain's modes, each by the frequency that declares it
 CHAIN_MODES = {"support_hz": SUPPORT, "mount_hz": MOUNT}
 CHAIN = SUPPORT | MOUNT
-#: bounds of every calibrated parameter of the declared model
+#: bounds of every nuisance parameter of the declared model (the calibrated ones' search range;
+#: the stated mounting's, the range its stated values must lie in)
 BOUNDS = NUISANCE | CHAIN | {n: b[:3] for n, b in MODEL_FORM.items()}
 #: the nuisance parameters the dynamics see (``m_h`` acts on the measurement chain); the model
 #: form's only with ``loop.model_form``
@@ -219,8 +220,8 @@ def declared_modes(scn: Scenario) -> dict[str, float]:
         for n, (lo, hi, _) in mode.items():
             if not lo <= getattr(dyn, n) <= hi:
                 raise ValueError(f"dynamics.{n} = {getattr(dyn, n)!r} must lie in [{lo:g}, "
-                                 f"{hi:g}] for the loop to calibrate it; state the mode inside "
-                                 f"that range or set dynamics.{key}=0 (no such mode)")
+                                 f"{hi:g}] for the loop to use it; state the mode inside that "
+                                 f"range or set dynamics.{key}=0 (no such mode)")
         out |= {n: float(getattr(dyn, n)) for n in mode}
     return out
 
