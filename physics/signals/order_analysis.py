@@ -3,12 +3,13 @@
 The *signature* of a record is the vector of quantities the measured-data loop compares between
 measurement and model, each in decibels so that gains become offsets:
 
-- amplitudes of the mesh harmonics ``k f_m`` up to 0.45 ``f_s``, of their pinion-shaft sidebands ``k
-  f_m +- j f_1`` (j = 1/2, 1, 2) and gear-shaft sidebands ``k f_m +- f_2``, and of the shaft orders
-  ``f_1 / 2, f_1, 2 f_1, f_2`` (the half order: a drive-line order upstream of the pinion, e.g. a
-  2:1 stage or belt, or a sub-harmonic of looseness or rub); an amplitude is the Hann-windowed
-  projection of the record on ``exp(i 2 pi f t)`` at the exact line frequency (order analysis
-  without resampling, valid at constant speed; McFadden & Smith, Tribology Int. 17 (1984) 3);
+- amplitudes of the mesh harmonics ``k f_m`` up to 0.45 ``f_s``, of their pinion-shaft sidebands
+  ``k f_m +- j f_1`` (j = 1/2, 1, 2) and gear-shaft sidebands ``k f_m +- f_2``, and of the shaft
+  orders ``f_1 / 2, f_1, 2 f_1, f_2`` (the half order: a drive-line order upstream of the
+  pinion, e.g. a 2:1 stage or belt, or a sub-harmonic of looseness or rub); an amplitude is the
+  Hann-windowed projection of the record on ``exp(i 2 pi f t)`` at the exact line frequency
+  (order analysis without resampling, valid at constant speed; McFadden & Smith, Tribology Int.
+  17 (1984) 3);
 - band power in half-octave bands from ``f_m / 2`` to ``0.45 f_s`` (structural resonances);
 - RMS, Pearson kurtosis and crest factor of the record, and the kurtosis of the residual of the
   pinion time-synchronous average once its mesh harmonics are removed (a local tooth defect;
