@@ -71,11 +71,7 @@ def support_path(x: np.ndarray, fs: float, fn_hz: float, zeta: float) -> np.ndar
     2 kHz and 0.03, is short against the record), so ``fn_hz`` may lie anywhere, also above
     ``fs / 2`` where the mode only raises the band below it; as ``fn_hz`` grows the support
     becomes rigid (identity)."""
-    if not fn_hz > 0 or not 0 < zeta < 1:
-        raise ValueError(f"support fn_hz = {fn_hz!r} must be > 0 and zeta = {zeta!r} in (0, 1)")
-    n = x.shape[-1]
-    spec = np.fft.rfft(x, axis=-1) * transmissibility(np.fft.rfftfreq(n, 1 / fs), fn_hz, zeta)
-    return np.fft.irfft(spec, n, axis=-1)
+    return _through_mode(x, fs, fn_hz, zeta, "support", lambda t: t)
 
 
 def housing_mount(a: np.ndarray, fs: float, fn_hz: float, zeta: float) -> np.ndarray:
@@ -83,14 +79,20 @@ def housing_mount(a: np.ndarray, fs: float, fn_hz: float, zeta: float) -> np.nda
     spring and damper driven by a force, ``s^2 / (s^2 + 2 zeta wn s + wn^2)`` times the free
     mass's (Rao, Mechanical Vibrations, 5th ed., 3.4): the free mass's above the mounting mode
     ``fn_hz``, stiffness-controlled (lowered by ``(f / fn)^2``) below it, where the shaft
-    orders and drive-line orders lie. Applied along the last axis in the frequency domain (one
-    period of ``a`` assumed, as :func:`support_path`)."""
+    orders and drive-line orders lie; it is ``1 -`` :func:`transmissibility`. Applied along the
+    last axis in the frequency domain (one period of ``a`` assumed, as :func:`support_path`)."""
+    return _through_mode(a, fs, fn_hz, zeta, "mount", lambda t: 1 - t)
+
+
+def _through_mode(x: np.ndarray, fs: float, fn_hz: float, zeta: float, name: str,
+                  response) -> np.ndarray:
+    """``x`` through ``response`` of the single-degree-of-freedom :func:`transmissibility` at
+    ``fn_hz``, ``zeta``, along its last axis in the frequency domain."""
     if not fn_hz > 0 or not 0 < zeta < 1:
-        raise ValueError(f"mount fn_hz = {fn_hz!r} must be > 0 and zeta = {zeta!r} in (0, 1)")
-    n = a.shape[-1]
-    r = np.fft.rfftfreq(n, 1 / fs) / fn_hz
-    return np.fft.irfft(np.fft.rfft(a, axis=-1) * (r**2 / (r**2 - 1 - 2j * zeta * r)), n,
-                        axis=-1)
+        raise ValueError(f"{name} fn_hz = {fn_hz!r} must be > 0 and zeta = {zeta!r} in (0, 1)")
+    n = x.shape[-1]
+    t = transmissibility(np.fft.rfftfreq(n, 1 / fs), fn_hz, zeta)
+    return np.fft.irfft(np.fft.rfft(x, axis=-1) * response(t), n, axis=-1)
 
 
 def transfer_path(x: np.ndarray, fs: float, fn_hz: float, zeta: float) -> np.ndarray:
