@@ -28,10 +28,12 @@ tooth_defect       dynamics   a pit or spall of depth ``d`` on one pinion tooth 
                               in how much of each they make): once per pinion
                               revolution, a family of pinion sidebands ``k f_m +- j f_1``, raised
                               kurtosis of the synchronous-average residual
-transfer_path      measure    a structural mode (``f_n``, ``zeta`` 0.01-0.1) between mesh and
-                              accelerometer, base-excited SDOF transmissibility: raised bands
-                              around ``f_n``,
-                              higher kurtosis and crest (impulse response ringing)
+transfer_path      measure    a structural mode (``f_n``, ``zeta`` 0.01-0.1, residue ``g``
+                              -1 to 1) between mesh and accelerometer, the rigid path plus the
+                              mode's accelerance (``g = 1``: a sensor on a base-excited
+                              sub-structure, the band above ``f_n`` cut; ``g < 0``: a housing
+                              mode beside the rigid path, the band above ``f_n`` kept): raised
+                              bands around ``f_n``, higher kurtosis and crest (ringing)
 backlash_growth    dynamics   backlash grown by ``kappa`` times the wear thickness lost: visible
                               only where the teeth separate (light load, rattle)
 torque_ripple      dynamics   input torque ripple ``r`` at a drive-line order ``q`` of the pinion
@@ -185,7 +187,7 @@ def _torque_ripple(m: PairModel, v: dict) -> PairModel:
 
 
 def _transfer_path(x: np.ndarray, fs: float, v: dict) -> np.ndarray:
-    return transfer_path(x, fs, v["fn_hz"], v["zeta"])
+    return transfer_path(x, fs, v["fn_hz"], v["zeta"], v["residue"])
 
 
 def _sensor(x: np.ndarray, fs: float, v: dict) -> np.ndarray:
@@ -206,7 +208,8 @@ EFFECTS: dict[str, Effect] = {e.name: e for e in (
     # (``physics.dataset.generation.NuisanceRanges.transfer_zeta``: first plate modes of small
     # cast housings); beyond it the filter is a broad spectral tilt, not a mode
     Effect("transfer_path", "measurement", (Param("fn_hz", "Hz", 800.0, 15000.0, 3200.0),
-                                            Param("zeta", "1", 0.01, 0.1, 0.04)),
+                                            Param("zeta", "1", 0.01, 0.1, 0.04),
+                                            Param("residue", "1", -1.0, 1.0, 1.0, log=False)),
            quantities=("accel_m_s2",), record=_transfer_path),
     Effect("backlash_growth", "dynamics", (Param("kappa", "1", 0.1, 20.0, 1.0),),
            grows_with_wear=True, model=_backlash_growth),

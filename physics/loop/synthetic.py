@@ -1,9 +1,10 @@
 """Measured-like bundles with an undeclared effect, to test the loop (:mod:`physics.loop`).
 
 :func:`make_bundle` simulates records of the full model with one effect of the library switched
-on at a realistic size (its ``typical`` value times a seeded factor in [0.7, 1.4]), with the
-declared nuisance parameters (and the declared chain modes) moved off their defaults (each
-times a seeded factor in [0.6, 1.6]) and white measurement noise at ``snr_db``. Records span
+on at a realistic size (its ``typical`` value times a seeded factor in [0.7, 1.4], within its
+bounds: the transfer path's residue 0.7-1), with the declared nuisance parameters (and the
+declared chain modes) moved off their defaults (each times a seeded factor in [0.6, 1.6]) and
+white measurement noise at ``snr_db``. Records span
 the wear life of one operating case (wear and cycles known), so the loop also has a wear
 estimate to judge.
 """
@@ -47,7 +48,8 @@ def make_bundle(path: str | Path, base: Scenario, effect_name: str | None, seed:
             raise ValueError(f"effect {effect_name} does not show in {quantity} records; use "
                              f"one of {eff.quantities}")
         option = eff.options[int(rng.integers(len(eff.options)))]
-        values = dict(option) | {p.name: p.typical * rng.uniform(0.7, 1.4) for p in eff.params}
+        values = dict(option) | {p.name: float(np.clip(p.typical * rng.uniform(0.7, 1.4),
+                                                       p.low, p.high)) for p in eff.params}
     cycles = np.linspace(0.0, cycles_max, records)
     ms = MeshStiffness(base.gear, base.material)
     by_cycles, root = worn_models(base, ms, list(cycles))

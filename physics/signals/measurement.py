@@ -95,23 +95,32 @@ def _through_mode(x: np.ndarray, fs: float, fn_hz: float, zeta: float, name: str
     return np.fft.irfft(np.fft.rfft(x, axis=-1) * response(t), n, axis=-1)
 
 
-def transfer_path(x: np.ndarray, fs: float, fn_hz: float, zeta: float) -> np.ndarray:
-    """A housing resonance between the mesh and the sensor: the base-excited single-degree-of-
-    freedom transmissibility ``(2 zeta wn s + wn^2) / (s^2 + 2 zeta wn s + wn^2)`` (e.g. Rao,
-    Mechanical Vibrations, 5th ed., 3.6), discretised by the bilinear transform pre-warped at
-    ``fn_hz``, applied along the last axis of ``x``."""
+def transfer_path(x: np.ndarray, fs: float, fn_hz: float, zeta: float,
+                  residue: float = 1.0) -> np.ndarray:
+    """A structural mode between the mesh and the sensor: the rigid path plus one mode of the
+    accelerance, ``1 - g s^2 / (s^2 + 2 zeta wn s + wn^2)`` (Ewins, Modal Testing, 2nd ed.,
+    2000, 2.3 and 2.7: a rigid body's accelerance plus one mode's, ``g = -m A_r`` the mode's
+    modal constant over the rigid one), discretised by the bilinear transform pre-warped at
+    ``fn_hz``, applied along the last axis of ``x``. ``residue`` g = 1 (the default) is the
+    base-excited transmissibility ``(2 zeta wn s + wn^2) / (...)`` of a sensor on a
+    sub-structure (Rao, Mechanical Vibrations, 5th ed., 3.6): the path passes the band below
+    the mode, amplifies it ``1 / (2 zeta)`` times at the mode and cuts the band above it;
+    g < 0 is a housing mode in parallel with the rigid path: a peak ``1 + |g| / (2 zeta)``
+    over a band whose level is ``1`` below the mode and ``1 + |g|`` above it."""
     if not 0 < fn_hz < fs / 2 or not 0 < zeta < 1:
         raise ValueError(f"transfer path fn_hz = {fn_hz!r} must lie in (0, fs/2 = {fs / 2:g}) and "
                          f"zeta = {zeta!r} in (0, 1)")
-    return signal.lfilter(*_resonance_filter(float(fs), float(fn_hz), float(zeta)), x, axis=-1)
+    return signal.lfilter(*_resonance_filter(float(fs), float(fn_hz), float(zeta),
+                                             float(residue)), x, axis=-1)
 
 
-@lru_cache(maxsize=64)
-def _resonance_filter(fs: float, fn_hz: float, zeta: float) -> tuple[np.ndarray, np.ndarray]:
+@lru_cache(maxsize=256)
+def _resonance_filter(fs: float, fn_hz: float, zeta: float, residue: float
+                      ) -> tuple[np.ndarray, np.ndarray]:
     """The digital filter of :func:`transfer_path` (``scipy.signal.bilinear`` takes a
     millisecond; the loop applies one path to every record of an evaluation)."""
     wn = 2 * fs * math.tan(math.pi * fn_hz / fs)
-    return signal.bilinear([2 * zeta * wn, wn**2], [1.0, 2 * zeta * wn, wn**2], fs)
+    return signal.bilinear([1 - residue, 2 * zeta * wn, wn**2], [1.0, 2 * zeta * wn, wn**2], fs)
 
 
 def add_noise(x: np.ndarray, snr_db: float, rng: np.random.Generator) -> np.ndarray:

@@ -52,6 +52,34 @@ def test_support_agrees_with_the_time_domain_transfer_path_at_the_mode(fn, zeta)
     assert a_freq == pytest.approx(a_time, rel=0.01)
 
 
+@settings(max_examples=30, deadline=None)
+@given(fn=st.floats(500.0, 8000.0), zeta=st.floats(0.01, 0.1), g=st.floats(-1.0, 1.0))
+def test_transfer_path_gain_at_its_mode_follows_the_residue(fn, zeta, g):
+    # by hand: at s = i wn, s^2 / (s^2 + 2 zeta wn s + wn^2) = i / (2 zeta), so
+    # |1 - g s^2 / (...)| = sqrt(1 + g^2 / (4 zeta^2)); the pre-warped bilinear form is exact there
+    f = round(fn * N / FS) * FS / N
+    steady = slice(N // 2, N)
+    peak = np.max(np.abs(transfer_path(tone(f), FS, f, zeta, g)[steady]))
+    assert peak == pytest.approx(math.sqrt(1 + g * g / (4 * zeta * zeta)), rel=0.01)
+
+
+@pytest.mark.parametrize("g", [1.0, 0.0, -0.5])
+def test_transfer_path_passes_the_band_below_its_mode_and_scales_the_band_above_by_one_minus_g(g):
+    fn, zeta = 3000.0, 0.03
+    steady = slice(N // 2, N)
+    low = round(fn / 30 * N / FS) * FS / N
+    assert np.max(np.abs(transfer_path(tone(low), FS, fn, zeta, g)[steady])) == pytest.approx(
+        1.0, abs=0.01)
+    # above the mode, by hand: |1 - g r^2 / (r^2 - 1 - 2 i zeta r)|, r the bilinear transform's
+    # frequency ratio tan(pi f / fs) / tan(pi fn / fs); -> |1 - g| far above
+    high = round(4 * fn * N / FS) * FS / N
+    r = math.tan(math.pi * high / FS) / math.tan(math.pi * fn / FS)
+    by_hand = abs(1 - g * r * r / (r * r - 1 - 2j * zeta * r))
+    out = np.max(np.abs(transfer_path(tone(high), FS, fn, zeta, g)[steady]))
+    assert out == pytest.approx(by_hand, rel=1e-3)
+    assert out == pytest.approx(abs(1 - g), abs=0.06)
+
+
 def test_a_support_far_above_the_band_is_rigid_and_zero_declares_none():
     rng = np.random.default_rng(0)
     x = rng.standard_normal((3, N))
