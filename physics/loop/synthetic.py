@@ -4,9 +4,8 @@
 on at a realistic size (its ``typical`` value times a seeded factor in [0.7, 1.4], within its
 bounds: the transfer path's residue 0.7-1), with the declared nuisance parameters (and the
 declared chain modes) moved off their defaults (each times a seeded factor in [0.6, 1.6]) and
-white measurement noise at ``snr_db``. Records span
-the wear life of one operating case (wear and cycles known), so the loop also has a wear
-estimate to judge.
+white measurement noise at ``snr_db``. Records span the wear life of one operating case (wear
+and cycles known), so the loop also has a wear estimate to judge.
 """
 
 from __future__ import annotations

@@ -103,10 +103,10 @@ def transfer_path(x: np.ndarray, fs: float, fn_hz: float, zeta: float,
     modal constant over the rigid one), discretised by the bilinear transform pre-warped at
     ``fn_hz``, applied along the last axis of ``x``. ``residue`` g = 1 (the default) is the
     base-excited transmissibility ``(2 zeta wn s + wn^2) / (...)`` of a sensor on a
-    sub-structure (Rao, Mechanical Vibrations, 5th ed., 3.6): the path passes the band below
-    the mode, amplifies it ``1 / (2 zeta)`` times at the mode and cuts the band above it;
-    g < 0 is a housing mode in parallel with the rigid path: a peak ``1 + |g| / (2 zeta)``
-    over a band whose level is ``1`` below the mode and ``1 + |g|`` above it."""
+    sub-structure (Rao, Mechanical Vibrations, 5th ed., 3.6): it passes the band below the
+    mode and cuts the band above it; g < 0 is a housing mode in parallel with the rigid path,
+    whose level is ``1`` below the mode and ``1 - g`` above it. At the mode the gain is
+    ``sqrt(1 + g^2 / (4 zeta^2))``, about ``|g| / (2 zeta)``."""
     if not 0 < fn_hz < fs / 2 or not 0 < zeta < 1:
         raise ValueError(f"transfer path fn_hz = {fn_hz!r} must lie in (0, fs/2 = {fs / 2:g}) and "
                          f"zeta = {zeta!r} in (0, 1)")
