@@ -27,12 +27,18 @@ class DataConfig:
     operating_point: bool = True  # speed and torque as inputs (a user knows them)
     inputs: list[str] | None = None  # explicit input columns instead (a user's own table)
     target: str = "root_wear_mm"
-    val_replicates: int = 8  # whole trajectories (case, replicate), never rows of one;
-    test_replicates: int = 8  # per case (the validation ones calibrate the interval)
+    # whole trajectories (case, replicate) per case, never rows of one; the validation ones
+    # calibrate the interval. null: a tenth of each case's trajectories, at least 8
+    val_replicates: int | None = None
+    test_replicates: int = 8
     holdout_case: int | None = None  # a case number: leave that case out (test on it alone)
     batch_size: int = 64
     seed: int = 0
     generate: dict[str, Any] = field(default_factory=dict)  # DatasetSpec values if built
+    #: gearboxes (trajectories) a built dataset simulates, shared by the trained cases and
+    #: never fewer than 64 per case (``data.generate.replicates`` sets the count per case
+    #: instead). 256 for one case: docs/surrogate.md measures 64 against 256 over seeds
+    gearboxes: int = 256
     jobs: int = 2  # parallel processes when the dataset is built
     #: a user's own labelled feature table (CSV or parquet) instead of the physics dataset
     table: str | None = None

@@ -23,7 +23,13 @@ from physics.dataset.generation import (
 from physics.dynamics.model_form import FACTORS
 from physics.params import Dynamics, Scenario, WearSolver
 from surrogate import settings
-from surrogate.data import DEFAULT_INPUTS, split_trajectories
+from surrogate.data import (
+    DEFAULT_INPUTS,
+    load_dataset,
+    replicates_per_case,
+    split_trajectories,
+    validation_count,
+)
 from surrogate.inference import (
     ScaledEnsemble,
     Surrogate,
@@ -131,6 +137,35 @@ def test_split_is_by_trajectory_and_the_scaling_uses_training_rows(dataset):
     assert set(loco["test"].case) == {4} and 4 not in set(loco["train"].case)
     with pytest.raises(ValueError, match="replicates"):
         split_trajectories(df, 2, 2, seed=0)
+
+
+def test_a_built_dataset_holds_enough_gearboxes_and_a_tenth_validates(tmp_path):
+    """The default training set: 256 gearboxes for one case, 64 per case for all five (the
+    floor), an explicit ``data.generate.replicates`` wins; a tenth of a case's trajectories
+    validates (8 at least), and the split takes it when ``val_replicates`` is left null."""
+    assert replicates_per_case(256, 1) == 256 and replicates_per_case(256, 5) == 64
+    assert replicates_per_case(640, 5) == 128 and replicates_per_case(1, 3) == 64
+    assert validation_count(256) == 26 and validation_count(64) == 8
+    cfg = train_cfg(tmp_path, tmp_path / "x.parquet", "case=3", "data.val_replicates=null")
+    dm = instantiate(cfg.data)
+    assert dm.generate["replicates"] == 256 and dm.val_replicates is None
+    cfg = train_cfg(tmp_path, tmp_path / "x.parquet", "case=all", "+data.generate.replicates=4")
+    assert instantiate(cfg.data).generate["replicates"] == 4
+    reps = np.repeat(np.arange(100), 2)
+    df = pd.DataFrame({"case": 3, "replicate": reps, "x": np.arange(200.0)})
+    parts = split_trajectories(df, None, 8, seed=0)
+    assert {k: v.replicate.nunique() for k, v in parts.items()} == {
+        "train": 82, "val": 10, "test": 8}
+
+
+def test_a_dataset_built_with_other_settings_is_named_not_silently_used(dataset, caplog):
+    """A dataset file from other settings (an older default, another case list) is read as it
+    is, with a warning that names what differs and how to rebuild."""
+    with caplog.at_level("WARNING", logger="surrogate.data"):
+        load_dataset(dataset, {"cases": [3, 4], "replicates": 9})
+    text = caplog.text
+    assert "data.replicates: 4 -> 9" in text and "delete it" in text
+    assert "scenario.solver" in text  # the tiny test scenario is not the default physics
 
 
 def test_ensemble_members_differ_and_the_mixture_is_right():
