@@ -24,9 +24,10 @@ shifts the model form too). Test sets:
 
 The estimator (thesis 4.4: cubics of DTE peak-to-peak and kurtosis in cycles and the empirical
 wear law, :class:`physics.estimators.empirical_inverse.EmpiricalInverse`) is fitted on the same
-training trajectories as the network. Columns: RMSE [mm], R2, mean and maximum relative error
-[%], the conformal interval's coverage (surrogate), out-of-range (surrogate) or invalid
-(estimator) flag rate, batch throughput [rows/s] and single-row latency [us] on the CPU. Writes
+training trajectories as the network; so is the null model ``training_median``
+(:func:`typical_wear`). Columns: RMSE [mm], R2, mean and maximum relative error [%], the
+conformal interval's coverage (surrogate), out-of-range (surrogate) or invalid (estimator) flag
+rate, batch throughput [rows/s] and single-row latency [us] on the CPU. Writes
 ``benchmark.csv``, ``parity.png`` and the trained models into ``--out`` (default
 ``logs/benchmark/<time>``).
 """
@@ -86,8 +87,14 @@ def throughput(fn, x: np.ndarray) -> tuple[float, float]:
     return rate, float(np.median(times)) * 1e6
 
 
-def evaluate(name: str, surrogate: Surrogate, est: EmpiricalInverse, test: pd.DataFrame,
-             speed: bool) -> tuple[list[dict], dict]:
+def typical_wear(train: pd.DataFrame) -> float:
+    """The null model: the median root wear of the training rows' worn states, whatever the
+    features say. A network that does not beat it has learnt nothing from vibration."""
+    return float(train.loc[train[TARGET] > 0, TARGET].median())
+
+
+def evaluate(name: str, surrogate: Surrogate, est: EmpiricalInverse, typical: float,
+             test: pd.DataFrame, speed: bool) -> tuple[list[dict], dict]:
     true = test[TARGET].to_numpy()
     pred = surrogate.predict(test[list(surrogate.schema.inputs)])
     e = est.predict(test.dte_peak_to_peak.to_numpy(), test.dte_kurtosis.to_numpy())
@@ -97,7 +104,10 @@ def evaluate(name: str, surrogate: Surrogate, est: EmpiricalInverse, test: pd.Da
              "flag_rate": float(pred.out_of_range.mean())},
             {"scenario": name, "estimator": "empirical_inverse", "test_rows": len(test),
              **wear_errors(e.wear, true), "interval_coverage": np.nan,
-             "flag_rate": float(np.mean(~e.valid))}]
+             "flag_rate": float(np.mean(~e.valid))},
+            {"scenario": name, "estimator": "training_median", "test_rows": len(test),
+             **wear_errors(np.full_like(true, typical), true), "interval_coverage": np.nan,
+             "flag_rate": np.nan}]
     if speed:
         x = np.repeat(test[list(surrogate.schema.inputs)].to_numpy(float),
                       -(-1_000_000 // len(test)), axis=0)[:1_000_000]
@@ -217,7 +227,7 @@ def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5) ->
         dm = instantiate(cfg.data)
         dm.setup()
         surrogate = Surrogate.load(folder / "wear_surrogate.pt")
-        est = fit_estimator(dm.frames["train"])
+        est, typical = fit_estimator(dm.frames["train"]), typical_wear(dm.frames["train"])
         cases = set(dm.cases)
         sets = {"heldout_trajectories" if name[:4] != "loco" else
                 f"heldout_operating_point_{'inside' if name == 'loco2' else 'outside'}":
@@ -233,7 +243,7 @@ def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5) ->
             sets["nuisance_shifted"] = shifted[shifted.case.isin(cases)]
             sets["independent_simulator"] = foreign[foreign.case.isin(cases)]
         for set_name, test in sets.items():
-            r, plot = evaluate(f"{name}/{set_name}", surrogate, est, test,
+            r, plot = evaluate(f"{name}/{set_name}", surrogate, est, typical, test,
                                speed=(name, seed, set_name) == ("case3", 0,
                                                                 "heldout_trajectories"))
             rows += [{**row, "seed": seed} for row in r]
@@ -245,7 +255,8 @@ def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5) ->
                 nets[f"{name}_{label}"], held = finetune(root, out, name, mine, extra, label)
             for label, net in nets.items():
                 r, plots[(label, "independent_fleet_heldout")] = evaluate(
-                    f"{label}/independent_fleet_heldout", net, est, held, speed=False)
+                    f"{label}/independent_fleet_heldout", net, est, typical, held,
+                    speed=False)
                 rows += [{**row, "seed": seed} for row in r]
     table = pd.DataFrame(rows)
     atomic_write(out / "benchmark.csv", lambda p: table.to_csv(p, index=False))
