@@ -394,3 +394,18 @@ def test_the_benchmarks_fleet_is_labelled_gearboxes_that_differ():
     new = fleet[fleet.root_wear_mm == 0].groupby("gearbox").dte_peak_to_peak.mean()
     assert abs(new[0] / new[1] - 1) > 0.01
     assert np.isfinite(fleet.drop(columns="cycles").to_numpy(float)).all()
+
+
+def test_the_benchmark_summarises_seeds_and_scores_a_null_model():
+    """Over training seeds: the mean and the worst error and the smallest coverage per model,
+    test set and estimator; the null model is the median of the worn training rows."""
+    from surrogate.benchmark import seed_summary, typical_wear
+
+    rows = pd.DataFrame({"scenario": ["case3/x"] * 4, "estimator": ["surrogate"] * 2 + ["null"] * 2,
+                         "seed": [0, 1, 0, 1], "mean_relative_error_pct": [2.0, 6.0, 14.0, 15.0],
+                         "interval_coverage": [0.9, 0.8, np.nan, np.nan]})
+    out = seed_summary(rows)
+    assert out.loc[("case3/x", "surrogate")].tolist() == [2, 4.0, 6.0, 0.8]
+    assert out.loc[("case3/x", "null"), "mre_max"] == 15.0
+    train = pd.DataFrame({"root_wear_mm": [0.0, 0.0, 0.01, 0.02, 0.04]})
+    assert typical_wear(train) == 0.02  # the unworn rows do not pull it to zero
