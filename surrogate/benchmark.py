@@ -289,10 +289,10 @@ def seed_summary(table: pd.DataFrame) -> pd.DataFrame:
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m surrogate.benchmark",
                                      description=__doc__.split("\n\n")[0],
-                                     epilog="Takes about 15 minutes on 2 cores the first time "
-                                            "(the case-3, all-case and shifted datasets are "
-                                            "generated once into data/; 6 trainings and 4 "
-                                            "fine-tunes).")
+                                     epilog="Takes about 17 minutes on 2 cores the first time "
+                                            "(the case-3, all-case, model-form and shifted "
+                                            "datasets are generated once into data/), 5 "
+                                            "minutes after (10 trainings and 4 fine-tunes).")
     parser.add_argument("--out", type=Path, default=None,
                         help="output folder (default: logs/benchmark/<time>)")
     parser.add_argument("--seeds", type=int, default=5,
