@@ -244,11 +244,9 @@ class WearDataModule(L.LightningDataModule):
         self.schema: FeatureSchema | None = None
         self.frames: dict[str, pd.DataFrame] = {}
 
-    def prepare_data(self) -> None:
-        if self.table is None:
-            load_dataset(self.dataset, self.generate, self.jobs)
-
     def setup(self, stage: str | None = None) -> None:
+        """Read (building it if missing) and split the data, once: Lightning calls this at
+        every stage, and a single process needs no separate ``prepare_data``."""
         if self.schema is not None:
             return
         df = self.table if self.table is not None else load_dataset(

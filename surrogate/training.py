@@ -83,7 +83,6 @@ def fit(job: TrainJob) -> float:
     L.seed_everything(cfg.seed, workers=True)
     if cfg.get("threads"):
         torch.set_num_threads(int(cfg.threads))
-    dm.prepare_data()
     dm.setup()
     if job.init is None:
         model = instantiate(cfg.model, n_inputs=len(dm.inputs), schema=dm.schema.to_dict(),
