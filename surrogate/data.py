@@ -10,7 +10,7 @@ the training rows only and travels with the model in its :class:`~surrogate.sche
 A dataset built here simulates :func:`replicates_per_case` gearboxes per trained case: what a
 network learns about gearboxes it was not trained on is set by how many it was trained on
 (docs/surrogate.md: with 48 training gearboxes of case 3 the error on a shifted gearbox ranged
-from 3 to 18 % over training seeds, with 218 from 1.5 to 3.3 %).
+from 3 to 18 % over training seeds, with 219 from 1.5 to 4.9 %).
 """
 
 from __future__ import annotations
