@@ -24,7 +24,8 @@ R_GAS = 8.314462618  # J/(mol K), CODATA 2018 molar gas constant
 
 class OutOfScope(ValueError):
     """A run left the model's scope on its own (a tooth worn through, the mixed-EHL table's
-    range exceeded by the worn profile): the physics has stopped, not the code. Scenarios that
+    range exceeded by the worn profile, a worn flank past the shakedown limit): the physics has
+    stopped, not the code. Scenarios that
     are out of scope from the start are refused before any work (:mod:`physics.scope`)."""
 
 

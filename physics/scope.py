@@ -14,6 +14,11 @@ periods to give features at all.
   rule of ``shared/specs/measured-bundle.md``), i.e. ``f_s >= 12 f_mesh``.
 - Record length (:func:`check_record`, for the apps that take features of the records): at
   least 10 mesh periods.
+- Worn flanks (:func:`shakedown_pressure`, checked at every profile update of the wear
+  integration): a worn profile that concentrates the load until the largest Hertz pressure on
+  the flank passes the elastic shakedown limit of rolling line contact deforms the surface
+  plastically at every cycle; neither Hertz nor mild Archard wear applies, and the run leaves
+  the scope (:class:`physics.params.OutOfScope`), as a tooth worn through does.
 """
 
 from __future__ import annotations
@@ -35,6 +40,16 @@ STATIC_CONTACT_LIMIT = 1.6 * 1500e6
 SAMPLES_PER_MESH = 12.0
 #: least mesh periods in a simulated record
 MESH_PERIODS = 10
+
+
+def shakedown_pressure(hardness: float) -> float:
+    """Largest Hertz pressure [Pa] at which rolling line contact still shakes down elastically,
+    for an indentation hardness ``hardness`` [Pa]: ``p0 = 4 k`` (Johnson, Contact Mechanics,
+    1985, section 9.2: free rolling, kinematic hardening), with the shear yield stress
+    ``k = Y / sqrt(3)`` (von Mises) and the yield stress ``Y = H / 3`` (Tabor, The Hardness of
+    Metals, 1951), so ``4 H / (3 sqrt(3)) = 0.77 H``: 5.4 GPa for the 7 GPa case of
+    :class:`physics.params.Material`."""
+    return 4.0 * hardness / (3.0 * math.sqrt(3.0))
 
 
 def pitch_point_pressure(scn: Scenario) -> float:

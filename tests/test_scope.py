@@ -18,6 +18,7 @@ from physics.scope import (
     check_scope,
     mesh_frequency_hz,
     pitch_point_pressure,
+    shakedown_pressure,
 )
 
 
@@ -75,3 +76,13 @@ def test_numpy_scalars_are_accepted():
     scn = Scenario(operating=Operating(n1_rpm=np.int64(2000), torque_Nm=np.float32(300.0)))
     assert check_scope(scn).operating.n1_rpm == 2000.0
     assert type(scn.operating.n1_rpm) is float
+
+
+@given(st.floats(1e9, 2e10))
+def test_shakedown_limit_is_four_shear_yields_by_hand(hardness):
+    """p0 = 4 k with k = Y / sqrt(3) and Y = H / 3 (Johnson 1985, 9.2; Tabor 1951): 0.770 H,
+    5.39 GPa for 7 GPa; always above the 2.4 GPa static capacity the scenario is held to."""
+    y = hardness / 3.0
+    assert shakedown_pressure(hardness) == pytest.approx(4.0 * y / math.sqrt(3.0), rel=1e-12)
+    assert shakedown_pressure(7e9) == pytest.approx(5.389e9, rel=1e-3)
+    assert shakedown_pressure(7e9) > STATIC_CONTACT_LIMIT

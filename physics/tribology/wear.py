@@ -33,8 +33,8 @@ from physics.gear import kinematics
 from physics.gear.geometry import MeshGeometry, mesh_geometry
 from physics.gear.load_sharing import PairStiffness, pair_loads
 from physics.gear.stiffness import MeshStiffness
-from physics.params import R_GAS, Lubricant, Scenario
-from physics.scope import check_scope
+from physics.params import R_GAS, Lubricant, OutOfScope, Scenario
+from physics.scope import check_scope, shakedown_pressure
 from physics.tribology.asperity_table import check_scenario
 from physics.tribology.contact_state import ContactState, solve_contact_state
 
@@ -135,6 +135,19 @@ class WearResult:
         return float(np.trapezoid(getattr(self, side), self.s))
 
 
+def check_shakedown(state: ContactState, limit: float, w1: np.ndarray, w2: np.ndarray,
+                    cycles: float) -> None:
+    """Raise :class:`OutOfScope` when the largest Hertz pressure on the current (worn) flanks
+    passes the shakedown ``limit`` [Pa] (:func:`physics.scope.shakedown_pressure`)."""
+    p, deepest = float(np.nanmax(state.p_max)), max(w1.max(), w2.max()) * 1e6
+    if p > limit:
+        raise OutOfScope(
+            f"after {cycles:.3g} cycles the worn flanks (deepest wear {deepest:.0f} um) carry a "
+            f"Hertz pressure of {p / 1e9:.2f} GPa, above the {limit / 1e9:.2f} GPa "
+            "shakedown limit of rolling contact: the flank would yield at every cycle; the wear "
+            "model is outside its scope")
+
+
 def quasi_static_force(scn: Scenario, geom: MeshGeometry) -> float:
     """Static normal mesh force ``F_n = T_2 / r_b2`` [N] (thesis 2.2)."""
     return scn.operating.torque_Nm / geom.rb2
@@ -191,6 +204,7 @@ def simulate_wear(
                 "give one force per grid point, finite and >= 0 [N]")
         rate = wear_rate(scn, geom, s, w1, w2, f, stiffness(s, w1, w2))
         first = first or rate
+        check_shakedown(rate.state, shakedown_pressure(scn.material.hardness), w1, w2, done)
         if done >= cycles:
             break
         peak = max(rate.pinion.max(), rate.gear.max())

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import types
 
 import numpy as np
 import pytest
@@ -12,8 +13,16 @@ from hypothesis import strategies as st
 
 from physics.gear.load_sharing import pair_loads
 from physics.gear.stiffness import iso6336_single_pair_stiffness
-from physics.params import GearPair, Lubricant, Operating, Scenario, Tribology, WearSolver
-from physics.tribology.wear import film_deficiency, simulate_wear
+from physics.params import (
+    GearPair,
+    Lubricant,
+    Operating,
+    OutOfScope,
+    Scenario,
+    Tribology,
+    WearSolver,
+)
+from physics.tribology.wear import check_shakedown, film_deficiency, simulate_wear
 
 CYCLES = 1e6
 
@@ -255,3 +264,25 @@ def test_bad_cycles_refused(baseline):
             simulate_wear(baseline, bad)
     with pytest.raises(ValueError, match="snapshots"):
         simulate_wear(baseline, 10.0, snapshots=[20.0])
+
+
+def test_a_flank_past_the_shakedown_limit_leaves_the_scope():
+    """The check itself: silent at the limit, out of scope above it, naming the pressure, the
+    limit and the deepest wear."""
+    w = np.array([0.0, 40e-6])
+    check_shakedown(types.SimpleNamespace(p_max=np.array([np.nan, 2e9, 5e9])), 5e9, w, w, 1e6)
+    with pytest.raises(OutOfScope, match=r"40 um\) carry a Hertz pressure of 5.10 GPa, above "
+                                         r"the 5.00 GPa shakedown limit"):
+        check_shakedown(types.SimpleNamespace(p_max=np.array([2e9, 5.1e9])), 5e9, w, w, 1e6)
+
+
+def test_a_runaway_gearbox_stops_at_the_shakedown_limit_not_at_its_centre_line():
+    """Replicate 136 of the 256 case-3 gearboxes (high torque and wear coefficient, low
+    damping) wears its pinion root at an accelerating rate; the worn groove's Hertz pressure
+    passes 5.4 GPa at about 90 um of wear (it would have been followed to 1.6 mm, 31 s)."""
+    from physics.dataset.generation import DatasetSpec, run_unit
+
+    with pytest.raises(OutOfScope, match="shakedown limit") as err:
+        run_unit(Scenario(), DatasetSpec(cases=(3,), replicates=256), 3, 136)
+    deepest = float(str(err.value).split("deepest wear ")[1].split(" um")[0])
+    assert 20 < deepest < 200
