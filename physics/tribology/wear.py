@@ -190,6 +190,7 @@ def simulate_wear(
         stiffness = MeshStiffness(scn.gear, scn.material).pair_function
 
     step = scn.solver.update_um * 1e-6
+    limit = shakedown_pressure(scn.material.hardness)
     w1, w2 = np.zeros_like(s), np.zeros_like(s)
     done, blocks, taken = 0.0, 0, {}
     pending = list(marks)
@@ -204,7 +205,7 @@ def simulate_wear(
                 "give one force per grid point, finite and >= 0 [N]")
         rate = wear_rate(scn, geom, s, w1, w2, f, stiffness(s, w1, w2))
         first = first or rate
-        check_shakedown(rate.state, shakedown_pressure(scn.material.hardness), w1, w2, done)
+        check_shakedown(rate.state, limit, w1, w2, done)
         if done >= cycles:
             break
         peak = max(rate.pinion.max(), rate.gear.max())
