@@ -25,8 +25,8 @@ R_GAS = 8.314462618  # J/(mol K), CODATA 2018 molar gas constant
 class OutOfScope(ValueError):
     """A run left the model's scope on its own (a tooth worn through, the mixed-EHL table's
     range exceeded by the worn profile, a worn flank past the shakedown limit): the physics has
-    stopped, not the code. Scenarios that
-    are out of scope from the start are refused before any work (:mod:`physics.scope`)."""
+    stopped, not the code. Scenarios that are out of scope from the start are refused before
+    any work (:mod:`physics.scope`)."""
 
 
 def bounded(default: Any, lo: float, hi: float, hint: str = "", *, closed: bool = False,
