@@ -24,7 +24,6 @@ from pathlib import Path
 import lightning as L
 import numpy as np
 import pandas as pd
-import pyarrow.parquet as pq
 import torch
 from torch.utils.data import DataLoader, TensorDataset
 
@@ -100,12 +99,11 @@ def stale_dataset(path: Path, job: DatasetJob) -> str | None:
     """What differs between the dataset at ``path`` and the one ``job`` would build (its
     sidecar's settings against the job's), or None when it is that dataset or has no sidecar
     of ours to compare."""
-    meta = pq.read_schema(path).metadata or {}
-    built = meta.get(b"gearwear_hash", b"").decode()
     sidecar = path.with_suffix(".json")
-    if not built or built == job.digest or not sidecar.is_file():
+    side = json.loads(sidecar.read_text()) if sidecar.is_file() else {}
+    if side.get("hash") in (None, job.digest):
         return None
-    have = json.loads(sidecar.read_text()).get("config", {})
+    have = side.get("config", {})
     want = json.loads(json.dumps({"scenario": dataclasses.asdict(job.base),
                                   "data": dataclasses.asdict(job.spec)}, default=str))
     diff = [f"{part}.{k}: {have.get(part, {}).get(k)!r} -> {v!r}"
