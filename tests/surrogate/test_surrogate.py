@@ -24,6 +24,7 @@ from physics.dynamics.model_form import FACTORS
 from physics.params import Dynamics, Scenario, WearSolver
 from surrogate import settings
 from surrogate.data import (
+    BUILD_CHUNKS,
     DEFAULT_INPUTS,
     load_dataset,
     replicates_per_case,
@@ -150,7 +151,11 @@ def test_a_built_dataset_holds_enough_gearboxes_and_a_tenth_validates(tmp_path):
     dm = instantiate(cfg.data)
     assert dm.generate["replicates"] == 256 and dm.val_replicates is None
     cfg = train_cfg(tmp_path, tmp_path / "x.parquet", "case=all", "+data.generate.replicates=4")
-    assert instantiate(cfg.data).generate["replicates"] == 4
+    small = instantiate(cfg.data).generate
+    assert small["replicates"] == 4 and small["chunks"] == 20  # one chunk per trajectory
+    assert dm.generate["chunks"] == BUILD_CHUNKS  # many chunks: both processes busy to the end
+    cfg = train_cfg(tmp_path, tmp_path / "x.parquet", "case=3", "+data.generate.chunks=3")
+    assert instantiate(cfg.data).generate["chunks"] == 3  # a user's count wins
     reps = np.repeat(np.arange(100), 2)
     df = pd.DataFrame({"case": 3, "replicate": reps, "x": np.arange(200.0)})
     parts = split_trajectories(df, None, 8, seed=0)
