@@ -944,20 +944,27 @@ def discrepancy_allowance(k: int, n_candidates: int, rate: float) -> float:
 
 
 def signature_gain(rec: Records, idx: np.ndarray, before: list[np.ndarray],
-                   after: list[np.ndarray]) -> tuple[dict[str, float], float, float]:
+                   after: list[np.ndarray], quantities: tuple[str, ...]
+                   ) -> tuple[dict[str, float], float, float]:
     """Where a candidate's own signature lives and what it explains there, on records ``idx``.
 
     Its entries in a group: those where the model's signature moves with the candidate by
     more than the entry's noise scatter (mean over the group's records; measured data do not
-    enter this choice). Returns, per group where it has entries, the mean over the records of
-    the drop of the standardised sum of squares (noise and discrepancy) over those entries,
-    and the RMS residual there in units of the noise alone, before and after (all groups
-    pooled; the effect-size guard of the null test, in the unit of the report's headline).
+    enter this choice). Only groups of the ``quantities`` the candidate can show in count: in
+    the others (the DTE records of a bundle, for a transfer path to the accelerometer) only
+    the nuisance refitted with it moves the signature, and a measurement-chain effect would
+    otherwise be judged where it cannot act. Returns, per group where it has entries, the mean
+    over the records of the drop of the standardised sum of squares (noise and discrepancy)
+    over those entries, and the RMS residual there in units of the noise alone, before and
+    after (all groups pooled; the effect-size guard of the null test, in the unit of the
+    report's headline).
     """
     res_b, res_a = residuals_db(rec, idx, before), residuals_db(rec, idx, after)
     explained, e_b, e_a = {}, [], []
     for k, mine in by_group(rec, idx).items():
         g = rec.groups[k]
+        if g.key[2] not in quantities:
+            continue
         own = np.mean([np.abs(res_b[j] - res_a[j]) for j in mine], axis=0) > g.entry_sd
         if not own.any():
             continue
@@ -1317,8 +1324,8 @@ def attribute(rec: Records, judged: Records, declared: Effect | None, declared_v
         c.separable = separable_share(directions, with_c - without)
         test = model_signals(rec, rec.test, c.nuisance, effects[c.name], c.values)
         c.heldout = rms(residuals(judged, rec.test, test))
-        c.explained, c.own_before, c.own_after = signature_gain(judged, rec.test, base_test,
-                                                                test)
+        c.explained, c.own_before, c.own_after = signature_gain(
+            judged, rec.test, base_test, test, effects[c.name].quantities)
         c.bic = bic(c.train_rss, n_train, c.n_params)
         log.info("%s %s: held-out %.2f (baseline %.2f), own entries %.2f -> %.2f, explained "
                  "%s, dBIC %.1f, separable %.2f%s", c.name, c.option, c.heldout, before,

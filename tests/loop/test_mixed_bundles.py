@@ -38,6 +38,7 @@ from physics.loop.bundle_loop import (
     rms,
     run_loop,
     second_candidates,
+    signature_gain,
     split_records,
     stacked,
     wear_check,
@@ -123,6 +124,24 @@ def test_one_calibration_shares_the_physical_parameters(mixed):
     gained = model_signals(rec, every, nuisance, EFFECTS["sensor"], {"gain": 2.0})
     for i in every:
         assert np.array_equal(gained[i], base[i]) == acc[i]
+
+
+def test_a_candidate_is_judged_only_where_it_can_show(mixed):
+    """A transfer path reaches the accelerometer only: refitted with the damping, it also moves
+    the DTE records' signature, but what it explains is judged in the acceleration groups
+    alone (else one DTE group where it does nothing would veto it in every mixed bundle)."""
+    rec, nuisance = mixed
+    path = EFFECTS["transfer_path"]
+    before = model_signals(rec, rec.test, nuisance, None, {})
+    after = model_signals(rec, rec.test, nuisance | {"damping_ratio": 2 * nuisance[
+        "damping_ratio"]}, path, path.defaults())
+    label = {g.label: g.key[2] for g in rec.groups}
+    everywhere, _, _ = signature_gain(rec, rec.test, before, after, ("dte_m", "accel_m_s2"))
+    assert {label[k] for k in everywhere} == {"dte_m", "accel_m_s2"}  # the damping moved both
+    own, e_before, e_after = signature_gain(rec, rec.test, before, after, path.quantities)
+    assert {label[k] for k in own} == {"accel_m_s2"}
+    assert own == {k: v for k, v in everywhere.items() if label[k] == "accel_m_s2"}
+    assert np.isfinite(e_before) and np.isfinite(e_after)
 
 
 def test_discrepancy_brings_a_mismatched_bundle_towards_one(mixed):
