@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import subprocess
 import sys
 from pathlib import Path
@@ -29,6 +30,7 @@ from surrogate.data import (
     load_dataset,
     replicates_per_case,
     split_trajectories,
+    stale_dataset,
     validation_count,
 )
 from surrogate.inference import (
@@ -171,6 +173,14 @@ def test_a_dataset_built_with_other_settings_is_named_not_silently_used(dataset,
     text = caplog.text
     assert "data.replicates: 4 -> 9" in text and "delete it" in text
     assert "scenario.solver" in text  # the tiny test scenario is not the default physics
+    # the same rows cut into other chunks (the training build's count) are the same dataset
+    for chunks in (1, 2):
+        job = plan_dataset(TINY_BASE, dataclasses.replace(TINY, chunks=chunks), dataset.parent,
+                           dataset.stem, progress=False)
+        assert stale_dataset(dataset, job) is None
+    job = plan_dataset(TINY_BASE, dataclasses.replace(TINY, replicates=5), dataset.parent,
+                       dataset.stem, progress=False)
+    assert "data.replicates: 4 -> 5" in stale_dataset(dataset, job)
 
 
 def test_ensemble_members_differ_and_the_mixture_is_right():
