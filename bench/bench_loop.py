@@ -1,7 +1,7 @@
 """Confusion matrix and timing of the measured-data loop on bundles with an undeclared effect.
 
     python bench/bench_loop.py [--generator own|independent] [--seeds 3] [--null-seeds 6]
-                               [--records 12] [--jobs 2] [--model-form] [--out DIR]
+                               [--records 12] [--jobs 2] [--model-form] [--both] [--out DIR]
 
 For every effect of the library (acceleration bundles; ``sensor``, which only DTE records show,
 on DTE bundles) and for bundles without any effect (of both quantities: what a clean bundle of
@@ -22,6 +22,10 @@ round's best candidate with the null test's figures on it) and ``loop_confusion.
 ``reports/<generator>_<effect>_<seed>_<quantity>/`` (every candidate's figures), plus the
 rates the issue asks for: right effect named, held-out error at least halved, nothing added on
 clean bundles.
+``--both`` (independent generator): every bundle holds the DTE and the housing acceleration of
+each operating point and wear state, as a rig with shaft encoders and an accelerometer records
+them; what one sensor's records cannot tell apart (a DTE gain from the stiffness level, a
+transfer-path mode from the mesh) the other's may.
 Also times one bundle alone (:func:`solo_timing`); the per-bundle seconds of the table are
 those of ``--jobs`` bundles sharing the machine.
 """
@@ -68,13 +72,18 @@ def base_scenario(generator: str = "own"):
         "support_hz": support, "mount_hz": pair.mount_frequency_hz}})
 
 
-def one(job: tuple[str, str | None, int, int, bool, str, str, str]) -> dict:
-    generator, name, seed, records, model_form, tmp, quantity, out = job
+#: the quantities of a bundle with both sensors (``--both``), and its label
+BOTH = ("dte_m", "accel_m_s2")
+
+
+def one(job: tuple[str, str | None, int, int, bool, str, tuple[str, ...], str]) -> dict:
+    generator, name, seed, records, model_form, tmp, quantities, out = job
     base = base_scenario(generator)
+    quantity = "both" if quantities == BOTH else quantities[0]
     label = f"{generator}_{name or 'none'}_{seed}_{quantity}"
     folder = Path(tmp) / label
     if generator == "independent":
-        path, truth = make_independent_bundle(folder, name, quantities=(quantity,), seed=seed)
+        path, truth = make_independent_bundle(folder, name, quantities=quantities, seed=seed)
     else:
         path, truth = make_bundle(folder, base, name, seed, quantity=quantity, records=records)
     t = time.perf_counter()
@@ -141,19 +150,30 @@ def main() -> None:
     ap.add_argument("--jobs", type=int, default=2, help="bundles analysed in parallel")
     ap.add_argument("--model-form", action="store_true",
                     help="calibrate the declared model's form uncertainty (loop.model_form=true)")
+    ap.add_argument("--both", action="store_true",
+                    help="independent generator: DTE and acceleration records in every bundle")
     ap.add_argument("--out", default="bench_loop_out",
                     help="folder for the CSV files and the reports")
     args = ap.parse_args()
+    if args.both and args.generator != "independent":
+        ap.error("--both needs --generator independent (the own generator writes one quantity "
+                 "per bundle)")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:
         solo_timing(args.generator, args.model_form, Path(tmp))
         names = EFFECTS if args.generator == "own" else EFFECT_NAMES
-        jobs = [(args.generator, n, s, args.records, args.model_form, tmp,
-                 "dte_m" if n == "sensor" else "accel_m_s2", str(out))
-                for n in names for s in range(args.seeds)]
+        def sensors(name: str | None) -> list[tuple[str, ...]]:
+            if args.both:
+                return [BOTH]
+            if name is None:  # clean bundles of each quantity
+                return [("accel_m_s2",), ("dte_m",)]
+            return [("dte_m",) if name == "sensor" else ("accel_m_s2",)]
+
+        jobs = [(args.generator, n, s, args.records, args.model_form, tmp, q, str(out))
+                for n in names for s in range(args.seeds) for q in sensors(n)]
         jobs += [(args.generator, None, 100 + s, args.records, args.model_form, tmp, q, str(out))
-                 for s in range(args.null_seeds) for q in ("accel_m_s2", "dte_m")]
+                 for s in range(args.null_seeds) for q in sensors(None)]
         spawn = multiprocessing.get_context("spawn")  # numba's OpenMP threads do not survive fork
         with ProcessPoolExecutor(args.jobs, mp_context=spawn) as pool:
             rows = list(pool.map(one, jobs))
