@@ -116,7 +116,7 @@ def stale_dataset(path: Path, job: DatasetJob) -> str | None:
         return None
     have = side.get("config", {})
     want = json.loads(json.dumps({"scenario": dataclasses.asdict(job.base),
-                                  "data": dataclasses.asdict(job.spec)}, default=str))
+                                  "data": dataclasses.asdict(spec)}, default=str))
     diff = [f"{part}.{k}: {have.get(part, {}).get(k)!r} -> {v!r}"
             for part in ("data", "scenario") for k, v in want[part].items()
             if have.get(part, {}).get(k) != v]
@@ -243,10 +243,9 @@ class WearDataModule(L.LightningDataModule):
         spec = {"cases": self.cases,
                 "replicates": replicates_per_case(int(gearboxes), len(self.cases)),
                 **dict(generate or {})}
-        reps = spec["replicates"]
-        if isinstance(reps, int) and not isinstance(reps, bool) and reps > 0:
-            # a user's chunks win; a bad replicates is refused by the dataset spec below
-            spec = {"chunks": min(BUILD_CHUNKS, len(spec["cases"]) * reps), **spec}
+        if "chunks" not in spec:  # a user's count wins; the spec's checks come first
+            units = spec_from_config(spec | {"chunks": 1}).units
+            spec["chunks"] = min(BUILD_CHUNKS, units)
         self.generate = spec
         self.table = None
         if table is not None:  # a user's own data: read and checked now, before any work

@@ -63,15 +63,16 @@ its run folder.
    candidate that soaks up form error across the spectrum can rank first and fail it while the
    effect in the data passes); a candidate passes only if it lowers the held-out error there (in
    units of the noise) by at least ``min_gain`` (20 %), its BIC by at least ``min_delta_bic``
-   (10, "very strong" on Kass & Raftery's scale), and, in every group where it shows, removes
-   more standardised sum of squares per held-out record than the discrepancy lets a candidate of
-   its size absorb by chance (:func:`discrepancy_allowance`). The records' wear takes no part in
-   this decision: an adopted effect **reads the wear** (item 6) only if, where the train
-   records' wear is known, it does not lower the model-based wear estimate's leave-one-out
-   skill on them by more than ``max_wear_loss`` (0.1: its mean absolute error may grow by a
-   tenth of the constant guess's; :func:`wear_check`); else the model before it keeps reading
-   it. The held-out records' wear is only scored, before and after, never used to decide (a
-   decision on it would leave the held-out score no longer held out). The rule is designed
+   (10, "very strong" on Kass & Raftery's scale), and, in every group where it shows (of the
+   quantities it can act on), removes more standardised sum of squares per held-out record than
+   the discrepancy lets a candidate of its size absorb by chance
+   (:func:`discrepancy_allowance`). The records' wear takes no part in this decision: an adopted
+   effect **reads the wear** (item 6) only if, where the train records' wear is known, it does
+   not lower the model-based wear estimate's leave-one-out skill on them by more than
+   ``max_wear_loss`` (0.1: its mean absolute error may grow by a tenth of the constant guess's;
+   :func:`wear_check`); else the model before it keeps reading it. The held-out records' wear is
+   only scored, before and after, never used to decide (a decision on it would leave the
+   held-out score no longer held out). The rule is designed
    for a false-add rate of ``false_add_rate`` (1 %) per bundle when the declared model's form
    error is unstructured (no effect of the library resembles it); a form error that looks like
    an effect is not separable from it by any rule on these data. Each candidate's
@@ -956,7 +957,7 @@ def signature_gain(rec: Records, idx: np.ndarray, before: list[np.ndarray],
     otherwise be judged where it cannot act. Returns, per group where it has entries, the mean
     over the records of the drop of the standardised sum of squares (noise and discrepancy)
     over those entries, and the RMS residual there in units of the noise alone, before and
-    after (all groups pooled; the effect-size guard of the null test, in the unit of the
+    after (its groups pooled; the effect-size guard of the null test, in the unit of the
     report's headline).
     """
     res_b, res_a = residuals_db(rec, idx, before), residuals_db(rec, idx, after)
@@ -1325,7 +1326,7 @@ def attribute(rec: Records, judged: Records, declared: Effect | None, declared_v
         test = model_signals(rec, rec.test, c.nuisance, effects[c.name], c.values)
         c.heldout = rms(residuals(judged, rec.test, test))
         c.explained, c.own_before, c.own_after = signature_gain(
-            judged, rec.test, base_test, test, effects[c.name].quantities)
+            judged, rec.test, base_test, test, effects[c.name].judged_in())
         c.bic = bic(c.train_rss, n_train, c.n_params)
         log.info("%s %s: held-out %.2f (baseline %.2f), own entries %.2f -> %.2f, explained "
                  "%s, dBIC %.1f, separable %.2f%s", c.name, c.option, c.heldout, before,
@@ -1391,6 +1392,7 @@ def stacked(first: Effect, values: dict, second: Effect) -> Effect:
     dynamic = first.model is not None or second.model is not None
     return dataclasses.replace(second, name=f"{first.name}+{second.name}",
                                quantities=tuple(dict.fromkeys(quantities)),
+                               shows_in=second.quantities,
                                model=model if dynamic else None,
                                record=record if staged else None)
 

@@ -79,6 +79,14 @@ class Effect:
     quantities: tuple[str, ...] = ("dte_m", "accel_m_s2")  # records it can show in
     model: Callable[[PairModel, dict], PairModel] | None = None
     record: Callable[[np.ndarray, float, dict], np.ndarray] | None = None
+    #: a stacked candidate of the second round: where its added effect shows, which may be
+    #: wider than ``quantities`` (there the records that the first effect's measurement stage
+    #: acts on)
+    shows_in: tuple[str, ...] = ()
+
+    def judged_in(self) -> tuple[str, ...]:
+        """The quantities whose records can show this candidate's own change."""
+        return self.shows_in or self.quantities
 
     def defaults(self) -> dict:
         return {p.name: p.typical for p in self.params} | dict(self.options[0])

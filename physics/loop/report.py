@@ -29,12 +29,13 @@ def null_test(heldout: float, null_heldout: float, delta_bic: float, min_gain: f
     ``min_gain``; ``delta_bic``, at most ``-min_delta_bic``; and, where the loop measures it,
     ``explained``, more than ``allowed``.
 
-    The bundle loop passes the held-out errors in the candidate's own signature entries (in
-    units of the noise), as ``explained`` the smallest over the groups (operating points and
-    quantities) of the sum of squares (standardised by noise and model discrepancy) it removes
-    per held-out record there, and as ``allowed`` what the discrepancy lets a candidate of its
-    size absorb by chance (:func:`physics.loop.bundle_loop.discrepancy_allowance`). The
-    feature-table loop judges the features as a whole and leaves the last condition out."""
+    The bundle loop passes the held-out errors in the candidate's own signature entries (in units of
+    the noise), as ``explained`` the smallest over the groups (operating points and quantities; of
+    the quantities the candidate can act on) of the sum of squares (standardised by noise and model
+    discrepancy) it removes per held-out record there, and as ``allowed`` what the discrepancy lets
+    a candidate of its size absorb by chance
+    (:func:`physics.loop.bundle_loop.discrepancy_allowance`). The feature-table loop judges the
+    features as a whole and leaves the last condition out."""
     gain = 1.0 - heldout / null_heldout if null_heldout > 0 else math.nan
     checks = {"gain": {"value": gain, "bound": min_gain,
                        "holds": bool(heldout <= (1 - min_gain) * null_heldout)},
@@ -186,7 +187,8 @@ def markdown(r: dict) -> str:
               f"and the BIC by at least {rule['min_delta_bic']:g}"]
     if "allowed" in rule:
         lines[-1] += (f", and explains more than {rule['allowed']:.1f} (standardised sum of "
-                      f"squares per held-out record, in every group), what the discrepancy "
+                      f"squares per held-out record, in every group of the quantities it acts "
+                      f"on), what the discrepancy "
                       f"allows at a false-add rate of {rule['false_add_rate']:.0%}")
     lines[-1] += "."
     if "max_wear_loss" in rule:

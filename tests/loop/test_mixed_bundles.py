@@ -345,6 +345,14 @@ def test_second_round_stacks_on_the_first_effect(scn):
     path = {"fn_hz": 3000.0, "zeta": 0.05}
     with pytest.raises(ValueError, match="not stacked"):
         stacked(EFFECTS["transfer_path"], path, EFFECTS["sensor"])
+    # a run-out on an adopted transfer path: the path's stage acts on the acceleration only,
+    # the run-out is judged wherever it shows (both quantities); the other way round, the
+    # added path is judged on the acceleration alone
+    runout = stacked(EFFECTS["transfer_path"], path, EFFECTS["gear_runout"])
+    assert runout.quantities == ("accel_m_s2",)
+    assert runout.judged_in() == EFFECTS["gear_runout"].quantities == ("dte_m", "accel_m_s2")
+    assert stacked(EFFECTS["gear_runout"], {"runout_um": 20.0},
+                   EFFECTS["transfer_path"]).judged_in() == ("accel_m_s2",)
     names = [e.name for e, _ in second_candidates(
         EFFECTS["transfer_path"], path, [(e, {}) for e in EFFECTS.values()])]
     assert "transfer_path+friction" in names and "transfer_path+sensor" not in names
@@ -381,6 +389,8 @@ def test_clean_mixed_independent_bundle_gets_no_effect(tmp_path, mixed, scn):
                                                 "sensor"))
     report = run_loop(rec.bundle, scn, settings)
     assert report["chosen_effect"] is None
+    path = next(c for c in report["ranking"] if c["effect"] == "transfer_path")
+    assert path["explained"] and all("accel_m_s2" in g for g in path["explained"])
     groups = report["groups"]
     assert len(groups) == 4 and all(g["error_before"] is not None for g in groups.values())
     assert report["error_before"] > 3 * report["error_before_with_discrepancy"]

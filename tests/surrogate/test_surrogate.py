@@ -158,6 +158,9 @@ def test_a_built_dataset_holds_enough_gearboxes_and_a_tenth_validates(tmp_path):
     assert dm.generate["chunks"] == BUILD_CHUNKS  # many chunks: both processes busy to the end
     cfg = train_cfg(tmp_path, tmp_path / "x.parquet", "case=3", "+data.generate.chunks=3")
     assert instantiate(cfg.data).generate["chunks"] == 3  # a user's count wins
+    cfg = train_cfg(tmp_path, tmp_path / "x.parquet", "case=3", "+data.generate.replicates=0")
+    with pytest.raises(Exception, match=r"data\.replicates = 0 must"):  # not a chunks error
+        instantiate(cfg.data)
     reps = np.repeat(np.arange(100), 2)
     df = pd.DataFrame({"case": 3, "replicate": reps, "x": np.arange(200.0)})
     parts = split_trajectories(df, None, 8, seed=0)
@@ -178,9 +181,10 @@ def test_a_dataset_built_with_other_settings_is_named_not_silently_used(dataset,
         job = plan_dataset(TINY_BASE, dataclasses.replace(TINY, chunks=chunks), dataset.parent,
                            dataset.stem, progress=False)
         assert stale_dataset(dataset, job) is None
-    job = plan_dataset(TINY_BASE, dataclasses.replace(TINY, replicates=5), dataset.parent,
-                       dataset.stem, progress=False)
-    assert "data.replicates: 4 -> 5" in stale_dataset(dataset, job)
+    job = plan_dataset(TINY_BASE, dataclasses.replace(TINY, replicates=5, chunks=2),
+                       dataset.parent, dataset.stem, progress=False)
+    diff = stale_dataset(dataset, job)
+    assert "data.replicates: 4 -> 5" in diff and "chunks" not in diff
 
 
 def test_ensemble_members_differ_and_the_mixture_is_right():
