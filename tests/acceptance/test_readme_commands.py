@@ -148,6 +148,8 @@ CASES: dict[str, Case] = {
                                        slow=True),
     "python bench/bench_loop.py --generator independent": Case(
         ("--seeds", "1", "--null-seeds", "1"), slow=True),
+    "python bench/bench_loop.py --generator independent --both": Case(
+        ("--seeds", "1", "--null-seeds", "1"), slow=True),
 }
 SNIPPETS: dict[str, Case] = {
     's = Surrogate.load("logs/train/runs/<run>/wear_surrogate.pt")': Case(before=(TRAIN_CASE3,)),
