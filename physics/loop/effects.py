@@ -79,8 +79,8 @@ class Effect:
     quantities: tuple[str, ...] = ("dte_m", "accel_m_s2")  # records it can show in
     model: Callable[[PairModel, dict], PairModel] | None = None
     record: Callable[[np.ndarray, float, dict], np.ndarray] | None = None
-    #: a stacked candidate of the second round: where its added effect shows, which may be
-    #: wider than ``quantities`` (there the records that the first effect's measurement stage
+    #: where a stacked candidate of the second round is judged: the quantities its added
+    #: effect shows in (its ``quantities`` are then those the first effect's measurement stage
     #: acts on)
     shows_in: tuple[str, ...] = ()
 
