@@ -81,10 +81,20 @@ class WearRegressor(L.LightningModule):
         mu, logvar = out[..., 0], out[..., 1].clamp(-20, 10)
         return 0.5 * (logvar + (y.unsqueeze(0) - mu) ** 2 / torch.exp(logvar)).mean()
 
+    def on_train_epoch_start(self) -> None:
+        self._epoch_loss = torch.zeros(2)  # sum of loss x rows, rows
+
     def training_step(self, batch, _):
         loss = self._nll(*batch)
-        self.log("train/loss", loss, on_epoch=True, on_step=False)
+        # summed here and logged once an epoch: a ``self.log`` per step costs more than the
+        # step of these small networks (profile of the main job: docs/surrogate.md)
+        rows = len(batch[1])
+        self._epoch_loss += torch.stack([loss.detach() * rows, torch.tensor(float(rows))])
         return loss
+
+    def on_train_epoch_end(self) -> None:
+        total, rows = self._epoch_loss
+        self.log("train/loss", total / rows)
 
     def _evaluate(self, batch, stage: str) -> None:
         x, y = batch

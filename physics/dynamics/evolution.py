@@ -11,7 +11,7 @@ them on the cycles beyond.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -22,13 +22,16 @@ from physics.tribology.wear import MeshForce, WearResult, simulate_wear
 
 
 def dynamic_mesh_force(scn: Scenario, stiffness: MeshStiffness | None = None) -> MeshForce:
-    """A :data:`physics.wear.MeshForce` that runs the dynamic model for the current wear."""
+    """A :data:`physics.wear.MeshForce` that runs the dynamic model for the current wear: after
+    the declared transient, ``dynamics.feedback_revolutions`` whole pinion revolutions."""
     ms = stiffness or MeshStiffness(scn.gear, scn.material)
+    revolutions = scn.dynamics.feedback_revolutions * 60.0 / scn.operating.n1_rpm
+    run = replace(scn.dynamics, duration_s=revolutions)
 
     def force(s: np.ndarray, wear1: np.ndarray, wear2: np.ndarray) -> np.ndarray:
         worn = np.any(wear1 > 0) or np.any(wear2 > 0)
         model = build_model(scn, ms, s, wear1, wear2) if worn else build_model(scn, ms)
-        response = simulate(model, scn.dynamics)
+        response = simulate(model, run)
         return force_per_position(model, response.force_by_phase[0], s)
 
     return force
