@@ -15,23 +15,54 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from physics.dynamics.model import build_model, force_per_position, simulate
+from physics.dynamics.model import PairModel, build_model, force_per_position, simulate, time_step
 from physics.gear.stiffness import MeshStiffness
-from physics.params import Scenario
+from physics.params import Dynamics, Scenario
 from physics.tribology.wear import MeshForce, WearResult, simulate_wear
 
 
+def largest_phase_gap(step: float, steps: int) -> float:
+    """Largest gap, in mesh periods, between the mesh phases ``k step mod 1`` of ``steps``
+    consecutive integration steps. It does not depend on the first step's phase (the
+    three-gap theorem: Steinhaus; Sos, Ann. Univ. Sci. Budapest 1 (1958) 127), so a record
+    whose gap is below the bin width visits every phase bin whatever its start."""
+    phases = np.sort(np.mod(np.arange(steps) * step, 1.0))
+    return float(np.max(np.diff(phases, append=phases[0] + 1.0)))
+
+
+#: revolutions the wear feedback may add to ``dynamics.feedback_revolutions`` to visit every
+#: phase bin (a step commensurate with the mesh period revisits the same phases)
+EXTRA_REVOLUTIONS = 16
+
+
+def feedback_dynamics(scn: Scenario, model: PairModel) -> Dynamics:
+    """The wear feedback's run: after the declared transient, the fewest whole pinion
+    revolutions, at least ``dynamics.feedback_revolutions``, whose steps visit every one of
+    the ``dynamics.phase_bins`` mesh-phase bins (:func:`largest_phase_gap`)."""
+    dyn = scn.dynamics
+    dt, n_sub = time_step([model], dyn)
+    revolution = 60.0 / scn.operating.n1_rpm
+    step = model.roll_speed * dt / model.geometry.base_pitch  # mesh periods per step
+    first = dyn.feedback_revolutions
+    for k in range(first, first + EXTRA_REVOLUTIONS + 1):
+        steps = round(k * revolution * dyn.sample_rate_hz) * n_sub
+        if largest_phase_gap(step, steps) < 1.0 / dyn.phase_bins:
+            return replace(dyn, duration_s=k * revolution)
+    raise ValueError(f"dynamics.phase_bins = {dyn.phase_bins}: {first + EXTRA_REVOLUTIONS} "
+                     f"pinion revolutions at n1_rpm = {scn.operating.n1_rpm:g} do not visit "
+                     "every mesh-phase bin (the integration step is nearly commensurate with "
+                     "the mesh period); use fewer bins or change dynamics.step_factor")
+
+
 def dynamic_mesh_force(scn: Scenario, stiffness: MeshStiffness | None = None) -> MeshForce:
-    """A :data:`physics.wear.MeshForce` that runs the dynamic model for the current wear: after
-    the declared transient, ``dynamics.feedback_revolutions`` whole pinion revolutions."""
+    """A :data:`physics.wear.MeshForce` that runs the dynamic model for the current wear, over
+    whole pinion revolutions (:func:`feedback_dynamics`)."""
     ms = stiffness or MeshStiffness(scn.gear, scn.material)
-    revolutions = scn.dynamics.feedback_revolutions * 60.0 / scn.operating.n1_rpm
-    run = replace(scn.dynamics, duration_s=revolutions)
 
     def force(s: np.ndarray, wear1: np.ndarray, wear2: np.ndarray) -> np.ndarray:
         worn = np.any(wear1 > 0) or np.any(wear2 > 0)
         model = build_model(scn, ms, s, wear1, wear2) if worn else build_model(scn, ms)
-        response = simulate(model, run)
+        response = simulate(model, feedback_dynamics(scn, model))
         return force_per_position(model, response.force_by_phase[0], s)
 
     return force

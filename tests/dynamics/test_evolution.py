@@ -2,10 +2,21 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
-from physics.dynamics.evolution import fit_evolution_models, root_wear_evolution
+from physics.dynamics.evolution import (
+    feedback_dynamics,
+    fit_evolution_models,
+    largest_phase_gap,
+    root_wear_evolution,
+)
+from physics.dynamics.model import build_model, simulate, time_step
+from physics.gear.stiffness import MeshStiffness
 from physics.params import Dynamics, Scenario, WearSolver
 
 
@@ -52,3 +63,39 @@ def test_feedback_over_one_revolution_is_converged():
 
     one, four = root(1), root(4)
     assert one > 0 and abs(one / four - 1) < 5e-3
+
+
+def test_largest_phase_gap_by_hand():
+    assert largest_phase_gap(0.25, 4) == pytest.approx(0.25)
+    assert largest_phase_gap(0.3, 10) == pytest.approx(0.1)  # 0, 0.1, ..., 0.9
+    assert largest_phase_gap(2.0, 50) == pytest.approx(1.0)  # commensurate: one phase only
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.floats(1e-3, 0.999), st.integers(2, 400), st.floats(0.0, 1.0))
+def test_largest_phase_gap_does_not_depend_on_the_start(step, steps, start):
+    phases = np.sort(np.mod(start + np.arange(steps) * step, 1.0))
+    gap = np.max(np.diff(phases, append=phases[0] + 1.0))
+    assert largest_phase_gap(step, steps) == pytest.approx(gap, abs=1e-9)
+
+
+def test_feedback_adds_revolutions_where_one_misses_phase_bins():
+    """A mesh resonance lowered by the model form (n_sub 6 at 2042.87 r/min) puts one
+    revolution's steps on too few mesh phases; the run takes more whole revolutions."""
+    base = Scenario()
+    scn = dataclasses.replace(
+        base, operating=dataclasses.replace(base.operating, n1_rpm=2042.87),
+        dynamics=dataclasses.replace(base.dynamics, resonance_factor=0.618,
+                                     stiffness_factor=0.893))
+    model = build_model(scn, MeshStiffness(scn.gear, scn.material))
+    dt, n_sub = time_step([model], scn.dynamics)
+    revolution = 60.0 / scn.operating.n1_rpm
+    one = round(revolution * scn.dynamics.sample_rate_hz) * n_sub
+    step = model.roll_speed * dt / model.geometry.base_pitch
+    assert largest_phase_gap(step, one) > 1.0 / scn.dynamics.phase_bins
+    run = feedback_dynamics(scn, model)
+    turns = run.duration_s / revolution
+    assert turns == pytest.approx(round(turns)) and round(turns) >= 2
+    assert np.all(np.isfinite(simulate(model, run).force_by_phase))  # every bin visited
+    with pytest.raises(ValueError, match="too short to visit every"):
+        simulate(model, dataclasses.replace(scn.dynamics, duration_s=revolution))
