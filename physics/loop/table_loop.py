@@ -113,7 +113,8 @@ def model_features(td: TableData, rows: np.ndarray, nuisance: dict, eff: Effect 
         ms = [eff.model(m, _sized(eff, values, td.wear[i] / top)) for m, i in zip(ms, rows,
                                                                                  strict=True)]
     run = dataclasses.replace(dyn, duration_s=td.settings.segment_s,
-                              transient_s=td.settings.transient_s, phase_bins=16)
+                              transient_s=td.settings.transient_s, phase_bins=16,
+                              step_factor=td.settings.step_factor)
     resp = simulate(ms, run)
     x = declared_chain(sensed(resp, td.quantity), td.quantity, nuisance["housing_mass_kg"],
                        fs=dyn.sample_rate_hz, support_hz=dyn.support_hz,
