@@ -194,8 +194,6 @@ SCREEN_NFEV = 6
 SEPARABILITY_STEP = 0.02
 #: simulations kept by :func:`responses`
 CACHE_SIZE = 256
-#: level steps of :func:`with_level` (the simulation is reused; each costs a signature)
-LEVEL_STEPS = 2
 
 
 def declared_nuisance(scn: Scenario) -> dict[str, float]:
@@ -692,27 +690,23 @@ def with_level(rec: Records, nuisance: dict, eff: Effect | None, values: dict) -
     """``m_h`` moved so that the model's level matches the train acceleration records'.
 
     ``m_h`` divides every amplitude, so in dB it is an offset of the entries that scale with
-    the record (all but kurtosis and crest factors): a step of their mean residual, weighted
-    by the inverse variance of each entry (:attr:`Group.sd`), taken ``LEVEL_STEPS`` times.
-    The noise does not scale with it: entries at the model's noise floor hold a step back
-    (from a factor of 4 off, one step lands within 30 %, two within 5 %), so this is a
-    starting value, not the fit. DTE records do not see ``m_h``.
+    the record (all but kurtosis and crest factors): one step of their mean residual, weighted
+    by the inverse variance of each entry (:attr:`Group.sd`). The noise does not scale with
+    it, so this is a starting value, not the fit. DTE records do not see ``m_h``.
     """
     acc = is_accel(rec, rec.train)
     if not acc.any():
         return nuisance
+    res = residuals_db(rec, rec.train, model_signals(rec, rec.train, nuisance, eff, values))
+    num = den = 0.0
+    for r, i, a in zip(res, rec.train, acc, strict=True):
+        if a:
+            g = rec.group(i)
+            w = np.where([n not in SCALE_FREE for n in g.names], g.sd**-2.0, 0.0)
+            num, den = num + float(np.sum(r * w)), den + float(np.sum(w))
     lo, hi, _ = NUISANCE["housing_mass_kg"]
-    for _ in range(LEVEL_STEPS):
-        res = residuals_db(rec, rec.train, model_signals(rec, rec.train, nuisance, eff, values))
-        num = den = 0.0
-        for r, i, a in zip(res, rec.train, acc, strict=True):
-            if a:
-                g = rec.group(i)
-                w = np.where([n not in SCALE_FREE for n in g.names], g.sd**-2.0, 0.0)
-                num, den = num + float(np.sum(r * w)), den + float(np.sum(w))
-        nuisance = nuisance | {"housing_mass_kg": float(np.clip(
-            nuisance["housing_mass_kg"] * 10 ** (-num / den / 20), lo, hi))}
-    return nuisance
+    return nuisance | {"housing_mass_kg": float(np.clip(
+        nuisance["housing_mass_kg"] * 10 ** (-num / den / 20), lo, hi))}
 
 
 def train_cost(rec: Records, nuisance: dict, eff: Effect | None, values: dict) -> float:

@@ -35,31 +35,19 @@ from physics.signals.features import features
 
 @lru_cache(maxsize=16)
 def _basis(n: int, fs: float, freqs: tuple[float, ...]) -> np.ndarray:
-    """The matrix that maps a record (n samples) to the cosine and sine coefficients of the
-    sinusoids at ``freqs`` fitted jointly by Hann-weighted least squares, (n, 2 lines), in
-    single precision (the record is real: two real products cost half of one complex one).
-
-    Fitted jointly, a line's estimate does not carry the window's leakage of the others
-    (a pinion sideband 33 Hz beside a mesh harmonic 50 dB stronger, in a segment of 8.3
-    revolutions, read the mesh line's sidelobe and moved by several times its noise with the
-    segment's start angle); for a line alone it is the windowed projection ``2 sum(w x e) /
-    sum(w)``. The linear model of known frequencies: Kay, Fundamentals of Statistical Signal
-    Processing: Estimation Theory (1993), 4.5 (sinusoidal amplitudes), weighted as in 4.6.
-    """
+    """Hann-weighted cosines and sines at ``freqs``, (n, 2 lines), in single precision: the
+    record is real, so two real products cost half of one complex one."""
     t = np.arange(n) / fs
     w = np.hanning(n)
     phase = 2 * np.pi * np.outer(t, freqs)
-    b = np.hstack([np.cos(phase), np.sin(phase)])
-    gram = b.T @ (b * w[:, None])
-    basis = (b * w[:, None]) @ np.linalg.pinv(gram, rcond=1e-10, hermitian=True)
+    basis = np.hstack([np.cos(phase), np.sin(phase)]) * (2 * w / w.sum())[:, None]
     basis = basis.astype(np.float32)
     basis.flags.writeable = False
     return basis
 
 
 def line_amplitudes(x: np.ndarray, fs: float, freqs: np.ndarray) -> np.ndarray:
-    """Amplitudes of sinusoids at ``freqs`` [Hz] in ``x`` (..., n): fitted jointly
-    (:func:`_basis`)."""
+    """Amplitudes of sinusoids at ``freqs`` [Hz] in ``x`` (..., n): Hann-windowed projection."""
     basis = _basis(x.shape[-1], float(fs), tuple(float(f) for f in freqs))
     proj = (x - x.mean(axis=-1, keepdims=True)).astype(np.float32) @ basis
     return np.hypot(proj[..., :len(freqs)], proj[..., len(freqs):])

