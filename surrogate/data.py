@@ -287,7 +287,7 @@ class WearDataModule(L.LightningDataModule):
 
     def train_dataloader(self) -> DataLoader:
         # the batches of ``shuffle=True`` (same permutation), each taken as one slice of the
-        # tensors instead of row by row and stacked: a third of the loader's time per batch
+        # tensors instead of row by row and stacked (3.2 of the trainer's 35 s in a profile)
         data, g = self.tensors("train"), torch.Generator().manual_seed(self.seed)
         order = BatchSampler(RandomSampler(data, generator=g), self.batch_size, drop_last=False)
         return DataLoader(data, sampler=order, batch_size=None, generator=g)
