@@ -15,7 +15,14 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from physics.dynamics.model import PairModel, build_model, force_per_position, simulate, time_step
+from physics.dynamics.model import (
+    PairModel,
+    build_model,
+    force_per_position,
+    output_samples,
+    simulate,
+    time_step,
+)
 from physics.gear.stiffness import MeshStiffness
 from physics.params import Dynamics, Scenario
 from physics.tribology.wear import MeshForce, WearResult, simulate_wear
@@ -45,9 +52,9 @@ def feedback_dynamics(scn: Scenario, model: PairModel) -> Dynamics:
     step = model.roll_speed * dt / model.geometry.base_pitch  # mesh periods per step
     first = dyn.feedback_revolutions
     for k in range(first, first + EXTRA_REVOLUTIONS + 1):
-        steps = round(k * revolution * dyn.sample_rate_hz) * n_sub
-        if largest_phase_gap(step, steps) < 1.0 / dyn.phase_bins:
-            return replace(dyn, duration_s=k * revolution)
+        run = replace(dyn, duration_s=k * revolution)
+        if largest_phase_gap(step, output_samples(run) * n_sub) < 1.0 / dyn.phase_bins:
+            return run
     raise ValueError(f"dynamics.phase_bins = {dyn.phase_bins}: {first + EXTRA_REVOLUTIONS} "
                      f"pinion revolutions at n1_rpm = {scn.operating.n1_rpm:g} do not visit "
                      "every mesh-phase bin (the integration step is nearly commensurate with "

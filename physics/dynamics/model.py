@@ -266,6 +266,11 @@ def _decimate(h, x, n_sub, n_out):
     return y
 
 
+def output_samples(dyn: Dynamics) -> int:
+    """Samples of a record of ``dyn.duration_s`` (each ``n_sub`` integration steps)."""
+    return round(dyn.duration_s * dyn.sample_rate_hz)
+
+
 def simulate(models: Sequence[PairModel] | PairModel, dyn: Dynamics) -> Response:
     """Integrate a batch of scenarios (parallel over scenarios) and sample their response."""
     if isinstance(models, PairModel):
@@ -276,7 +281,7 @@ def simulate(models: Sequence[PairModel] | PairModel, dyn: Dynamics) -> Response
     if len(n_phase) != 1:
         raise ValueError("all scenarios of a batch need the same phase grid and periods")
     dt, n_sub = time_step(models, dyn)
-    n_out = round(dyn.duration_s * dyn.sample_rate_hz)
+    n_out = output_samples(dyn)
     half = (len(anti_aliasing_filter(n_sub)) - 1) // (2 * n_sub)
     # the filter reaches (L - 1) n_sub steps before the first sample: inside the transient
     n_transient = max(round(dyn.transient_s / dt), (half - 1) * n_sub)

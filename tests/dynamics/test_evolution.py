@@ -15,7 +15,7 @@ from physics.dynamics.evolution import (
     largest_phase_gap,
     root_wear_evolution,
 )
-from physics.dynamics.model import build_model, simulate, time_step
+from physics.dynamics.model import build_model, output_samples, simulate, time_step
 from physics.gear.stiffness import MeshStiffness
 from physics.params import Dynamics, Scenario, WearSolver
 
@@ -90,7 +90,7 @@ def test_feedback_adds_revolutions_where_one_misses_phase_bins():
     model = build_model(scn, MeshStiffness(scn.gear, scn.material))
     dt, n_sub = time_step([model], scn.dynamics)
     revolution = 60.0 / scn.operating.n1_rpm
-    one = round(revolution * scn.dynamics.sample_rate_hz) * n_sub
+    one = output_samples(dataclasses.replace(scn.dynamics, duration_s=revolution)) * n_sub
     step = model.roll_speed * dt / model.geometry.base_pitch
     assert largest_phase_gap(step, one) > 1.0 / scn.dynamics.phase_bins
     run = feedback_dynamics(scn, model)
