@@ -19,9 +19,10 @@ bundle: truth, choice, held-out error before/after and that of the data-generati
 itself, wear-estimate error and skill and the model that reads it, seconds, and the first
 round's best candidate with the null test's figures on it) and ``loop_confusion.csv``
 (truth x choice counts), each bundle's ``report.json`` and ``report.md`` under
-``reports/<generator>_<effect>_<seed>_<quantity>/`` (every candidate's figures), plus the
+``reports/<generator>_<effect>_<seed>_<quantity>/`` (every candidate's figures), the
 rates the issue asks for: right effect named, held-out error at least halved, nothing added on
-clean bundles.
+clean bundles, and ``loop_visibility.csv``: for each effect bundle the entry family whose model
+discrepancy most exceeds that of the clean bundles of its quantity (:func:`visibility`).
 ``--both`` (independent generator): every bundle holds the DTE and the housing acceleration of
 each operating point and wear state, as a rig with shaft encoders and an accelerometer records
 them; what one sensor's records cannot tell apart (a DTE gain from the stiffness level, a
@@ -33,6 +34,7 @@ those of ``--jobs`` bundles sharing the machine.
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import multiprocessing
 import tempfile
@@ -80,7 +82,7 @@ def one(job: tuple[str, str | None, int, int, bool, str, tuple[str, ...], str]) 
     generator, name, seed, records, model_form, tmp, quantities, out = job
     base = base_scenario(generator)
     quantity = "both" if quantities == BOTH else quantities[0]
-    label = f"{generator}_{name or 'none'}_{seed}_{quantity}"
+    label = report_label(generator, name, seed, quantity)
     folder = Path(tmp) / label
     if generator == "independent":
         path, truth = make_independent_bundle(folder, name, quantities=quantities, seed=seed)
@@ -105,6 +107,40 @@ def one(job: tuple[str, str | None, int, int, bool, str, tuple[str, ...], str]) 
             "wear_skill_before": r["wear_skill_before"], "wear_skill_after": r["wear_skill_after"],
             "wear_read_by": r["wear_read_by"],
             "seconds": seconds, **best_candidate(r)}
+
+
+def report_label(generator: str, name: str | None, seed: int, quantity: str) -> str:
+    """The folder of one bundle's report under ``<out>/reports``."""
+    return f"{generator}_{name or 'none'}_{seed}_{quantity}"
+
+
+def family_discrepancy(report: Path) -> dict[str, float]:
+    """A bundle's model discrepancy [dB] per entry family, the mean over its groups (the
+    declared model's train residuals; ``groups`` of report.json)."""
+    groups = json.loads(report.read_text())["groups"].values()
+    return pd.DataFrame([g["discrepancy_db"] for g in groups]).mean().to_dict()
+
+
+def visibility(runs: pd.DataFrame, out: Path) -> pd.DataFrame:
+    """Where each effect bundle's residual stands out from the model-form discrepancy: per entry
+    family, its discrepancy less the largest of the clean bundles of its quantity; the family
+    with the largest excess and that excess [dB]. An effect whose bundle has no family above
+    the clean bundles' (excess <= 0) leaves its residual where the declared model's form
+    error already is: no rule on the residual can name it and not name the form error of a
+    clean bundle too."""
+    fams = {i: family_discrepancy(out / "reports" / report_label(
+        r.generator, None if r.truth == "none" else r.truth, r.seed, r.quantity) / "report.json")
+        for i, r in runs.iterrows()}
+    clean = runs.truth == "none"
+    rows = []
+    for i, r in runs[~clean].iterrows():
+        ref = pd.DataFrame([fams[j] for j in runs.index[clean & (runs.quantity == r.quantity)]])
+        if ref.empty:
+            continue
+        excess = (pd.Series(fams[i]) - ref.max()).dropna()
+        rows.append({"truth": r.truth, "seed": r.seed, "quantity": r.quantity,
+                     "family": excess.idxmax(), "excess_db": round(float(excess.max()), 1)})
+    return pd.DataFrame(rows)
 
 
 def best_candidate(r) -> dict:
@@ -203,6 +239,12 @@ def main() -> None:
     for quantity, rows_q in clean.groupby("quantity"):
         print(f"  {quantity}: nothing added on {(rows_q.chosen == 'none').sum()} of {len(rows_q)}")
     print(f"median loop time: {runs.seconds.median():.1f} s per bundle")
+    seen = visibility(runs, out)
+    if not seen.empty:
+        seen.to_csv(out / "loop_visibility.csv", index=False)
+        print("\nthe family of each effect bundle whose discrepancy most exceeds the clean "
+              "bundles' (<= 0 dB: the effect hides in the model-form error)")
+        print(seen.to_string(index=False))
 
 
 if __name__ == "__main__":

@@ -7,12 +7,14 @@ import subprocess
 import sys
 from pathlib import Path
 
+import hypothesis
 import numpy as np
 import pandas as pd
 import pytest
 import torch
 from hydra import compose, initialize_config_module
 from hydra.utils import get_class, instantiate
+from hypothesis import strategies as st
 
 from physics.dataset.generation import (
     DatasetSpec,
@@ -428,3 +430,47 @@ def test_the_benchmark_summarises_seeds_and_scores_a_null_model():
     assert out.loc[("case3/x", "null"), "mre_max"] == 15.0
     train = pd.DataFrame({"root_wear_mm": [0.0, 0.0, 0.01, 0.02, 0.04]})
     assert typical_wear(train) == 0.02  # the unworn rows do not pull it to zero
+
+
+@hypothesis.settings(max_examples=25, deadline=None)
+@hypothesis.given(offsets=st.lists(st.floats(0.0, 0.02), min_size=1, max_size=4),
+                  slope=st.floats(0.5, 2.0))
+def test_a_reading_referenced_to_the_unworn_record_loses_its_offset_not_its_slope(offsets,
+                                                                                  slope):
+    """Readings ``c_g + slope w`` of gearboxes g: the unworn rows read the median offset, and
+    referenced to its unworn record every gearbox reads ``slope w``, whose relative error is
+    ``|slope - 1|`` on every worn row, whatever the offsets."""
+    from surrogate.benchmark import referenced
+
+    wear = np.array([0.0, 0.003, 0.009, 0.015])
+    test = pd.DataFrame({"replicate": np.repeat(np.arange(len(offsets)), wear.size),
+                         "root_wear_mm": np.tile(wear, len(offsets))})
+    reading = np.repeat(offsets, wear.size) + slope * test.root_wear_mm.to_numpy()
+    unworn, mre = referenced(test, reading)
+    assert unworn == pytest.approx(np.median(offsets), abs=1e-15)
+    assert mre == pytest.approx(100 * abs(slope - 1), abs=1e-9)
+    assert all(np.isnan(referenced(test[test.root_wear_mm > 0],
+                                   reading[test.root_wear_mm.to_numpy() > 0])))
+
+
+def test_novelty_is_rare_on_the_training_distribution_and_certain_far_from_it():
+    """Rows drawn like the training rows are novel at about the rate the radius allows; rows
+    shifted by ten standard deviations in one input are all novel, and the scaling is the
+    schema's (a shift of ten in an input of scale 1e-5 is no shift)."""
+    from surrogate.benchmark import Novelty
+
+    rng = np.random.default_rng(0)
+
+    def draw(n):
+        return pd.DataFrame({"a": rng.normal(0, 1, n), "b": rng.normal(0, 1e-5, n),
+                             "root_wear_mm": rng.uniform(0, 0.02, n)})
+
+    train = draw(2000)
+    schema = FeatureSchema.fit(train, ["a", "b"], {"a": "1", "b": "m", "root_wear_mm": "mm"},
+                               "root_wear_mm")
+    nov = Novelty(schema, train, draw(500), level=0.95)
+    assert nov.rate(draw(4000)) == pytest.approx(0.05, abs=0.02)
+    far = draw(200)
+    assert nov.rate(far.assign(a=far.a + 10)) == 1.0
+    assert nov.rate(far.assign(b=far.b * 0 + 10e-5)) == 1.0
+    assert nov.rate(far.assign(a=far.a * 0 + 1e-4)) < 0.1
