@@ -82,13 +82,18 @@ class PairModel:
     gear_error: float = 0.0  # amplitude of the gear's run-out error on the line of action [m]
     centre_runout: float = 0.0  # amplitude of the centre-distance change it causes [m]
     omega2: float = 0.0  # gear speed [rad/s]
+    # the mesh stiffness times 1 + gear_modulation cos(omega2 t + gear_modulation_phase): the
+    # run-out's once-per-gear-revolution modulation (physics.loop.bundle_loop.with_modulation)
+    gear_modulation: float = 0.0
+    gear_modulation_phase: float = 0.0  # [rad]
     ripple_force: float = 0.0  # amplitude of the torque ripple as mesh force [N]
     omega_ripple: float = 0.0  # its angular frequency [rad/s]
 
     @property
     def omega_max(self) -> float:
         """Highest natural frequency of the linearised mesh, ``sqrt(k_max / m_e)`` [rad/s]."""
-        return math.sqrt(float(np.max(self.k_a + self.k_b)) / self.mass)
+        k_max = float(np.max(self.k_a + self.k_b)) * (1.0 + abs(self.gear_modulation))
+        return math.sqrt(k_max / self.mass)
 
     @property
     def mesh_frequency_hz(self) -> float:
@@ -195,7 +200,8 @@ class Response:
 #: positions of the kernel's per-scenario parameters (numba reads module constants as literals)
 (MASS, DAMPING, STATIC_FORCE, HALF_BACKLASH, LONG_ERROR, SHORT_ERROR, OMEGA1, OMEGA_MESH,
  ROLL_SPEED, BASE_PITCH, GEAR_ERROR, OMEGA2, RIPPLE_FORCE, OMEGA_RIPPLE, CELLS_PER_PERIOD,
- CENTRE_RUNOUT, CELLS_PER_METRE, N_PARAMETERS) = range(18)
+ CENTRE_RUNOUT, CELLS_PER_METRE, GEAR_MODULATION, GEAR_MODULATION_PHASE,
+ N_PARAMETERS) = range(20)
 
 
 def kernel_parameters(m: PairModel) -> np.ndarray:
@@ -207,6 +213,8 @@ def kernel_parameters(m: PairModel) -> np.ndarray:
     row[OMEGA1], row[OMEGA_MESH], row[OMEGA2] = m.omega1, m.omega_mesh, m.omega2
     row[ROLL_SPEED], row[BASE_PITCH] = m.roll_speed, m.geometry.base_pitch
     row[GEAR_ERROR], row[CENTRE_RUNOUT] = m.gear_error, m.centre_runout
+    row[GEAR_MODULATION], row[GEAR_MODULATION_PHASE] = (m.gear_modulation,
+                                                        m.gear_modulation_phase)
     row[RIPPLE_FORCE], row[OMEGA_RIPPLE] = m.ripple_force, m.omega_ripple
     row[CELLS_PER_PERIOD] = len(m.k_a) / m.periods
     row[CELLS_PER_METRE] = row[CELLS_PER_PERIOD] / (m.geometry.base_pitch
@@ -320,12 +328,13 @@ def _lerp(tab, row, i0, i1, frac):
 
 
 @numba.njit(cache=True, fastmath=True)
-def _mesh(par, tab, pos, x, v, da):
+def _mesh(par, tab, pos, x, v, da, kf):
     """Force factors and forces of the pairs in contact at table position ``pos``.
 
     ``pos`` in [0, n) is the mesh phase in table cells; the tables are interpolated linearly and
     periodically. The mesh damping ``c`` is shared between the pairs by stiffness. ``da`` is the
-    centre-distance change [m] (gear run-out): it moves the ends of the path of contact.
+    centre-distance change [m] (gear run-out): it moves the ends of the path of contact; ``kf``
+    a factor on every pair's stiffness (the gear run-out's modulation).
     """
     n = tab.shape[1]
     i0 = int(pos)
@@ -336,6 +345,8 @@ def _mesh(par, tab, pos, x, v, da):
     k_a, k_b = _lerp(tab, 0, i0, i1, frac), _lerp(tab, 1, i0, i1, frac)
     g_a, g_b = _lerp(tab, 2, i0, i1, frac), _lerp(tab, 3, i0, i1, frac)
     l_a, l_b = _lerp(tab, 4, i0, i1, frac), _lerp(tab, 5, i0, i1, frac)
+    if kf != 1.0:
+        k_a, k_b = k_a * kf, k_b * kf
     k_c, g_c, l_c = 0.0, 0.0, 0.0
     if da != 0.0:
         # in the pinion's roll frame the exit (pinion tip) stays put and the entry (gear tip)
@@ -348,7 +359,7 @@ def _mesh(par, tab, pos, x, v, da):
             k_a = 0.0
         elif u_in < 0.0 and pos - start >= n_per + u_in:
             j = int(start + n_per) % n
-            k_c, g_c, l_c = tab[0, j], tab[2, j], tab[4, j]
+            k_c, g_c, l_c = tab[0, j] * kf, tab[2, j], tab[4, j]
     c_v = par[DAMPING] * v / (k_a + k_b + k_c)
     f_a = _contact(k_a, x - g_a, par[HALF_BACKLASH], k_a * c_v)
     f_b = _contact(k_b, x - g_b, par[HALF_BACKLASH], k_b * c_v)
@@ -358,28 +369,31 @@ def _mesh(par, tab, pos, x, v, da):
 
 
 @numba.njit(cache=True, fastmath=True)
-def _accel(par, tab, pos, x, v, e_dd, w, da):
-    """x'' of the reduced model at mesh phase ``pos``, given e'', the static force w and the
-    centre-distance change da there, and the mesh force.
+def _accel(par, tab, pos, x, v, e_dd, w, da, kf):
+    """x'' of the reduced model at mesh phase ``pos``, given e'', the static force w, the
+    centre-distance change da and the stiffness factor kf there, and the mesh force.
 
     Each pair's force enters with its factor (1, or the sliding-friction moment factor).
     """
-    l_a, l_b, f_a, f_b = _mesh(par, tab, pos, x, v, da)
+    l_a, l_b, f_a, f_b = _mesh(par, tab, pos, x, v, da, kf)
     return (w - par[MASS] * e_dd - l_a * f_a - l_b * f_b) / par[MASS], f_a + f_b
 
 
 @numba.njit(cache=True, fastmath=True, inline="always")
 def _extra(par, t):
-    """The effect library's time terms at t: the gear run-out's e'' on the line of action and
-    its centre-distance change (the eccentricity's other component), and the static force."""
-    e_dd, da = 0.0, 0.0
+    """The effect library's time terms at t: the gear run-out's e'' on the line of action, its
+    centre-distance change (the eccentricity's other component) and its modulation of the
+    mesh stiffness (a factor), and the static force."""
+    e_dd, da, kf = 0.0, 0.0, 1.0
     if par[GEAR_ERROR] != 0.0:
         e_dd = -par[GEAR_ERROR] * par[OMEGA2] ** 2 * math.sin(par[OMEGA2] * t)
         da = par[CENTRE_RUNOUT] * math.cos(par[OMEGA2] * t)
+    if par[GEAR_MODULATION] != 0.0:
+        kf += par[GEAR_MODULATION] * math.cos(par[OMEGA2] * t + par[GEAR_MODULATION_PHASE])
     w = par[STATIC_FORCE]
     if par[RIPPLE_FORCE] != 0.0:
         w += par[RIPPLE_FORCE] * math.sin(par[OMEGA_RIPPLE] * t)
-    return e_dd, w, da
+    return e_dd, w, da, kf
 
 
 @numba.njit(cache=True, fastmath=True, inline="always")
@@ -419,10 +433,10 @@ def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins, half):
         cs, ss = math.cos(0.5 * p[OMEGA_MESH] * dt), math.sin(0.5 * p[OMEGA_MESH] * dt)
         s1, c1, s2, c2 = 0.0, 1.0, 0.0, 1.0  # sin, cos of w1 t and wm t
         total = n_transient + k_last + 1  # the last recorded step's force needs its stages
-        da0 = _extra(p, 0.0)[2]
+        _, _, da0, kf0 = _extra(p, 0.0)
         for step in range(total + 1):
             # the mesh at (t, x) serves both the record of the state reached and stage 1 of RK4
-            l_a, l_b, f_a, f_b = _mesh(p, tab, pos, x, v, da0)
+            l_a, l_b, f_a, f_b = _mesh(p, tab, pos, x, v, da0, kf0)
             k = step - n_transient
             f = f_a + f_b
             recorded = k_first <= k <= k_last
@@ -445,26 +459,27 @@ def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins, half):
             s1n, c1n = s1h * cl + c1h * sl, c1h * cl - s1h * sl  # at t + dt
             s2n, c2n = s2h * cs + c2h * ss, c2h * cs - s2h * ss
             t = step * dt
-            x0e, w0, _ = _extra(p, t)
-            xhe, wh, dah = _extra(p, t + 0.5 * dt)
-            x1e, w1, da1 = _extra(p, t + dt)
+            x0e, w0, _, _ = _extra(p, t)
+            xhe, wh, dah, kfh = _extra(p, t + 0.5 * dt)
+            x1e, w1, da1, kf1 = _extra(p, t + dt)
             e0 = x0e - (a_l * s1 + a_s * s2)
             eh = xhe - (a_l * s1h + a_s * s2h)
             e1 = x1e - (a_l * s1n + a_s * s2n)
             a1 = (w0 - p[MASS] * e0 - l_a * f_a - l_b * f_b) / p[MASS]
             pos_h = _wrap(pos + 0.5 * inc, n_tab)
             pos_1 = _wrap(pos + inc, n_tab)
-            a2, f2 = _accel(p, tab, pos_h, x + 0.5 * dt * v, v + 0.5 * dt * a1, eh, wh, dah)
+            a2, f2 = _accel(p, tab, pos_h, x + 0.5 * dt * v, v + 0.5 * dt * a1, eh, wh, dah,
+                            kfh)
             a3, f3 = _accel(p, tab, pos_h, x + 0.5 * dt * (v + 0.5 * dt * a1),
-                            v + 0.5 * dt * a2, eh, wh, dah)
+                            v + 0.5 * dt * a2, eh, wh, dah, kfh)
             a4, f4 = _accel(p, tab, pos_1, x + dt * (v + 0.5 * dt * a2), v + dt * a3, e1, w1,
-                            da1)
+                            da1, kf1)
             if recorded:
                 force[j, k - k_first] = (f + 2.0 * (f2 + f3) + f4) / 6.0
             x += dt * (v + dt * (a1 + a2 + a3) / 6.0)
             v += dt * (a1 + 2.0 * a2 + 2.0 * a3 + a4) / 6.0
             pos = pos_1
-            da0 = da1
+            da0, kf0 = da1, kf1
             s1, c1, s2, c2 = s1n, c1n, s2n, c2n
             if step % 4096 == 0:  # keep the rotations on the unit circle
                 r1, r2 = math.hypot(s1, c1), math.hypot(s2, c2)
@@ -499,7 +514,7 @@ def simulate_two_dof(model: PairModel, t_eval: np.ndarray, rtol: float = 1e-9,
 
     geom, m = model.geometry, model
     if (m.periods != 1 or m.lam_a is not None or m.lam_b is not None or m.gear_error
-            or m.ripple_force or m.centre_runout):
+            or m.ripple_force or m.centre_runout or m.gear_modulation):
         raise ValueError("simulate_two_dof checks the declared model only; this one carries "
                          "effects of physics.effects")
     j1, j2 = m.inertias

@@ -11,11 +11,12 @@ output. Its physical signature says where the loop will see it.
 effect             acts on    signature
 =================  =========  =====================================================================
 gear_runout        dynamics   radial run-out of the gear (eccentricity = half of it): a kinematic
-                              error at ``f_2`` on the line of action and a centre-distance change
-                              that shifts the start of contact once per gear revolution; phase
-                              modulation of the mesh harmonics, sidebands ``k f_m +- f_2``,
-                              strongest at the harmonics near the mesh resonance (the pinion's
-                              run-out is declared and calibrated)
+                              error at ``f_2`` on the line of action, a centre-distance change
+                              that shifts the start of contact once per gear revolution, and the
+                              mesh stiffness modulated as the pinion's run-out modulates it (its
+                              calibrated depth per unit eccentricity, ``with_modulation``);
+                              sidebands ``k f_m +- f_2``, strongest at the harmonics near the
+                              mesh resonance (the pinion's run-out is declared and calibrated)
 friction           dynamics   Coulomb sliding friction ``mu`` reversing at the pitch point: a
                               force factor on each pair (moment arms of the friction force about
                               both centres, Vaishya & Singh, JSV 248 (2001) 671) that changes the

@@ -447,6 +447,31 @@ def test_mesh_modulation_makes_pinion_sidebands_and_keeps_the_mean_stiffness(scn
     np.testing.assert_allclose(amp["shifted"], amp["high"], rtol=0.05)
 
 
+def test_a_gear_run_out_modulates_the_mesh_as_the_pinions_does_per_unit_eccentricity(scn):
+    """The gear run-out's mesh modulation: depth ``mu e2 / e1`` (none while the pinion's is
+    none), in the phase the pinion's has; its sidebands ``k f_m +- f_2`` grow with it, by the
+    depth's share over the kinematic error and moving path alone, and a stiffness modulation
+    leaves the mesh line itself nearly where it was."""
+    m = build_model(scn)
+    runout = EFFECTS["gear_runout"].model(m, {"runout_um": 25.0})  # eccentricity 12.5 um
+    nui = {"eccentricity1_um": 7.5, "mesh_modulation": 0.03, "modulation_phase_rad": 0.4}
+    mod = with_modulation(runout, nui)
+    assert mod.gear_modulation == pytest.approx(0.03 * 12.5 / 7.5)
+    assert mod.gear_modulation_phase == 0.4
+    assert with_modulation(runout, nui | {"mesh_modulation": 0.0}).gear_modulation == 0.0
+    assert with_modulation(m, nui).gear_modulation == 0.0  # no run-out of the gear
+    f1 = scn.operating.n1_rpm / 60
+    f2, fm = f1 * scn.gear.z1 / scn.gear.z2, scn.gear.z1 * f1
+    lines = np.array([fm - f2, fm, fm + f2])
+    fs = scn.dynamics.sample_rate_hz
+    bare = dataclasses.replace(mod, gear_modulation=0.0)
+    deep = dataclasses.replace(mod, gear_modulation=2 * mod.gear_modulation)
+    amp = [line_amplitudes(x, fs, lines) for x in _dte([bare, mod, deep], scn, seconds=0.5)]
+    assert np.all(amp[1][[0, 2]] > 1.2 * amp[0][[0, 2]])
+    assert np.all(amp[2][[0, 2]] > 1.2 * amp[1][[0, 2]])
+    np.testing.assert_allclose(amp[1][1], amp[0][1], rtol=0.05)
+
+
 def _modulated_bundle(path, scn, seed: int, records: int = 6, duration_s: float = 0.75):
     """Own-model DTE bundle whose pinion modulates the mesh once per revolution, with a
     stiffer mesh and heavier inertias than declared (a gearbox the declared model does not
