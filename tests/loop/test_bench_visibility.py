@@ -1,4 +1,4 @@
-"""The loop bench's reading of where an effect stands out from the model-form discrepancy."""
+"""The loop bench's reading of where a bundle's residual stands out from the model-form error."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ import pandas as pd
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
+GROUP = "2000rpm_300Nm_accel_m_s2_40960Hz"
 
 
 @pytest.fixture(scope="module")
@@ -20,33 +21,45 @@ def bench():
     return module
 
 
-def write(out: Path, label: str, groups: list[dict[str, float]]) -> None:
+def write(out: Path, label: str, residual: dict[str, float]) -> None:
     folder = out / "reports" / label
     folder.mkdir(parents=True)
-    report = {"groups": {f"g{i}": {"discrepancy_db": g} for i, g in enumerate(groups)}}
-    (folder / "report.json").write_text(json.dumps(report))
+    (folder / "report.json").write_text(json.dumps({"residual_before": {GROUP: residual}}))
 
 
-def test_an_effect_stands_out_only_above_every_clean_bundle_of_its_quantity(bench, tmp_path):
-    """Families are averaged over a bundle's groups and compared with the largest clean bundle
-    of the same quantity; a family above the clean ones by less than nothing is no excess, and
-    clean bundles of the other quantity do not count."""
+def test_cells_are_families_and_mesh_harmonics_with_their_sidebands(bench, tmp_path):
+    write(tmp_path, "b", {"line_mesh1": 3.0, "line_mesh1+g": -4.0, "line_mesh2": 0.0,
+                          "line_mesh2+g": 0.0, "kurtosis": 2.0})
+    cells = bench.residual_cells(tmp_path / "reports" / "b" / "report.json")
+    assert cells[(GROUP, "family line_mesh")] == pytest.approx((9 / 2) ** 0.5)
+    assert cells[(GROUP, "family line_mesh+g")] == pytest.approx((16 / 2) ** 0.5)
+    assert cells[(GROUP, "mesh harmonic 1")] == pytest.approx(5 / 2 ** 0.5)
+    assert cells[(GROUP, "mesh harmonic 2")] == 0.0
+    assert cells[(GROUP, "family kurtosis")] == 2.0
+    assert len(cells) == 5
+
+
+def test_a_bundle_stands_out_only_above_every_other_clean_bundle_of_its_quantity(bench,
+                                                                                   tmp_path):
+    """The excess is over the largest other clean bundle of the same quantity (a clean bundle
+    against the others: the chance level); clean bundles of the other quantity do not count;
+    a sharp mode shows as one harmonic with all its sidebands, not as a family."""
     q = "accel_m_s2"
-    write(tmp_path, bench.report_label("independent", None, 100, q),
-          [{"line_mesh": 11.0, "line_mesh+g": 4.0}, {"line_mesh": 13.0, "line_mesh+g": 4.0}])
+    flat = {f"line_mesh{k}{s}": 2.0 for k in (5, 6, 7) for s in ("", "+g", "-g")}
+    write(tmp_path, bench.report_label("independent", None, 100, q), flat)
     write(tmp_path, bench.report_label("independent", None, 101, q),
-          [{"line_mesh": 10.0, "line_mesh+g": 5.0}])
+          flat | {"line_mesh7": 3.0})
     write(tmp_path, bench.report_label("independent", None, 100, "dte_m"),
-          [{"line_mesh": 30.0, "line_mesh+g": 30.0}])
-    write(tmp_path, bench.report_label("independent", "gear_runout", 0, q),
-          [{"line_mesh": 12.0, "line_mesh+g": 18.0}, {"line_mesh": 12.0, "line_mesh+g": 12.0}])
-    write(tmp_path, bench.report_label("independent", "tip_relief", 0, q),
-          [{"line_mesh": 11.0, "line_mesh+g": 3.0}])
+          {k: 40.0 for k in flat})
+    write(tmp_path, bench.report_label("independent", "transfer_path", 0, q),
+          flat | {"line_mesh6": 12.0, "line_mesh6+g": 12.0, "line_mesh6-g": 12.0})
     runs = pd.DataFrame({"generator": "independent",
-                         "truth": ["none", "none", "none", "gear_runout", "tip_relief"],
-                         "seed": [100, 101, 100, 0, 0],
-                         "quantity": [q, q, "dte_m", q, q]})
-    seen = bench.visibility(runs, tmp_path).set_index("truth")
-    assert seen.loc["gear_runout", "family"] == "line_mesh+g"
-    assert seen.loc["gear_runout", "excess_db"] == pytest.approx(15.0 - 5.0)
-    assert seen.loc["tip_relief", "excess_db"] == pytest.approx(-1.0)  # 11 against 12
+                         "truth": ["none", "none", "none", "transfer_path"],
+                         "seed": [100, 101, 100, 0], "quantity": [q, q, "dte_m", q]})
+    seen = bench.visibility(runs, tmp_path).set_index(["truth", "seed"])
+    assert seen.loc[("transfer_path", 0), "cell"] == "mesh harmonic 6"
+    assert seen.loc[("transfer_path", 0), "excess_db"] == pytest.approx(10.0)
+    # each clean bundle against the other: harmonic 7 of bundle 101 by (9+4+4)/3 against 4
+    assert seen.loc[("none", 101), "excess_db"] == pytest.approx(round((17 / 3) ** 0.5 - 2, 1))
+    assert seen.loc[("none", 100), "excess_db"] <= 0.0
+    assert ("none", 100) in seen.index and len(seen) == 3  # the DTE bundle has no other clean one
