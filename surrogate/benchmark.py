@@ -132,12 +132,12 @@ class Novelty:
 
     def __init__(self, schema: FeatureSchema, train: pd.DataFrame, val: pd.DataFrame,
                  level: float = 0.99) -> None:
-        self.inputs, self.schema = list(schema.inputs), schema
+        self.schema = schema
         self.tree = spatial.cKDTree(self._scaled(train))
         self.radius = float(np.quantile(self.tree.query(self._scaled(val))[0], level))
 
     def _scaled(self, df: pd.DataFrame) -> np.ndarray:
-        return self.schema.scale(df[self.inputs].to_numpy(float))
+        return self.schema.scale(df[list(self.schema.inputs)].to_numpy(float))
 
     def rate(self, test: pd.DataFrame) -> float:
         return float(np.mean(self.tree.query(self._scaled(test))[0] > self.radius))
