@@ -327,6 +327,20 @@ def _lerp(tab, row, i0, i1, frac):
     return tab[row, i0] + (tab[row, i1] - tab[row, i0]) * frac
 
 
+@numba.njit(cache=True, fastmath=True, inline="always")
+def _entry_shift(q, u_in):
+    """Share of the entering pair's stiffness that an entry moved by ``u_in`` table cells adds
+    (> 0) or removes (< 0) at ``q`` cells from the nearest period boundary.
+
+    The tables' linear interpolation spreads the nominal entry over the cell before the
+    boundary (a ramp ``clamp(q + 1, 0, 1)``); the moved entry is the same ramp shifted by
+    ``u_in``. Their difference keeps the stiffness continuous in time (so the RK4 step converges
+    at its order, wherever the step's instants fall), removes or adds exactly ``u_in`` cells'
+    worth of the entering pair and vanishes with the shift.
+    """
+    return min(1.0, max(0.0, q + 1.0 - u_in)) - min(1.0, max(0.0, q + 1.0))
+
+
 @numba.njit(cache=True, fastmath=True)
 def _mesh(par, tab, pos, x, v, da, kf):
     """Force factors and forces of the pairs in contact at table position ``pos``.
@@ -353,13 +367,15 @@ def _mesh(par, tab, pos, x, v, da, kf):
         # moves by d(a sin aw')/da = 1/sin aw' per unit centre distance: pairs enter later
         # when the centres part, earlier (the next pair ahead of time) when they close
         n_per = par[CELLS_PER_PERIOD]
-        start = pos - (pos % n_per)
-        u_in = da * par[CELLS_PER_METRE]  # entry shift in table cells
-        if u_in > 0.0 and pos - start < u_in:
-            k_a = 0.0
-        elif u_in < 0.0 and pos - start >= n_per + u_in:
-            j = int(start + n_per) % n
-            k_c, g_c, l_c = tab[0, j] * kf, tab[2, j], tab[4, j]
+        q = pos % n_per  # cells from the nearest period boundary (where a pair enters)
+        if q > 0.5 * n_per:
+            q -= n_per
+        j = int(round(pos - q)) % n
+        share = _entry_shift(q, da * par[CELLS_PER_METRE])
+        if share < 0.0:  # the entering pair (slot a) comes later
+            k_a = max(k_a + share * tab[0, j] * kf, 0.0)
+        elif share > 0.0:  # it comes earlier, beside the pairs of the tables
+            k_c, g_c, l_c = share * tab[0, j] * kf, tab[2, j], tab[4, j]
     c_v = par[DAMPING] * v / (k_a + k_b + k_c)
     f_a = _contact(k_a, x - g_a, par[HALF_BACKLASH], k_a * c_v)
     f_b = _contact(k_b, x - g_b, par[HALF_BACKLASH], k_b * c_v)
