@@ -370,7 +370,7 @@ def _mesh(par, tab, pos, x, v, da, kf):
         q = pos % n_per  # cells from the nearest period boundary (where a pair enters)
         if q > 0.5 * n_per:
             q -= n_per
-        j = int(round(pos - q)) % n
+        j = int(pos - q + 0.5) % n  # the boundary's cell (pos - q >= 0)
         share = _entry_shift(q, da * par[CELLS_PER_METRE])
         if share < 0.0:  # the entering pair (slot a) comes later
             k_a = max(k_a + share * tab[0, j] * kf, 0.0)

@@ -1292,6 +1292,9 @@ class Round:
     # the judged candidate's place in the ranking: the first that passes the null test, else
     # the first
     pick: int = 0
+    # the other candidates that pass the null test too, in ranking order: where there are
+    # any, the records do not single out the adopted effect
+    also_passing: list[Candidate] = field(default_factory=list)
 
     @property
     def best(self) -> Candidate:
@@ -1374,8 +1377,10 @@ def attribute(rec: Records, judged: Records, declared: Effect | None, declared_v
             wear_score(rec, after.nuisance, after.effect, after.values))
     log.info("%s adopted; the wear read by %s (train leave-one-out %s), held-out %s -> %s",
              best.name, after.name, reading, *wear)
+    also = [c for k, (c, (_, ch)) in enumerate(zip(ranking, verdicts, strict=True))
+            if k != pick and holds(ch)]
     return Round(ranking, effects, null_bic, allowed, adopted, base_test, checks, after,
-                 reading, wear, pick)
+                 reading, wear, pick, also)
 
 
 def stacked(first: Effect, values: dict, second: Effect) -> Effect:
@@ -1497,7 +1502,9 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
                                 "after_mm": list(wear_after.estimate_mm)}
                                if wear_before and wear_after else None),
             "verdicts": [{"effect": r.best.name, "rank": r.pick, "adopted": r.adopted,
-                          "checks": r.checks, "wear_reading": r.wear_reading} for r in rounds],
+                          "checks": r.checks, "wear_reading": r.wear_reading,
+                          "also_passing": {c.name: c.heldout for c in r.also_passing}}
+                         for r in rounds],
             "wear_read_by": (last.reader if last else declared).name,
             "second_round": ({"on": first.best.name, "rank": rounds[1].pick,
                               "adopted": rounds[1].adopted,

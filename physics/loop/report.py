@@ -87,6 +87,11 @@ def verdict_line(v: dict) -> str:
            f"Candidate {rank + 1} by held-out error (the first that passes)")
     line = (f"{who} {v['effect']}: {'; '.join(parts)}: "
             f"{'adopted' if v['adopted'] else 'not adopted'}.")
+    also = v.get("also_passing")
+    if also:
+        others = ", ".join(f"{name} (held-out error {err:.3f})" for name, err in also.items())
+        line += (f" Also passing the null test: {others}; the records do not single out "
+                 f"{v['effect']}, which leads by held-out error.")
     w = v.get("wear_reading")
     if w:
         line += (f" The wear estimate is read with {w['reads_with']}: "
