@@ -178,7 +178,7 @@ def best_candidate(r) -> dict:
             "explained": min(best["explained"].values(), default=0.0),
             "allowed": r["decision_rule"]["allowed"], "delta_bic": best["delta_bic"],
             "separable": best["separable"],
-            "also_passing": ";".join(r["verdicts"][0].get("also_passing") or {})}
+            "also_passing": ";".join(c["effect"] for c in r["verdicts"][0]["also_passing"])}
 
 
 def solo_timing(generator: str, model_form: bool, tmp: Path, both: bool = False) -> None:

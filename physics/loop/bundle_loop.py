@@ -1503,7 +1503,9 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
                                if wear_before and wear_after else None),
             "verdicts": [{"effect": r.best.name, "rank": r.pick, "adopted": r.adopted,
                           "checks": r.checks, "wear_reading": r.wear_reading,
-                          "also_passing": {c.name: c.heldout for c in r.also_passing}}
+                          "also_passing": [{"effect": c.name, "option": c.option,
+                                            "heldout_error": c.heldout}
+                                           for c in r.also_passing]}
                          for r in rounds],
             "wear_read_by": (last.reader if last else declared).name,
             "second_round": ({"on": first.best.name, "rank": rounds[1].pick,

@@ -89,7 +89,8 @@ def verdict_line(v: dict) -> str:
             f"{'adopted' if v['adopted'] else 'not adopted'}.")
     also = v.get("also_passing")
     if also:
-        others = ", ".join(f"{name} (held-out error {err:.3f})" for name, err in also.items())
+        others = ", ".join(f"{c['effect']}{' ' + str(c['option']) if c['option'] else ''} "
+                           f"(held-out error {c['heldout_error']:.3f})" for c in also)
         line += (f" Also passing the null test: {others}; the records do not single out "
                  f"{v['effect']}, which leads by held-out error.")
     w = v.get("wear_reading")

@@ -544,7 +544,7 @@ def test_loop_app_finds_an_undeclared_transfer_path(tmp_path, scn):
     assert report["second_round"] is None
     verdict = report["verdicts"][0]  # every condition held
     assert verdict["adopted"] and all(c["holds"] for c in verdict["checks"].values())
-    assert verdict["also_passing"] == {}  # the only candidate
+    assert verdict["also_passing"] == []  # the only candidate
     # the adopted effect reads the wear: it kept the estimate's leave-one-out skill on the
     # train records
     reading = verdict["wear_reading"]

@@ -220,9 +220,13 @@ def test_the_null_test_is_one_rule_for_both_loops_and_says_what_stopped_it():
     assert line.startswith("Candidate 2 by held-out error (the first that passes) tooth_defect")
     # a second candidate that passes as well is named: the records do not single out the first
     line = verdict_line({"effect": "transfer_path", "adopted": True, "checks": passing,
-                         "also_passing": {"tooth_defect": 0.777}})
-    assert ("Also passing the null test: tooth_defect (held-out error 0.777); the records do "
-            "not single out transfer_path") in line
+                         "also_passing": [{"effect": "tooth_defect", "option": {},
+                                           "heldout_error": 0.777},
+                                          {"effect": "torque_ripple", "option": {"order": 2},
+                                           "heldout_error": 0.8}]})
+    assert ("Also passing the null test: tooth_defect (held-out error 0.777), torque_ripple "
+            "{'order': 2} (held-out error 0.800); the records do not single out "
+            "transfer_path") in line
 
 
 @given(before=st.floats(-2.0, 1.0), loss=st.floats(0.0, 1.0), share=st.floats(0.0, 1.0),
