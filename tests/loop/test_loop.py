@@ -277,7 +277,6 @@ def test_gear_runout_raises_the_gear_sidebands(scn, healthy):
     assert a[1] > 10 * a[0]
 
 
-
 def test_gear_runout_converges_under_step_halving(scn, healthy):
     """The run-out moves the entry of each pair along the path of contact (later while the
     centres part, earlier while they close: both within 0.07 s). The moved entry keeps the
@@ -293,6 +292,7 @@ def test_gear_runout_converges_under_step_halving(scn, healthy):
     d1, d2 = np.max(np.abs(dte[0] - dte[1])), np.max(np.abs(dte[1] - dte[2]))
     assert d2 < d1 / 3
     assert d2 < 1e-2 * np.ptp(dte[2])
+
 
 def test_torque_ripple_shows_at_its_shaft_order(scn, healthy):
     rip = effect("torque_ripple").model(healthy, {"ripple_pct": 5.0, "order": 2})
