@@ -17,22 +17,26 @@ shifts the model form too). Test sets:
   (:mod:`physics.loop.independent_simulator`, another model form) at 2000/300 and 1800/290;
 - ``independent_fleet_heldout``: gearboxes of a fleet of the independent simulator
   (:func:`independent_fleet`) that neither network saw, scored for the physics-trained network
-  (``case3``, ``all``) and for the same network fine-tuned on the fleet's other labelled
-  gearboxes, all its weights (``case3_finetuned``, ``all_finetuned``) or its output layers
-  only (``case3_head``, ``all_head``, :data:`FINETUNES`): what a user with a few labelled
-  records of his own gearbox type gets (README, training on your own data).
+  (``case3``, ``all``) and for networks trained on the fleet's other labelled gearboxes
+  (:data:`FINETUNES`): the physics-trained one fine-tuned, all its weights
+  (``case3_finetuned``, ``all_finetuned``) or its output layers only (``case3_head``,
+  ``all_head``), and one of the DTE features trained on those gearboxes alone
+  (``case3_dte_scratch``, ``all_dte_scratch``): what a user with a few labelled records of his
+  own gearbox type gets (README, training on your own data). Per training seed of ``case3``
+  (the seed draws the fleet's split too), once for ``all``.
 
 The estimator (thesis 4.4: cubics of DTE peak-to-peak and kurtosis in cycles and the empirical
 wear law, :class:`physics.estimators.empirical_inverse.EmpiricalInverse`) is fitted on the same
 training trajectories as the network; so is the null model ``training_median``
-(:func:`typical_wear`). Columns: RMSE [mm], R2, mean and maximum relative error [%], the
-conformal interval's coverage (surrogate), out-of-range (surrogate) or invalid (estimator) flag
-rate, the share of rows farther from the physics training rows than 99 % of the validation rows
-(:class:`Novelty`, surrogate), the median reading of the unworn rows [mm] and the mean relative
-error of the readings referenced to each gearbox's unworn record [%] (:func:`referenced`),
-batch throughput [rows/s] and single-row latency [us] on the CPU. Writes
-``benchmark.csv``, ``parity.png`` and the trained models into ``--out`` (default
-``logs/benchmark/<time>``).
+(:func:`typical_wear`); beside a network trained on the fleet they are refitted on the fleet's
+labelled gearboxes it trained on (:func:`fit_fleet_estimator`). Columns: RMSE [mm], R2, mean
+and maximum relative error [%], the conformal interval's coverage (surrogate), out-of-range
+(surrogate) or invalid (estimator) flag rate, the share of rows farther from the physics
+training rows than 99 % of the validation rows (:class:`Novelty`, surrogate), the median
+reading of the unworn rows [mm] and the mean relative error of the readings referenced to each
+gearbox's unworn record [%] (:func:`referenced`), batch throughput [rows/s] and single-row
+latency [us] on the CPU. Writes ``benchmark.csv``, ``parity.png`` and the trained models into
+``--out`` (default ``logs/benchmark/<time>``).
 """
 
 from __future__ import annotations
@@ -77,6 +81,15 @@ def train_config(root: Path, out: Path, *overrides: str):
 def fit_estimator(train: pd.DataFrame) -> EmpiricalInverse:
     return EmpiricalInverse.fit(train.cycles.to_numpy(), train.dte_peak_to_peak.to_numpy(),
                                 train.dte_kurtosis.to_numpy(), train[TARGET].to_numpy())
+
+
+def fit_fleet_estimator(labelled: pd.DataFrame) -> EmpiricalInverse:
+    """The estimator refitted on a fleet's labelled gearboxes, the rows a fine-tuned network
+    trained on. The independent simulator's records carry wear depths, not cycle counts; at a
+    fixed load and profile shape its Archard depth grows in proportion to the cycles, and the
+    estimator's cubics and wear law do not depend on the unit of N, so the depth stands in
+    for the cycle count (1 um per 1e6 cycles)."""
+    return fit_estimator(labelled.assign(cycles=labelled[TARGET] * 1e9))
 
 
 def throughput(fn, x: np.ndarray) -> tuple[float, float]:
@@ -193,9 +206,13 @@ FLEET_FIELDS = ("runout1_um", "mesh_damping_ratio", "single_stiffness_N_mm_um",
 FLEET_SPREAD = 0.25
 #: fleet gearboxes: labelled for fine-tuning, validating (the interval) and held out
 FLEET_SPLIT = {"train": 4, "val": 2, "test": 4}
-#: fine-tunes on the fleet: label -> train.py overrides (every weight at a tenth of the
-#: learning rate; or the output layers only, at the default rate)
-FINETUNES = {"finetuned": ["model.lr=0.0003"], "head": ["model.trainable=head"]}
+#: networks trained on the fleet's labelled gearboxes: label -> (train.py overrides, whether
+#: they start from the physics-trained network): every weight fine-tuned at a tenth of the
+#: learning rate, the output layers only at the default rate, or a network of the DTE
+#: features (and the operating point) trained on the labelled gearboxes alone
+FINETUNES = {"finetuned": (["model.lr=0.0003"], True),
+             "head": (["model.trainable=head"], True),
+             "dte_scratch": (["data.sensors=[dte]"], False)}
 
 
 def shifted_ranges(share: float = 0.4, base: NuisanceRanges | None = None) -> dict:
@@ -241,26 +258,33 @@ def independent_fleet(gearboxes: int, seed: int = 1) -> pd.DataFrame:
     return pd.concat(frames, ignore_index=True)
 
 
-def finetune(root: Path, out: Path, name: str, fleet: pd.DataFrame, extra: list[str],
-             label: str) -> tuple[Surrogate, pd.DataFrame]:
-    """Fine-tune model ``name`` on the fleet's labelled gearboxes the way a user would
-    (``data.table``, ``init_from`` and the overrides of ``FINETUNES[label]``); returns the
-    network and the fleet's held-out rows."""
-    table = out / f"fleet_{name}.csv"
+def finetune(root: Path, physics: Path, name: str, fleet: pd.DataFrame, extra: list[str],
+             label: str, seed: int) -> tuple[Surrogate, pd.DataFrame, pd.DataFrame]:
+    """Train model ``name`` on the fleet's labelled gearboxes the way a user would
+    (``data.table``, the overrides of ``FINETUNES[label]`` and, where it says so, ``init_from``
+    the physics-trained network in folder ``physics``; ``seed`` draws the fleet's split);
+    returns the network, the fleet's rows it trained on and its held-out rows."""
+    table = physics.parent.parent / f"fleet_{name}.csv"
     atomic_write(table, lambda p: fleet.to_csv(p, index=False))
-    folder = out / "models" / f"{name}_{label}"
-    cfg = train_config(root, folder, *MODELS[name], *extra,
+    folder = physics.parent / f"{physics.name}_{label}"
+    overrides, from_physics = FINETUNES[label]
+    if from_physics:
+        overrides = [f"init_from={physics / 'wear_surrogate.pt'}", *overrides]
+    cfg = train_config(root, folder, *MODELS[name], *extra, f"seed={seed}",
                        f"data.table={table}", "data.group=gearbox",
                        f"data.val_replicates={FLEET_SPLIT['val']}",
                        f"data.test_replicates={FLEET_SPLIT['test']}",
-                       f"init_from={out / 'models' / name / 'wear_surrogate.pt'}",
-                       *FINETUNES[label])
-    log.info("model %s: fine-tuning (%s) on %d labelled gearboxes", name, label,
-             FLEET_SPLIT["train"])
+                       *overrides)
+    log.info("model %s: %s on %d labelled gearboxes", name, label, FLEET_SPLIT["train"])
     train(cfg)
     dm = instantiate(cfg.data)
     dm.setup()
-    return Surrogate.load(folder / "wear_surrogate.pt"), dm.frames["test"]
+    ids = np.sort(fleet.gearbox.unique())  # the table's groups in the data module's order
+
+    def rows(split: str) -> pd.DataFrame:  # every column, whatever the network's inputs
+        return fleet[fleet.gearbox.isin(ids[dm.frames[split].replicate.unique()])]
+
+    return Surrogate.load(folder / "wear_surrogate.pt"), rows("train"), rows("test")
 
 
 def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5) -> pd.DataFrame:
@@ -305,15 +329,21 @@ def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5) ->
             rows += [{**row, "seed": seed} for row in r]
             if seed == 0:
                 plots[(name, set_name)] = plot
-        if name in ("case3", "all") and seed == 0:
+        if name in ("case3", "all"):
             nets, mine = {name: surrogate}, fleet[fleet.case.isin(cases)]
-            for label in FINETUNES:  # the same split each time: ``held`` is one set of rows
-                nets[f"{name}_{label}"], held = finetune(root, out, name, mine, extra, label)
+            for label in FINETUNES:  # the same split each time: one set of rows each
+                nets[f"{name}_{label}"], labelled, held = finetune(root, folder, name, mine,
+                                                                   extra, label, seed)
+            # a network trained on the fleet against the estimator and null model given the
+            # same labelled gearboxes; the physics-trained one against those of its rows
+            refit = fit_fleet_estimator(labelled), typical_wear(labelled)
             for label, net in nets.items():
-                r, plots[(label, "independent_fleet_heldout")] = evaluate(
-                    f"{label}/independent_fleet_heldout", net, est, typical, held,
-                    speed=False, novelty=novelty)
+                e, t = (est, typical) if label == name else refit
+                r, plot = evaluate(f"{label}/independent_fleet_heldout", net, e, t, held,
+                                   speed=False, novelty=novelty)
                 rows += [{**row, "seed": seed} for row in r]
+                if seed == 0:
+                    plots[(label, "independent_fleet_heldout")] = plot
     table = pd.DataFrame(rows)
     atomic_write(out / "benchmark.csv", lambda p: table.to_csv(p, index=False))
     plt = pyplot()

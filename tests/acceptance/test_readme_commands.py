@@ -122,8 +122,9 @@ CASES: dict[str, Case] = {
     "python -m surrogate.predict ckpt=logs/train/runs/<run>/wear_surrogate.pt "
     "input=data/dataset_case3.parquet output=wear.csv": Case(before=(TRAIN_CASE3,),
                                                        check=_files("wear.csv")),
-    f"python train.py {TABLE_ARGS}": Case(tuple(FAST_TRAIN + SMALL_SPLIT), before=(USER_TABLE,),
-                                          check=_files("logs/train/runs/case3_*/metrics.json")),
+    f"python train.py {TABLE_ARGS} data.sensors=[dte]": Case(
+        tuple(FAST_TRAIN + SMALL_SPLIT), before=(USER_TABLE,),
+        check=_files("logs/train/runs/case3_*/metrics.json")),
     f"python train.py {TABLE_ARGS} init_from=logs/train/runs/<run>/wear_surrogate.pt "
     "model.trainable=head": Case(("trainer.max_epochs=3", "trainer.min_epochs=1", *SMALL_SPLIT),
                                  before=(USER_TABLE,)),

@@ -417,6 +417,24 @@ def test_the_benchmarks_fleet_is_labelled_gearboxes_that_differ():
     assert np.isfinite(fleet.drop(columns="cycles").to_numpy(float)).all()
 
 
+def test_the_estimator_refitted_on_a_fleet_ignores_the_cycle_unit_and_reads_its_gearboxes():
+    """Beside a fine-tuned network the estimator gets the same labelled gearboxes, the wear
+    depth standing in for the cycle count: its readings do not depend on that stand-in's unit,
+    and on a gearbox it did not see they rise with the wear."""
+    from surrogate.benchmark import fit_estimator, fit_fleet_estimator, independent_fleet
+
+    fleet = independent_fleet(3)
+    fleet = fleet[fleet.case == 3]
+    labelled, held = fleet[fleet.gearbox < 2], fleet[fleet.gearbox == 2]
+    p2p, kurt = held.dte_peak_to_peak.to_numpy(), held.dte_kurtosis.to_numpy()
+    read = fit_fleet_estimator(labelled).predict(p2p, kurt).wear
+    other = fit_estimator(labelled.assign(cycles=labelled.root_wear_mm * 4e8))
+    np.testing.assert_allclose(other.predict(p2p, kurt).wear, read, rtol=1e-3, atol=1e-5)
+    true = held.root_wear_mm.to_numpy()
+    assert np.corrcoef(read, true)[0, 1] > 0.8
+    assert abs(read[true == true.max()][0] - true.max()) < 0.5 * true.max()
+
+
 def test_the_benchmark_summarises_seeds_and_scores_a_null_model():
     """Over training seeds: the mean and the worst error and the smallest coverage per model,
     test set and estimator; the null model is the median of the worn training rows."""
