@@ -18,7 +18,7 @@ shifts the model form too). Test sets:
 - ``independent_fleet_heldout``: gearboxes of a fleet of the independent simulator
   (:func:`independent_fleet`) that neither network saw, scored for the physics-trained network
   (``case3``, ``all``) and for networks trained on the fleet's other labelled gearboxes
-  (:data:`FINETUNES`): the physics-trained one fine-tuned, all its weights
+  (:data:`FLEET_NETWORKS`): the physics-trained one fine-tuned, all its weights
   (``case3_finetuned``, ``all_finetuned``) or its output layers only (``case3_head``,
   ``all_head``), and one of the DTE features trained on those gearboxes alone
   (``case3_dte_scratch``, ``all_dte_scratch``): what a user with a few labelled records of his
@@ -84,11 +84,11 @@ def fit_estimator(train: pd.DataFrame) -> EmpiricalInverse:
 
 
 def fit_fleet_estimator(labelled: pd.DataFrame) -> EmpiricalInverse:
-    """The estimator refitted on a fleet's labelled gearboxes, the rows a fine-tuned network
-    trained on. The independent simulator's records carry wear depths, not cycle counts; at a
-    fixed load and profile shape its Archard depth grows in proportion to the cycles, and the
-    estimator's cubics and wear law do not depend on the unit of N, so the depth stands in
-    for the cycle count (1 um per 1e6 cycles)."""
+    """The estimator refitted on a fleet's labelled gearboxes, the rows a network trained on
+    the fleet learnt from. The independent simulator's records carry wear depths, not cycle
+    counts; at a fixed load and profile shape its Archard depth grows in proportion to the
+    cycles, and the estimator's cubics and wear law do not depend on the unit of N, so the
+    depth stands in for the cycle count (1 um per 1e6 cycles)."""
     return fit_estimator(labelled.assign(cycles=labelled[TARGET] * 1e9))
 
 
@@ -210,7 +210,7 @@ FLEET_SPLIT = {"train": 4, "val": 2, "test": 4}
 #: they start from the physics-trained network): every weight fine-tuned at a tenth of the
 #: learning rate, the output layers only at the default rate, or a network of the DTE
 #: features (and the operating point) trained on the labelled gearboxes alone
-FINETUNES = {"finetuned": (["model.lr=0.0003"], True),
+FLEET_NETWORKS = {"finetuned": (["model.lr=0.0003"], True),
              "head": (["model.trainable=head"], True),
              "dte_scratch": (["data.sensors=[dte]"], False)}
 
@@ -258,16 +258,16 @@ def independent_fleet(gearboxes: int, seed: int = 1) -> pd.DataFrame:
     return pd.concat(frames, ignore_index=True)
 
 
-def finetune(root: Path, physics: Path, name: str, fleet: pd.DataFrame, extra: list[str],
+def train_on_fleet(root: Path, physics: Path, name: str, fleet: pd.DataFrame, extra: list[str],
              label: str, seed: int) -> tuple[Surrogate, pd.DataFrame, pd.DataFrame]:
     """Train model ``name`` on the fleet's labelled gearboxes the way a user would
-    (``data.table``, the overrides of ``FINETUNES[label]`` and, where it says so, ``init_from``
+    (``data.table``, the overrides of ``FLEET_NETWORKS[label]`` and, where it says so, ``init_from``
     the physics-trained network in folder ``physics``; ``seed`` draws the fleet's split);
     returns the network, the fleet's rows it trained on and its held-out rows."""
     table = physics.parent.parent / f"fleet_{name}.csv"
     atomic_write(table, lambda p: fleet.to_csv(p, index=False))
     folder = physics.parent / f"{physics.name}_{label}"
-    overrides, from_physics = FINETUNES[label]
+    overrides, from_physics = FLEET_NETWORKS[label]
     if from_physics:
         overrides = [f"init_from={physics / 'wear_surrogate.pt'}", *overrides]
     cfg = train_config(root, folder, *MODELS[name], *extra, f"seed={seed}",
@@ -331,8 +331,8 @@ def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5) ->
                 plots[(name, set_name)] = plot
         if name in ("case3", "all"):
             nets, mine = {name: surrogate}, fleet[fleet.case.isin(cases)]
-            for label in FINETUNES:  # the same split each time: one set of rows each
-                nets[f"{name}_{label}"], labelled, held = finetune(root, folder, name, mine,
+            for label in FLEET_NETWORKS:  # the same split each time: one set of rows each
+                nets[f"{name}_{label}"], labelled, held = train_on_fleet(root, folder, name, mine,
                                                                    extra, label, seed)
             # a network trained on the fleet against the estimator and null model given the
             # same labelled gearboxes; the physics-trained one against those of its rows
@@ -378,7 +378,8 @@ def main(argv: list[str] | None = None) -> None:
                                      epilog="Takes about 5 minutes on 2 cores the first time "
                                             "(the case-3, all-case, model-form and shifted "
                                             "datasets are generated once into data/), 3 "
-                                            "minutes after (10 trainings and 4 fine-tunes).")
+                                            "minutes after (10 trainings on the physics and "
+                                            "18 on the fleet's labelled gearboxes).")
     parser.add_argument("--out", type=Path, default=None,
                         help="output folder (default: logs/benchmark/<time>)")
     parser.add_argument("--seeds", type=int, default=5,
