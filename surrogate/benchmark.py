@@ -375,9 +375,9 @@ def seed_summary(table: pd.DataFrame) -> pd.DataFrame:
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m surrogate.benchmark",
                                      description=__doc__.split("\n\n")[0],
-                                     epilog="Takes about 5 minutes on 2 cores the first time "
+                                     epilog="Takes about 7 minutes on 2 cores the first time "
                                             "(the case-3, all-case, model-form and shifted "
-                                            "datasets are generated once into data/), 3 "
+                                            "datasets are generated once into data/), 4 "
                                             "minutes after (10 trainings on the physics and "
                                             "18 on the fleet's labelled gearboxes).")
     parser.add_argument("--out", type=Path, default=None,

@@ -36,7 +36,7 @@ class DataConfig:
     seed: int = 0
     generate: dict[str, Any] = field(default_factory=dict)  # DatasetSpec values if built
     #: gearboxes (trajectories) a built dataset simulates, shared by the trained cases and
-    #: never fewer than 64 per case (``data.generate.replicates`` sets the count per case
+    #: never fewer than 128 per case (``data.generate.replicates`` sets the count per case
     #: instead). 256 for one case: docs/surrogate.md measures 64 against 256 over seeds
     gearboxes: int = 256
     jobs: int = 2  # parallel processes when the dataset is built

@@ -145,11 +145,11 @@ def test_split_is_by_trajectory_and_the_scaling_uses_training_rows(dataset):
 
 
 def test_a_built_dataset_holds_enough_gearboxes_and_a_tenth_validates(tmp_path):
-    """The default training set: 256 gearboxes for one case, 64 per case for all five (the
+    """The default training set: 256 gearboxes for one case, 128 per case for all five (the
     floor), an explicit ``data.generate.replicates`` wins; a tenth of a case's trajectories
     validates (8 at least), and the split takes it when ``val_replicates`` is left null."""
-    assert replicates_per_case(256, 1) == 256 and replicates_per_case(256, 5) == 64
-    assert replicates_per_case(640, 5) == 128 and replicates_per_case(1, 3) == 64
+    assert replicates_per_case(256, 1) == 256 and replicates_per_case(256, 5) == 128
+    assert replicates_per_case(1280, 5) == 256 and replicates_per_case(1, 3) == 128
     assert validation_count(256) == 26 and validation_count(64) == 8
     cfg = train_cfg(tmp_path, tmp_path / "x.parquet", "case=3", "data.val_replicates=null")
     dm = instantiate(cfg.data)
