@@ -32,11 +32,11 @@ training trajectories as the network; so is the null model ``training_median``
 labelled gearboxes it trained on (:func:`fit_fleet_estimator`). Columns: RMSE [mm], R2, mean
 and maximum relative error [%], the conformal interval's coverage (surrogate), out-of-range
 (surrogate) or invalid (estimator) flag rate, the share of rows farther from the physics
-training rows than 99 % of the validation rows (:class:`Novelty`, surrogate), the median
-reading of the unworn rows [mm] and the mean relative error of the readings referenced to each
-gearbox's unworn record [%] (:func:`referenced`), batch throughput [rows/s] and single-row
-latency [us] on the CPU. Writes ``benchmark.csv``, ``parity.png`` and the trained models into
-``--out`` (default ``logs/benchmark/<time>``).
+training rows than 99 % of the validation rows (:class:`Novelty`, physics-trained networks),
+the median reading of the unworn rows [mm] and the mean relative error of the readings
+referenced to each gearbox's unworn record [%] (:func:`referenced`), batch throughput [rows/s]
+and single-row latency [us] on the CPU. Writes ``benchmark.csv``, ``parity.png`` and the
+trained models into ``--out`` (default ``logs/benchmark/<time>``).
 """
 
 from __future__ import annotations
@@ -86,9 +86,9 @@ def fit_estimator(train: pd.DataFrame) -> EmpiricalInverse:
 def fit_fleet_estimator(labelled: pd.DataFrame) -> EmpiricalInverse:
     """The estimator refitted on a fleet's labelled gearboxes, the rows a network trained on
     the fleet learnt from. The independent simulator's records carry wear depths, not cycle
-    counts; at a fixed load and profile shape its Archard depth grows in proportion to the
-    cycles, and the estimator's cubics and wear law do not depend on the unit of N, so the
-    depth stands in for the cycle count (1 um per 1e6 cycles)."""
+    counts; at each operating point, with its profile shape fixed, its Archard depth grows in
+    proportion to the cycles, and the estimator's cubics and wear law do not depend on the
+    unit of N, so the depth stands in for the cycle count (1 um per 1e6 cycles)."""
     return fit_estimator(labelled.assign(cycles=labelled[TARGET] * 1e9))
 
 
@@ -157,7 +157,11 @@ class Novelty:
 
 
 def evaluate(name: str, surrogate: Surrogate, est: EmpiricalInverse, typical: float,
-             test: pd.DataFrame, speed: bool, novelty: Novelty) -> tuple[list[dict], dict]:
+             test: pd.DataFrame, speed: bool, novelty: Novelty | None
+             ) -> tuple[list[dict], dict]:
+    """The network, the estimator and the null model on ``test``: one row each of
+    :func:`wear_errors` and the columns of the module text (``novel_rate`` NaN without a
+    ``novelty`` test), and the parity plot's data."""
     true = test[TARGET].to_numpy()
     pred = surrogate.predict(test[list(surrogate.schema.inputs)])
     e = est.predict(test.dte_peak_to_peak.to_numpy(), test.dte_kurtosis.to_numpy())
@@ -166,7 +170,8 @@ def evaluate(name: str, surrogate: Surrogate, est: EmpiricalInverse, typical: fl
     est_unworn, est_ref = referenced(test, e.wear)
     rows = [{"scenario": name, "estimator": "surrogate", "test_rows": len(test),
              **wear_errors(pred[f"{TARGET}_pred"], true), "interval_coverage": float(inside),
-             "flag_rate": float(pred.out_of_range.mean()), "novel_rate": novelty.rate(test),
+             "flag_rate": float(pred.out_of_range.mean()),
+             "novel_rate": novelty.rate(test) if novelty else math.nan,
              "unworn_reading": net_unworn, "referenced_mre_pct": net_ref},
             {"scenario": name, "estimator": "empirical_inverse", "test_rows": len(test),
              **wear_errors(e.wear, true), "interval_coverage": np.nan,
@@ -204,15 +209,15 @@ INDEPENDENT_WEAR_MM = (0.0, 0.003, 0.006, 0.009, 0.012, 0.015)
 FLEET_FIELDS = ("runout1_um", "mesh_damping_ratio", "single_stiffness_N_mm_um",
                 "housing_mass_kg", "half_backlash_um")
 FLEET_SPREAD = 0.25
-#: fleet gearboxes: labelled for fine-tuning, validating (the interval) and held out
+#: fleet gearboxes: labelled (trained on), validating (the interval) and held out
 FLEET_SPLIT = {"train": 4, "val": 2, "test": 4}
 #: networks trained on the fleet's labelled gearboxes: label -> (train.py overrides, whether
 #: they start from the physics-trained network): every weight fine-tuned at a tenth of the
 #: learning rate, the output layers only at the default rate, or a network of the DTE
 #: features (and the operating point) trained on the labelled gearboxes alone
 FLEET_NETWORKS = {"finetuned": (["model.lr=0.0003"], True),
-             "head": (["model.trainable=head"], True),
-             "dte_scratch": (["data.sensors=[dte]"], False)}
+                  "head": (["model.trainable=head"], True),
+                  "dte_scratch": (["data.sensors=[dte]"], False)}
 
 
 def shifted_ranges(share: float = 0.4, base: NuisanceRanges | None = None) -> dict:
@@ -258,14 +263,14 @@ def independent_fleet(gearboxes: int, seed: int = 1) -> pd.DataFrame:
     return pd.concat(frames, ignore_index=True)
 
 
-def train_on_fleet(root: Path, physics: Path, name: str, fleet: pd.DataFrame, extra: list[str],
-             label: str, seed: int) -> tuple[Surrogate, pd.DataFrame, pd.DataFrame]:
-    """Train model ``name`` on the fleet's labelled gearboxes the way a user would
-    (``data.table``, the overrides of ``FLEET_NETWORKS[label]`` and, where it says so, ``init_from``
-    the physics-trained network in folder ``physics``; ``seed`` draws the fleet's split);
-    returns the network, the fleet's rows it trained on and its held-out rows."""
-    table = physics.parent.parent / f"fleet_{name}.csv"
-    atomic_write(table, lambda p: fleet.to_csv(p, index=False))
+def train_on_fleet(root: Path, physics: Path, name: str, table: Path, extra: list[str],
+                   label: str, seed: int) -> tuple[Surrogate, pd.DataFrame, pd.DataFrame]:
+    """Train model ``name`` on the labelled gearboxes of the fleet table ``table`` the way a
+    user would (``data.table``, the overrides of ``FLEET_NETWORKS[label]`` and, where it says
+    so, ``init_from`` the physics-trained network in folder ``physics``; ``seed`` draws the
+    fleet's split); returns the network, the fleet's rows it trained on and its held-out rows
+    (every column of the table, whatever the network's inputs)."""
+    fleet = pd.read_csv(table)
     folder = physics.parent / f"{physics.name}_{label}"
     overrides, from_physics = FLEET_NETWORKS[label]
     if from_physics:
@@ -281,7 +286,7 @@ def train_on_fleet(root: Path, physics: Path, name: str, fleet: pd.DataFrame, ex
     dm.setup()
     ids = np.sort(fleet.gearbox.unique())  # the table's groups in the data module's order
 
-    def rows(split: str) -> pd.DataFrame:  # every column, whatever the network's inputs
+    def rows(split: str) -> pd.DataFrame:
         return fleet[fleet.gearbox.isin(ids[dm.frames[split].replicate.unique()])]
 
     return Surrogate.load(folder / "wear_surrogate.pt"), rows("train"), rows("test")
@@ -289,8 +294,10 @@ def train_on_fleet(root: Path, physics: Path, name: str, fleet: pd.DataFrame, ex
 
 def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5) -> pd.DataFrame:
     """Train the models of :data:`MODELS` (``case3`` once per training seed: the seed draws its
-    split and start, and one seed's figure says little) and score them and the estimator on
-    the test sets; column ``seed``."""
+    split and start, and one seed's figure says little) and, for ``case3`` and ``all``, the
+    networks of :data:`FLEET_NETWORKS` on the fleet's labelled gearboxes; score them, the
+    estimator and the null model (refitted on the fleet beside a network trained on it) on the
+    test sets; column ``seed``."""
     extra = [f"trainer.max_epochs={max_epochs}"] if max_epochs else []
     shifted = load_dataset(root / "data" / "dataset_shifted.parquet",
                            {"seed": 1, "replicates": 8, "nuisance": shifted_ranges()})
@@ -330,17 +337,26 @@ def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5) ->
             if seed == 0:
                 plots[(name, set_name)] = plot
         if name in ("case3", "all"):
-            nets, mine = {name: surrogate}, fleet[fleet.case.isin(cases)]
-            for label in FLEET_NETWORKS:  # the same split each time: one set of rows each
-                nets[f"{name}_{label}"], labelled, held = train_on_fleet(root, folder, name, mine,
-                                                                   extra, label, seed)
+            table, mine = out / f"fleet_{name}.csv", fleet[fleet.case.isin(cases)]
+            if seed == 0:  # the same gearboxes for every seed
+                atomic_write(table, lambda p, rows=mine: rows.to_csv(p, index=False))
+            nets, splits = {name: surrogate}, set()
+            for label in FLEET_NETWORKS:
+                nets[f"{name}_{label}"], labelled, held = train_on_fleet(
+                    root, folder, name, table, extra, label, seed)
+                splits.add((tuple(labelled.index), tuple(held.index)))
+            if len(splits) != 1:  # the split is the seed's, whatever the network's overrides
+                raise RuntimeError(f"the fleet networks of {name} (seed {seed}) were split "
+                                   "differently; their scores would not be comparable")
             # a network trained on the fleet against the estimator and null model given the
-            # same labelled gearboxes; the physics-trained one against those of its rows
+            # same labelled gearboxes (and without the physics rows' novelty test); the
+            # physics-trained one against those fitted on its rows
             refit = fit_fleet_estimator(labelled), typical_wear(labelled)
             for label, net in nets.items():
-                e, t = (est, typical) if label == name else refit
+                own = label == name
+                e, t = (est, typical) if own else refit
                 r, plot = evaluate(f"{label}/independent_fleet_heldout", net, e, t, held,
-                                   speed=False, novelty=novelty)
+                                   speed=False, novelty=novelty if own else None)
                 rows += [{**row, "seed": seed} for row in r]
                 if seed == 0:
                     plots[(label, "independent_fleet_heldout")] = plot
