@@ -36,13 +36,16 @@ training rows than 99 % of the validation rows (:class:`Novelty`, physics-traine
 the median reading of the unworn rows [mm] and the mean relative error of the readings
 referenced to each gearbox's unworn record [%] (:func:`referenced`), batch throughput [rows/s]
 and single-row latency [us] on the CPU. Writes ``benchmark.csv``, ``parity.png`` and the
-trained models into ``--out`` (default ``logs/benchmark/<time>``).
+trained models into ``--out`` (default ``logs/benchmark/<time>``), and ``labelled_counts.csv``:
+how many labelled gearboxes of the independent simulator a network trained on them needs to
+beat the estimator refitted on the same (:func:`labelled_counts`).
 """
 
 from __future__ import annotations
 
 import argparse
 import dataclasses
+import itertools
 import logging
 import math
 import time
@@ -218,6 +221,8 @@ FLEET_SPLIT = {"train": 4, "val": 2, "test": 4}
 FLEET_NETWORKS = {"finetuned": (["model.lr=0.0003"], True),
                   "head": (["model.trainable=head"], True),
                   "dte_scratch": (["data.sensors=[dte]"], False)}
+#: labelled gearboxes (and draws of them) for :func:`labelled_counts`
+LABEL_COUNTS, LABEL_DRAWS = (1, 2, 3, 4), 5
 
 
 def shifted_ranges(share: float = 0.4, base: NuisanceRanges | None = None) -> dict:
@@ -263,15 +268,15 @@ def independent_fleet(gearboxes: int, seed: int = 1) -> pd.DataFrame:
     return pd.concat(frames, ignore_index=True)
 
 
-def train_on_fleet(root: Path, physics: Path, name: str, table: Path, extra: list[str],
-                   label: str, seed: int) -> tuple[Surrogate, pd.DataFrame, pd.DataFrame]:
-    """Train model ``name`` on the labelled gearboxes of the fleet table ``table`` the way a
-    user would (``data.table``, the overrides of ``FLEET_NETWORKS[label]`` and, where it says
-    so, ``init_from`` the physics-trained network in folder ``physics``; ``seed`` draws the
-    fleet's split); returns the network, the fleet's rows it trained on and its held-out rows
-    (every column of the table, whatever the network's inputs)."""
+def train_on_fleet(root: Path, folder: Path, name: str, table: Path, extra: list[str],
+                   label: str, seed: int, physics: Path | None
+                   ) -> tuple[Surrogate, pd.DataFrame, pd.DataFrame]:
+    """Train model ``name`` into ``folder`` on the labelled gearboxes of the fleet table
+    ``table`` the way a user would (``data.table``, the overrides of ``FLEET_NETWORKS[label]``
+    and, where it says so, ``init_from`` the physics-trained network in folder ``physics``;
+    ``seed`` draws the fleet's split); returns the network, the fleet's rows it trained on and
+    its held-out rows (every column of the table, whatever the network's inputs)."""
     fleet = pd.read_csv(table)
-    folder = physics.parent / f"{physics.name}_{label}"
     overrides, from_physics = FLEET_NETWORKS[label]
     if from_physics:
         overrides = [f"init_from={physics / 'wear_surrogate.pt'}", *overrides]
@@ -280,7 +285,7 @@ def train_on_fleet(root: Path, physics: Path, name: str, table: Path, extra: lis
                        f"data.val_replicates={FLEET_SPLIT['val']}",
                        f"data.test_replicates={FLEET_SPLIT['test']}",
                        *overrides)
-    log.info("model %s: %s on %d labelled gearboxes", name, label, FLEET_SPLIT["train"])
+    log.info("model %s: %s on the labelled gearboxes of %s", name, label, table.name)
     train(cfg)
     dm = instantiate(cfg.data)
     dm.setup()
@@ -292,12 +297,48 @@ def train_on_fleet(root: Path, physics: Path, name: str, table: Path, extra: lis
     return Surrogate.load(folder / "wear_surrogate.pt"), rows("train"), rows("test")
 
 
-def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5) -> pd.DataFrame:
+def labelled_counts(root: Path, out: Path, fleet: pd.DataFrame, extra: list[str]
+                    ) -> pd.DataFrame:
+    """How many labelled gearboxes of a type our model does not describe a network needs: for
+    each count ``n`` of :data:`LABEL_COUNTS` and each of :data:`LABEL_DRAWS` draws, ``n`` plus
+    the validating and held-out gearboxes of :data:`FLEET_SPLIT` drawn from the case-3 fleet,
+    the DTE network of ``FLEET_NETWORKS["dte_scratch"]`` trained on the ``n`` and the
+    estimator refitted on them, both scored on the held-out ones (the draw is the split's
+    seed; with all ten gearboxes it is the benchmark's own fleet split)."""
+    mine = fleet[fleet.case == 3]
+    others = FLEET_SPLIT["val"] + FLEET_SPLIT["test"]
+    rows = []
+    for n, draw in itertools.product(LABEL_COUNTS, range(LABEL_DRAWS)):
+        chosen = np.random.default_rng([7, n, draw]).permutation(mine.gearbox.unique())
+        table = out / "labelled_counts" / f"fleet_{n}_{draw}.csv"
+        table.parent.mkdir(parents=True, exist_ok=True)
+        subset = mine[mine.gearbox.isin(chosen[:n + others])]
+        atomic_write(table, lambda p, frame=subset: frame.to_csv(p, index=False))
+        net, labelled, held = train_on_fleet(root, table.with_suffix(""), "case3", table, extra,
+                                             "dte_scratch", draw, None)
+        true = held[TARGET].to_numpy()
+        pred = net.predict(held[list(net.schema.inputs)])
+        e = fit_fleet_estimator(labelled).predict(held.dte_peak_to_peak.to_numpy(),
+                                                  held.dte_kurtosis.to_numpy())
+        net_err, est_err = wear_errors(pred[f"{TARGET}_pred"], true), wear_errors(e.wear, true)
+        rows.append({"labelled_gearboxes": n, "draw": draw, "heldout_rows": len(held),
+                     "network_mre_pct": net_err["mean_relative_error_pct"],
+                     "network_rmse": net_err["rmse"],
+                     "network_coverage": float(((true >= pred[f"{TARGET}_lower"])
+                                                & (true <= pred[f"{TARGET}_upper"])).mean()),
+                     "estimator_mre_pct": est_err["mean_relative_error_pct"],
+                     "estimator_rmse": est_err["rmse"]})
+    return pd.DataFrame(rows)
+
+
+def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5
+        ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Train the models of :data:`MODELS` (``case3`` once per training seed: the seed draws its
     split and start, and one seed's figure says little) and, for ``case3`` and ``all``, the
     networks of :data:`FLEET_NETWORKS` on the fleet's labelled gearboxes; score them, the
     estimator and the null model (refitted on the fleet beside a network trained on it) on the
-    test sets; column ``seed``."""
+    test sets (column ``seed``); and :func:`labelled_counts`. Writes ``benchmark.csv``,
+    ``labelled_counts.csv`` and ``parity.png``; returns the two tables."""
     extra = [f"trainer.max_epochs={max_epochs}"] if max_epochs else []
     shifted = load_dataset(root / "data" / "dataset_shifted.parquet",
                            {"seed": 1, "replicates": 8, "nuisance": shifted_ranges()})
@@ -339,11 +380,12 @@ def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5) ->
         if name in ("case3", "all"):
             table, mine = out / f"fleet_{name}.csv", fleet[fleet.case.isin(cases)]
             if seed == 0:  # the same gearboxes for every seed
-                atomic_write(table, lambda p, rows=mine: rows.to_csv(p, index=False))
+                atomic_write(table, lambda p, frame=mine: frame.to_csv(p, index=False))
             nets, splits = {name: surrogate}, set()
             for label in FLEET_NETWORKS:
                 nets[f"{name}_{label}"], labelled, held = train_on_fleet(
-                    root, folder, name, table, extra, label, seed)
+                    root, folder.parent / f"{folder.name}_{label}", name, table, extra, label,
+                    seed, folder)
                 splits.add((tuple(labelled.index), tuple(held.index)))
             if len(splits) != 1:  # the split is the seed's, whatever the network's overrides
                 raise RuntimeError(f"the fleet networks of {name} (seed {seed}) were split "
@@ -376,7 +418,9 @@ def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5) ->
     fig.tight_layout()
     atomic_write(out / "parity.png", lambda p: fig.savefig(p, dpi=110, format="png"))
     plt.close(fig)
-    return table
+    counts = labelled_counts(root, out, fleet, extra)
+    atomic_write(out / "labelled_counts.csv", lambda p: counts.to_csv(p, index=False))
+    return table, counts
 
 
 def seed_summary(table: pd.DataFrame) -> pd.DataFrame:
@@ -391,11 +435,12 @@ def seed_summary(table: pd.DataFrame) -> pd.DataFrame:
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m surrogate.benchmark",
                                      description=__doc__.split("\n\n")[0],
-                                     epilog="Takes about 7 minutes on 2 cores the first time "
+                                     epilog="Takes about 8 minutes on 2 cores the first time "
                                             "(the case-3, all-case, model-form and shifted "
-                                            "datasets are generated once into data/), 4 "
-                                            "minutes after (10 trainings on the physics and "
-                                            "18 on the fleet's labelled gearboxes).")
+                                            "datasets are generated once into data/), 4.5 "
+                                            "minutes after (10 trainings on the physics, "
+                                            "18 on the fleet's labelled gearboxes and 20 on "
+                                            "draws of them).")
     parser.add_argument("--out", type=Path, default=None,
                         help="output folder (default: logs/benchmark/<time>)")
     parser.add_argument("--seeds", type=int, default=5,
@@ -409,7 +454,7 @@ def main(argv: list[str] | None = None) -> None:
     out = args.out or Path("logs/benchmark") / datetime.now().strftime("%Y-%m-%d_%H-%M-%S")
     if args.seeds < 1:
         parser.error(f"--seeds {args.seeds}: give at least 1")
-    table = run(out.resolve(), Path.cwd(), args.max_epochs, args.seeds)
+    table, counts = run(out.resolve(), Path.cwd(), args.max_epochs, args.seeds)
     cols = ["scenario", "estimator", "seed", "rmse", "r2", "mean_relative_error_pct",
             "max_relative_error_pct", "interval_coverage", "flag_rate", "novel_rate",
             "unworn_reading", "referenced_mre_pct", "rows_per_s", "latency_us"]
@@ -417,7 +462,10 @@ def main(argv: list[str] | None = None) -> None:
         print(table[[c for c in cols if c in table.columns]].to_string(index=False))
         print("\nover the training seeds:")
         print(seed_summary(table).to_string())
-    print(f"\n-> {out / 'benchmark.csv'}, {out / 'parity.png'}")
+        print("\nlabelled gearboxes of the independent simulator, over the draws:")
+        print(counts.drop(columns=["draw", "heldout_rows"]).groupby("labelled_gearboxes").agg(
+            ["mean", "min", "max"]).to_string())
+    print(f"\n-> {out / 'benchmark.csv'}, {out / 'labelled_counts.csv'}, {out / 'parity.png'}")
 
 
 if __name__ == "__main__":

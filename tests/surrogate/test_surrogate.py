@@ -435,6 +435,24 @@ def test_the_estimator_refitted_on_a_fleet_ignores_the_cycle_unit_and_reads_its_
     assert abs(read[true == true.max()][0] - true.max()) < 0.5 * true.max()
 
 
+def test_the_labelled_count_study_trains_on_the_drawn_gearboxes_alone(tmp_path, monkeypatch):
+    """One draw of two labelled gearboxes: the network and the refitted estimator are scored
+    on the draw's four held-out gearboxes (24 rows at 2000 r/min), from a table that holds the
+    drawn eight gearboxes and nothing else."""
+    from surrogate import benchmark
+
+    monkeypatch.setattr(benchmark, "LABEL_COUNTS", (2,))
+    monkeypatch.setattr(benchmark, "LABEL_DRAWS", 1)
+    fleet = benchmark.independent_fleet(10)
+    out = benchmark.labelled_counts(ROOT, tmp_path, fleet, [
+        "trainer.max_epochs=2", "trainer.min_epochs=1", "model.members=2"])
+    assert out[["labelled_gearboxes", "draw", "heldout_rows"]].values.tolist() == [[2, 0, 24]]
+    assert np.isfinite(out.to_numpy(float)).all()
+    assert 0 <= out.network_coverage[0] <= 1
+    table = pd.read_csv(tmp_path / "labelled_counts" / "fleet_2_0.csv")
+    assert table.gearbox.nunique() == 2 + 2 + 4 and set(table.case) == {3}
+
+
 def test_the_benchmark_summarises_seeds_and_scores_a_null_model():
     """Over training seeds: the mean and the worst error and the smallest coverage per model,
     test set and estimator; the null model is the median of the worn training rows."""
