@@ -159,6 +159,11 @@ class Novelty:
         return float(np.mean(self.tree.query(self._scaled(test))[0] > self.radius))
 
 
+def coverage(pred: pd.DataFrame, true: np.ndarray) -> float:
+    """The share of rows whose true wear lies inside the network's interval."""
+    return float(((true >= pred[f"{TARGET}_lower"]) & (true <= pred[f"{TARGET}_upper"])).mean())
+
+
 def evaluate(name: str, surrogate: Surrogate, est: EmpiricalInverse, typical: float,
              test: pd.DataFrame, speed: bool, novelty: Novelty | None
              ) -> tuple[list[dict], dict]:
@@ -168,7 +173,7 @@ def evaluate(name: str, surrogate: Surrogate, est: EmpiricalInverse, typical: fl
     true = test[TARGET].to_numpy()
     pred = surrogate.predict(test[list(surrogate.schema.inputs)])
     e = est.predict(test.dte_peak_to_peak.to_numpy(), test.dte_kurtosis.to_numpy())
-    inside = ((true >= pred[f"{TARGET}_lower"]) & (true <= pred[f"{TARGET}_upper"])).mean()
+    inside = coverage(pred, true)
     net_unworn, net_ref = referenced(test, pred[f"{TARGET}_pred"].to_numpy())
     est_unworn, est_ref = referenced(test, e.wear)
     rows = [{"scenario": name, "estimator": "surrogate", "test_rows": len(test),
@@ -309,6 +314,7 @@ def labelled_counts(root: Path, out: Path, fleet: pd.DataFrame, extra: list[str]
     others = FLEET_SPLIT["val"] + FLEET_SPLIT["test"]
     rows = []
     for n, draw in itertools.product(LABEL_COUNTS, range(LABEL_DRAWS)):
+        # 7: a random stream of its own, apart from the fleet's (seed 1) and the split's (draw)
         chosen = np.random.default_rng([7, n, draw]).permutation(mine.gearbox.unique())
         table = out / "labelled_counts" / f"fleet_{n}_{draw}.csv"
         table.parent.mkdir(parents=True, exist_ok=True)
@@ -324,8 +330,7 @@ def labelled_counts(root: Path, out: Path, fleet: pd.DataFrame, extra: list[str]
         rows.append({"labelled_gearboxes": n, "draw": draw, "heldout_rows": len(held),
                      "network_mre_pct": net_err["mean_relative_error_pct"],
                      "network_rmse": net_err["rmse"],
-                     "network_coverage": float(((true >= pred[f"{TARGET}_lower"])
-                                                & (true <= pred[f"{TARGET}_upper"])).mean()),
+                     "network_coverage": coverage(pred, true),
                      "estimator_mre_pct": est_err["mean_relative_error_pct"],
                      "estimator_rmse": est_err["rmse"]})
     return pd.DataFrame(rows)
