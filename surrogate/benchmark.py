@@ -159,11 +159,6 @@ class Novelty:
         return float(np.mean(self.tree.query(self._scaled(test))[0] > self.radius))
 
 
-def coverage(pred: pd.DataFrame, true: np.ndarray) -> float:
-    """The share of rows whose true wear lies inside the network's interval."""
-    return float(((true >= pred[f"{TARGET}_lower"]) & (true <= pred[f"{TARGET}_upper"])).mean())
-
-
 def evaluate(name: str, surrogate: Surrogate, est: EmpiricalInverse, typical: float,
              test: pd.DataFrame, speed: bool, novelty: Novelty | None
              ) -> tuple[list[dict], dict]:
@@ -173,7 +168,7 @@ def evaluate(name: str, surrogate: Surrogate, est: EmpiricalInverse, typical: fl
     true = test[TARGET].to_numpy()
     pred = surrogate.predict(test[list(surrogate.schema.inputs)])
     e = est.predict(test.dte_peak_to_peak.to_numpy(), test.dte_kurtosis.to_numpy())
-    inside = coverage(pred, true)
+    inside = ((true >= pred[f"{TARGET}_lower"]) & (true <= pred[f"{TARGET}_upper"])).mean()
     net_unworn, net_ref = referenced(test, pred[f"{TARGET}_pred"].to_numpy())
     est_unworn, est_ref = referenced(test, e.wear)
     rows = [{"scenario": name, "estimator": "surrogate", "test_rows": len(test),
@@ -322,17 +317,15 @@ def labelled_counts(root: Path, out: Path, fleet: pd.DataFrame, extra: list[str]
         atomic_write(table, lambda p, frame=subset: frame.to_csv(p, index=False))
         net, labelled, held = train_on_fleet(root, table.with_suffix(""), "case3", table, extra,
                                              "dte_scratch", draw, None)
-        true = held[TARGET].to_numpy()
-        pred = net.predict(held[list(net.schema.inputs)])
-        e = fit_fleet_estimator(labelled).predict(held.dte_peak_to_peak.to_numpy(),
-                                                  held.dte_kurtosis.to_numpy())
-        net_err, est_err = wear_errors(pred[f"{TARGET}_pred"], true), wear_errors(e.wear, true)
+        (mine_net, mine_est, _), _ = evaluate(
+            f"dte_scratch_{n}_{draw}", net, fit_fleet_estimator(labelled),
+            typical_wear(labelled), held, speed=False, novelty=None)
         rows.append({"labelled_gearboxes": n, "draw": draw, "heldout_rows": len(held),
-                     "network_mre_pct": net_err["mean_relative_error_pct"],
-                     "network_rmse": net_err["rmse"],
-                     "network_coverage": coverage(pred, true),
-                     "estimator_mre_pct": est_err["mean_relative_error_pct"],
-                     "estimator_rmse": est_err["rmse"]})
+                     "network_mre_pct": mine_net["mean_relative_error_pct"],
+                     "network_rmse": mine_net["rmse"],
+                     "network_coverage": mine_net["interval_coverage"],
+                     "estimator_mre_pct": mine_est["mean_relative_error_pct"],
+                     "estimator_rmse": mine_est["rmse"]})
     return pd.DataFrame(rows)
 
 
