@@ -1,11 +1,13 @@
 """Surrogate against the analytic empirical-inverse estimator: ``python -m surrogate.benchmark``.
 
-Models (:data:`MODELS`): ``case3`` (``case=3``, trained once per seed of ``--seeds``: the
-seed draws the trajectory split and the start, and one seed's figures can mislead), ``all``
-(``case=all``), ``all_acc`` (all cases,
-housing acceleration only), ``loco2`` / ``loco5`` (all cases but one) and ``case3_form`` (case 3
-over the declared model's form uncertainty as well, ``experiment=model_form``; its shifted set
-shifts the model form too). Test sets:
+Models (:data:`MODELS`): ``case3`` (``case=3``) and ``case3_mean`` (the same network of the
+pinion's mean wear depth over the path of contact, ``data.target=mean_wear_mm``), each trained
+once per seed of ``--seeds`` (the seed draws the trajectory split and the start, and one seed's
+figures can mislead); ``all`` (``case=all``) and ``all_mean`` (its mean-wear twin),
+``all_acc`` (all cases, housing acceleration only), ``loco2`` / ``loco5`` (all cases but one)
+and ``case3_form`` (case 3 over the declared model's form uncertainty as well,
+``experiment=model_form``; its shifted set shifts the model form too).
+Every model and estimator is scored on its own target (root wear unless named). Test sets:
 
 - ``heldout_trajectories``: the model's own test trajectories (never seen in training);
 - ``heldout_operating_point_inside`` / ``_outside``: case 2 (2000 r/min, 290 N m, surrounded by
@@ -15,6 +17,8 @@ shifts the model form too). Test sets:
   trajectories;
 - ``independent_simulator``: features of records of the independent spur-pair simulator
   (:mod:`physics.loop.independent_simulator`, another model form) at 2000/300 and 1800/290;
+- ``independent_fleet``: the same for all ten gearboxes of a fleet of the independent simulator
+  (:func:`independent_fleet`), none of which a physics-trained network saw;
 - ``independent_fleet_heldout``: gearboxes of a fleet of the independent simulator
   (:func:`independent_fleet`) that neither network saw, scored for the physics-trained network
   (``case3``, ``all``) and for networks trained on the fleet's other labelled gearboxes
@@ -61,7 +65,7 @@ from scipy import spatial
 from physics.dataset.generation import NuisanceRanges
 from physics.estimators.empirical_inverse import EmpiricalInverse, wear_errors
 from physics.files import atomic_write, pyplot
-from physics.loop.independent_simulator import IndependentPair, simulate_record
+from physics.loop.independent_simulator import IndependentPair, simulate_record, wear_depths
 from physics.signals.features import features
 from surrogate import settings
 from surrogate.data import load_dataset
@@ -81,18 +85,18 @@ def train_config(root: Path, out: Path, *overrides: str):
             "trainer.enable_progress_bar=false", *overrides])
 
 
-def fit_estimator(train: pd.DataFrame) -> EmpiricalInverse:
+def fit_estimator(train: pd.DataFrame, target: str = TARGET) -> EmpiricalInverse:
     return EmpiricalInverse.fit(train.cycles.to_numpy(), train.dte_peak_to_peak.to_numpy(),
-                                train.dte_kurtosis.to_numpy(), train[TARGET].to_numpy())
+                                train.dte_kurtosis.to_numpy(), train[target].to_numpy())
 
 
-def fit_fleet_estimator(labelled: pd.DataFrame) -> EmpiricalInverse:
+def fit_fleet_estimator(labelled: pd.DataFrame, target: str = TARGET) -> EmpiricalInverse:
     """The estimator refitted on a fleet's labelled gearboxes, the rows a network trained on
     the fleet learnt from. The independent simulator's records carry wear depths, not cycle
     counts; at each operating point, with its profile shape fixed, its Archard depth grows in
     proportion to the cycles, and the estimator's cubics and wear law do not depend on the
     unit of N, so the depth stands in for the cycle count (1 um per 1e6 cycles)."""
-    return fit_estimator(labelled.assign(cycles=labelled[TARGET] * 1e9))
+    return fit_estimator(labelled.assign(cycles=labelled[TARGET] * 1e9), target)
 
 
 def throughput(fn, x: np.ndarray) -> tuple[float, float]:
@@ -109,24 +113,26 @@ def throughput(fn, x: np.ndarray) -> tuple[float, float]:
     return rate, float(np.median(times)) * 1e6
 
 
-def typical_wear(train: pd.DataFrame) -> float:
-    """The null model: the median root wear of the training rows' worn states, whatever the
-    features say. A network that does not beat it has learnt nothing from vibration."""
-    return float(train.loc[train[TARGET] > 0, TARGET].median())
+def typical_wear(train: pd.DataFrame, target: str = TARGET) -> float:
+    """The null model: the median wear (``target``) of the training rows' worn states,
+    whatever the features say. A network that does not beat it has learnt nothing from
+    vibration."""
+    return float(train.loc[train[target] > 0, target].median())
 
 
 #: the columns that name one gearbox at one operating point in a test set (those present)
 GEARBOX_KEYS = ("case", "replicate", "gearbox", "n1_rpm", "torque_Nm")
 
 
-def referenced(test: pd.DataFrame, wear: np.ndarray) -> tuple[float, float]:
+def referenced(test: pd.DataFrame, wear: np.ndarray, target: str = TARGET
+               ) -> tuple[float, float]:
     """How a wear reading depends on the gearbox's unworn state: the median reading of the
     unworn rows (each gearbox's record at zero wear), and the mean relative error [%] of the
     readings referenced to them (each gearbox's reading minus that of its unworn record, as a
     condition-monitoring system trends against its commissioning baseline). NaN where no row
     is unworn. An estimator that reads the change of wear right but not its level has a large
     unworn reading and a small referenced error."""
-    true = test[TARGET].to_numpy()
+    true = test[target].to_numpy()
     keys = [c for c in GEARBOX_KEYS if c in test.columns]
     gearbox = test.groupby(keys, sort=False).ngroup().to_numpy()
     unworn = true == 0
@@ -162,17 +168,18 @@ class Novelty:
 def evaluate(name: str, surrogate: Surrogate, est: EmpiricalInverse, typical: float,
              test: pd.DataFrame, speed: bool, novelty: Novelty | None
              ) -> tuple[list[dict], dict]:
-    """The network, the estimator and the null model on ``test``: one row each of
-    :func:`wear_errors` and the columns of the module text (``novel_rate`` NaN without a
-    ``novelty`` test), and the parity plot's data."""
-    true = test[TARGET].to_numpy()
+    """The network, the estimator and the null model (both fitted on the network's target)
+    on ``test``: one row each of :func:`wear_errors` and the columns of the module text
+    (``novel_rate`` NaN without a ``novelty`` test), and the parity plot's data."""
+    target = surrogate.schema.target
+    true = test[target].to_numpy()
     pred = surrogate.predict(test[list(surrogate.schema.inputs)])
     e = est.predict(test.dte_peak_to_peak.to_numpy(), test.dte_kurtosis.to_numpy())
-    inside = ((true >= pred[f"{TARGET}_lower"]) & (true <= pred[f"{TARGET}_upper"])).mean()
-    net_unworn, net_ref = referenced(test, pred[f"{TARGET}_pred"].to_numpy())
-    est_unworn, est_ref = referenced(test, e.wear)
+    inside = ((true >= pred[f"{target}_lower"]) & (true <= pred[f"{target}_upper"])).mean()
+    net_unworn, net_ref = referenced(test, pred[f"{target}_pred"].to_numpy(), target)
+    est_unworn, est_ref = referenced(test, e.wear, target)
     rows = [{"scenario": name, "estimator": "surrogate", "test_rows": len(test),
-             **wear_errors(pred[f"{TARGET}_pred"], true), "interval_coverage": float(inside),
+             **wear_errors(pred[f"{target}_pred"], true), "interval_coverage": float(inside),
              "flag_rate": float(pred.out_of_range.mean()),
              "novel_rate": novelty.rate(test) if novelty else math.nan,
              "unworn_reading": net_unworn, "referenced_mre_pct": net_ref},
@@ -192,19 +199,24 @@ def evaluate(name: str, surrogate: Surrogate, est: EmpiricalInverse, typical: fl
         pk = np.repeat(np.stack([p, k], 1), -(-200_000 // len(test)), axis=0)[:200_000]
         rows[1]["rows_per_s"], rows[1]["latency_us"] = throughput(
             lambda a: est.predict(a[:, 0], a[:, 1]).wear, pk)
-    plot = {"true": true, "surrogate": pred[f"{TARGET}_pred"].to_numpy(), "estimator": e.wear}
+    plot = {"true": true, "surrogate": pred[f"{target}_pred"].to_numpy(), "estimator": e.wear,
+            "target": target}
     return rows, plot
 
 
 #: trained models: name -> train.py overrides
 MODELS = {
     "case3": ["case=3"],
+    "case3_mean": ["case=3", "data.target=mean_wear_mm"],
     "all": ["case=all"],
+    "all_mean": ["case=all", "data.target=mean_wear_mm"],
     "all_acc": ["case=all", "data.sensors=[acc]"],
     "loco2": ["case=all", "data.holdout_case=2"],
     "loco5": ["case=all", "data.holdout_case=5"],
     "case3_form": ["case=3", "experiment=model_form"],
 }
+#: models trained once per seed of ``--seeds``; the others train with seed 0
+SEEDED = ("case3", "case3_mean")
 #: the independent simulator's operating points and wear states (loop issue)
 INDEPENDENT_POINTS = ((2000.0, 300.0), (1800.0, 290.0))
 INDEPENDENT_WEAR_MM = (0.0, 0.003, 0.006, 0.009, 0.012, 0.015)
@@ -239,8 +251,9 @@ def shifted_ranges(share: float = 0.4, base: NuisanceRanges | None = None) -> di
 
 def independent_rows(seed: int = 0, pair: IndependentPair | None = None) -> pd.DataFrame:
     """Feature rows of the independent spur-pair simulator (a model form other than ours):
-    DTE and housing acceleration records at two operating points and six wear depths."""
-    rows = []
+    DTE and housing acceleration records at two operating points and six root wear depths,
+    labelled with the root, largest and mean depth of its wear profile (:func:`wear_depths`)."""
+    rows, labels = [], IndependentPair() if pair is None else pair
     for k, (n1, torque) in enumerate(INDEPENDENT_POINTS):
         for w, wear in enumerate(INDEPENDENT_WEAR_MM):
             rng = np.random.default_rng([seed, k, w])
@@ -249,7 +262,7 @@ def independent_rows(seed: int = 0, pair: IndependentPair | None = None) -> pd.D
                    for q in ("dte_m", "accel_m_s2")}
             f_dte, f_acc = features(rec["dte_m"]), features(rec["accel_m_s2"])
             rows.append({"case": 3 if (n1, torque) == (2000.0, 300.0) else 1, "cycles": np.nan,
-                         "n1_rpm": n1, "torque_Nm": torque, TARGET: wear,
+                         "n1_rpm": n1, "torque_Nm": torque, **wear_depths(labels, wear),
                          **{f"dte_{n}": float(v[0]) for n, v in f_dte.items()},
                          **{f"acc_{n}": float(v[0]) for n, v in f_acc.items()}})
     return pd.DataFrame(rows)
@@ -331,19 +344,19 @@ def labelled_counts(root: Path, out: Path, fleet: pd.DataFrame, extra: list[str]
 
 def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5
         ) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """Train the models of :data:`MODELS` (``case3`` once per training seed: the seed draws its
-    split and start, and one seed's figure says little) and, for ``case3`` and ``all``, the
-    networks of :data:`FLEET_NETWORKS` on the fleet's labelled gearboxes; score them, the
-    estimator and the null model (refitted on the fleet beside a network trained on it) on the
-    test sets (column ``seed``); and :func:`labelled_counts`. Writes ``benchmark.csv``,
-    ``labelled_counts.csv`` and ``parity.png``; returns the two tables."""
+    """Train the models of :data:`MODELS` (those of :data:`SEEDED` once per training seed: the
+    seed draws their split and start, and one seed's figure says little) and, for ``case3``
+    and ``all``, the networks of :data:`FLEET_NETWORKS` on the fleet's labelled gearboxes;
+    score them, the estimator and the null model (refitted on the fleet beside a network
+    trained on it) on the test sets (column ``seed``); and :func:`labelled_counts`. Writes
+    ``benchmark.csv``, ``labelled_counts.csv`` and ``parity.png``; returns the two tables."""
     extra = [f"trainer.max_epochs={max_epochs}"] if max_epochs else []
     shifted = load_dataset(root / "data" / "dataset_shifted.parquet",
                            {"seed": 1, "replicates": 8, "nuisance": shifted_ranges()})
     foreign = independent_rows()
     fleet = independent_fleet(sum(FLEET_SPLIT.values()))
     rows, plots = [], {}
-    for name, seed in [(m, s) for m in MODELS for s in range(seeds if m == "case3" else 1)]:
+    for name, seed in [(m, s) for m in MODELS for s in range(seeds if m in SEEDED else 1)]:
         folder = out / "models" / (name if seed == 0 else f"{name}_seed{seed}")
         cfg = train_config(root, folder, *MODELS[name], *extra, f"seed={seed}")
         log.info("model %s: training (seed %d)", name, seed)
@@ -351,7 +364,9 @@ def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5
         dm = instantiate(cfg.data)
         dm.setup()
         surrogate = Surrogate.load(folder / "wear_surrogate.pt")
-        est, typical = fit_estimator(dm.frames["train"]), typical_wear(dm.frames["train"])
+        target = surrogate.schema.target
+        est = fit_estimator(dm.frames["train"], target)
+        typical = typical_wear(dm.frames["train"], target)
         novelty = Novelty(surrogate.schema, dm.frames["train"], dm.frames["val"])
         cases = set(dm.cases)
         sets = {"heldout_trajectories" if name[:4] != "loco" else
@@ -363,10 +378,11 @@ def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5
                 root / "data" / "dataset_shifted_model_form.parquet",
                 {"cases": [3], "seed": 1, "replicates": 8,
                  "nuisance": shifted_ranges(base=ranges)})
-            sets["independent_simulator"] = foreign[foreign.case.isin(cases)]
         elif name[:4] != "loco":
             sets["nuisance_shifted"] = shifted[shifted.case.isin(cases)]
+        if name[:4] != "loco":
             sets["independent_simulator"] = foreign[foreign.case.isin(cases)]
+            sets["independent_fleet"] = fleet[fleet.case.isin(cases)]
         for set_name, test in sets.items():
             r, plot = evaluate(f"{name}/{set_name}", surrogate, est, typical, test,
                                speed=(name, seed, set_name) == ("case3", 0,
@@ -407,9 +423,9 @@ def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5
     fig, axes = plt.subplots(rows_of_plots, 6, figsize=(26, 4.3 * rows_of_plots))
     for ax, key in zip(axes.flat, plots, strict=False):
         d = plots[key]
-        parity_figure(d["true"], d["estimator"], None, "/".join(key), TARGET, ax,
+        parity_figure(d["true"], d["estimator"], None, "/".join(key), d["target"], ax,
                       name="empirical inverse")
-        parity_figure(d["true"], d["surrogate"], None, "/".join(key), TARGET, ax)
+        parity_figure(d["true"], d["surrogate"], None, "/".join(key), d["target"], ax)
         ax.legend(fontsize=7)
     for ax in axes.flat[len(plots):]:
         ax.set_visible(False)
@@ -433,17 +449,18 @@ def seed_summary(table: pd.DataFrame) -> pd.DataFrame:
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m surrogate.benchmark",
                                      description=__doc__.split("\n\n")[0],
-                                     epilog="Takes about 8 minutes on 2 cores the first time "
+                                     epilog="Takes about 9 minutes on 2 cores the first time "
                                             "(the case-3, all-case, model-form and shifted "
-                                            "datasets are generated once into data/), 4.5 "
-                                            "minutes after (10 trainings on the physics, "
+                                            "datasets are generated once into data/), 5 "
+                                            "minutes after (16 trainings on the physics, "
                                             "18 on the fleet's labelled gearboxes and 20 on "
                                             "draws of them).")
     parser.add_argument("--out", type=Path, default=None,
                         help="output folder (default: logs/benchmark/<time>)")
     parser.add_argument("--seeds", type=int, default=5,
-                        help="training seeds of the case-3 network (its split and start; "
-                             "default 5); the other models train with seed 0")
+                        help="training seeds of the case-3 networks, root and mean wear "
+                             "(their split and start; default 5); the other models train "
+                             "with seed 0")
     parser.add_argument("--max-epochs", type=int, default=None,
                         help="cap the training epochs (quick looks; the default config's "
                              "early stopping otherwise)")

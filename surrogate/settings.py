@@ -26,6 +26,8 @@ class DataConfig:
     sensors: list[str] = field(default_factory=lambda: ["dte", "acc"])  # dte, acc or both
     operating_point: bool = True  # speed and torque as inputs (a user knows them)
     inputs: list[str] | None = None  # explicit input columns instead (a user's own table)
+    #: the wear column to read: root_wear_mm (the thesis's), or mean_wear_mm (the flank's mean
+    #: depth over the path of contact, which reads across wear laws: docs/surrogate.md)
     target: str = "root_wear_mm"
     # whole trajectories (case, replicate) per case, never rows of one; the validation ones
     # calibrate the interval. null: a tenth of each case's trajectories, at least 8

@@ -420,6 +420,19 @@ def _wear_profile(pair: IndependentPair, s: np.ndarray, h: float) -> np.ndarray:
     return np.where(s < 0, scale * law, scale * pair.wear_tip_share * law)
 
 
+def wear_depths(pair: IndependentPair, root_wear_mm: float, points: int = 4001
+                ) -> dict[str, float]:
+    """The wear profile of root wear ``root_wear_mm`` summarised as the physics dataset
+    summarises its own (:mod:`physics.dataset.generation`): depth at the root, largest depth
+    and mean depth over the path of contact (worn area per unit face width over the path's
+    length), all in mm, keyed by the dataset's column names."""
+    s0, s1 = pair.path
+    s = np.linspace(s0, s1, points)
+    w = _wear_profile(pair, s, root_wear_mm)
+    return {"root_wear_mm": float(w[0]), "max_wear_mm": float(w.max()),
+            "mean_wear_mm": float(np.trapezoid(w, s) / (s1 - s0))}
+
+
 @dataclass(frozen=True)
 class _Mesh:
     """Tables over one pinion revolution (``z1 * n_per`` cells, periodic)."""

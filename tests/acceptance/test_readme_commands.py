@@ -66,6 +66,12 @@ def _trained(folder: Path) -> None:
     assert metrics["train_rows"] > 0 and "test_mean_relative_error_pct" in metrics
 
 
+def _mean_wear(folder: Path) -> None:
+    run = next(folder.glob("logs/train/runs/case3_*"))
+    predictions = pd.read_csv(run / "test_predictions.csv")
+    assert {"mean_wear_mm", "mean_wear_mm_pred", "mean_wear_mm_upper"} <= set(predictions.columns)
+
+
 def _summary(folder: Path) -> None:
     table = pd.read_csv(next(folder.glob("logs/train/multiruns/*/summary.csv")))
     assert len(table) == 5 and set(table.status) == {"ok"}
@@ -105,6 +111,8 @@ CASES: dict[str, Case] = {
     "python bench/bench_dataset.py": Case(slow=True),
     "python bench/bench_mixed_ehl.py": Case(slow=True),
     "python bench/bench_surrogate.py": Case(slow=True),
+    "python train.py case=3 data.target=mean_wear_mm": Case(tuple(TINY_DATA + FAST_TRAIN),
+                                                            check=_mean_wear),
     "python train.py -m case=1,2,3,4,5": Case(tuple(TINY_DATA + FAST_TRAIN), check=_files(
         "logs/train/multiruns/*/4/wear_surrogate.pt")),
     "python train.py -m model.width=16,32 model.members=3,5": Case(

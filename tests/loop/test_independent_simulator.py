@@ -20,6 +20,7 @@ from physics.loop.independent_simulator import (
     effect_values,
     make_independent_bundle,
     simulate_record,
+    wear_depths,
 )
 
 FS = 40960.0
@@ -117,6 +118,29 @@ def _kurt(x):
 def _band_energy(x, lo, hi):
     f, a = _spectrum(x)
     return float(np.sum(a[(f >= lo) & (f <= hi)] ** 2))
+
+
+def test_wear_depths_integrate_the_archard_profile_by_hand():
+    """With a vanishing zone transition the profile is piecewise linear in the roll s:
+    depth ~ |s| in single contact, |s| / 2 in double contact, times the tip share beyond the
+    pitch point, h at the root. Its mean over the path is then a sum of four trapezoids."""
+    pair = IndependentPair(transition_roll_fraction=0.002)
+    s0, s1 = pair.path
+    ld = (pair.contact_ratio - 1.0) * pair.base_pitch
+    h, share = 0.01, pair.wear_tip_share
+    scale = h / (0.5 * abs(s0))
+
+    def ramp_area(a, b, weight):  # integral of weight |s| over [a, b], a < b, same sign
+        return weight * abs(b * abs(b) - a * abs(a)) / 2
+
+    area = (ramp_area(s0, s0 + ld, 0.5) + ramp_area(s0 + ld, 0.0, 1.0)
+            + share * (ramp_area(0.0, s1 - ld, 1.0) + ramp_area(s1 - ld, s1, 0.5)))
+    d = wear_depths(pair, h)
+    assert d["root_wear_mm"] == pytest.approx(h)
+    assert d["mean_wear_mm"] == pytest.approx(scale * area / (s1 - s0), rel=2e-3)
+    assert d["max_wear_mm"] == pytest.approx(scale * max(0.5 * abs(s0), abs(s0 + ld)), rel=2e-3)
+    assert wear_depths(pair, 2 * h)["mean_wear_mm"] == pytest.approx(2 * d["mean_wear_mm"])
+    assert wear_depths(pair, 0.0) == {k: 0.0 for k in d}
 
 
 @pytest.mark.parametrize("effect", EFFECT_NAMES)

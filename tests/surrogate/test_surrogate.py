@@ -415,6 +415,12 @@ def test_the_benchmarks_fleet_is_labelled_gearboxes_that_differ():
     new = fleet[fleet.root_wear_mm == 0].groupby("gearbox").dte_peak_to_peak.mean()
     assert abs(new[0] / new[1] - 1) > 0.01
     assert np.isfinite(fleet.drop(columns="cycles").to_numpy(float)).all()
+    # its rows carry the profile's summaries as the physics rows do; the fleet draws no
+    # geometry, so every gearbox's profile has one shape: mean / root fixed, below 1
+    worn = fleet[fleet.root_wear_mm > 0]
+    shape = worn.mean_wear_mm / worn.root_wear_mm
+    assert shape.max() - shape.min() < 1e-9 and 0 < shape.iloc[0] < 1
+    assert (worn.max_wear_mm >= worn.root_wear_mm).all()
 
 
 def test_the_estimator_refitted_on_a_fleet_ignores_the_cycle_unit_and_reads_its_gearboxes():
@@ -451,6 +457,31 @@ def test_the_labelled_count_study_trains_on_the_drawn_gearboxes_alone(tmp_path, 
     assert 0 <= out.network_coverage[0] <= 1
     table = pd.read_csv(tmp_path / "labelled_counts" / "fleet_2_0.csv")
     assert table.gearbox.nunique() == 2 + 2 + 4 and set(table.case) == {3}
+
+
+def test_a_mean_wear_network_is_scored_with_estimators_of_its_own_target(tmp_path):
+    """The benchmark's mean-wear model trained on fleet rows: it, the estimator and the null
+    model are all scored against the mean depth, not the root depth."""
+    from surrogate import benchmark
+
+    fleet = benchmark.independent_fleet(8)
+    fleet = fleet[fleet.case == 3]
+    table = tmp_path / "fleet.csv"
+    fleet.to_csv(table, index=False)
+    net, labelled, held = benchmark.train_on_fleet(
+        ROOT, tmp_path / "net", "case3_mean", table,
+        ["trainer.max_epochs=2", "trainer.min_epochs=1", "model.members=2"], "dte_scratch", 0,
+        None)
+    assert net.schema.target == "mean_wear_mm"
+    rows, plot = benchmark.evaluate(
+        "t", net, benchmark.fit_fleet_estimator(labelled, "mean_wear_mm"),
+        benchmark.typical_wear(labelled, "mean_wear_mm"), held, speed=False, novelty=None)
+    np.testing.assert_array_equal(plot["true"], held.mean_wear_mm.to_numpy())
+    null = rows[2]
+    expected = benchmark.wear_errors(
+        np.full(len(held), labelled.mean_wear_mm[labelled.mean_wear_mm > 0].median()),
+        held.mean_wear_mm.to_numpy())
+    assert null["mean_relative_error_pct"] == pytest.approx(expected["mean_relative_error_pct"])
 
 
 def test_the_benchmark_summarises_seeds_and_scores_a_null_model():
