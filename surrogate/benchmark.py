@@ -73,7 +73,6 @@ from surrogate.inference import Surrogate
 from surrogate.schema import FeatureSchema
 from surrogate.training import parity_figure, train
 
-TARGET = "root_wear_mm"
 log = logging.getLogger(__name__)
 
 
@@ -85,18 +84,19 @@ def train_config(root: Path, out: Path, *overrides: str):
             "trainer.enable_progress_bar=false", *overrides])
 
 
-def fit_estimator(train: pd.DataFrame, target: str = TARGET) -> EmpiricalInverse:
+def fit_estimator(train: pd.DataFrame, target: str) -> EmpiricalInverse:
     return EmpiricalInverse.fit(train.cycles.to_numpy(), train.dte_peak_to_peak.to_numpy(),
                                 train.dte_kurtosis.to_numpy(), train[target].to_numpy())
 
 
-def fit_fleet_estimator(labelled: pd.DataFrame, target: str = TARGET) -> EmpiricalInverse:
-    """The estimator refitted on a fleet's labelled gearboxes, the rows a network trained on
-    the fleet learnt from. The independent simulator's records carry wear depths, not cycle
-    counts; at each operating point, with its profile shape fixed, its Archard depth grows in
-    proportion to the cycles, and the estimator's cubics and wear law do not depend on the
-    unit of N, so the depth stands in for the cycle count (1 um per 1e6 cycles)."""
-    return fit_estimator(labelled.assign(cycles=labelled[TARGET] * 1e9), target)
+def fit_fleet_estimator(labelled: pd.DataFrame, target: str) -> EmpiricalInverse:
+    """The estimator of ``target`` refitted on a fleet's labelled gearboxes, the rows a
+    network trained on the fleet learnt from. The independent simulator's records carry wear
+    depths, not cycle counts; at each operating point, with its profile shape fixed (the
+    fleet draws no geometry), its Archard depths, root and mean alike, grow in proportion to
+    the cycles, and the estimator's cubics and wear law do not depend on the unit of N, so the
+    root depth stands in for the cycle count (1 um per 1e6 cycles) whichever is the target."""
+    return fit_estimator(labelled.assign(cycles=labelled.root_wear_mm * 1e9), target)
 
 
 def throughput(fn, x: np.ndarray) -> tuple[float, float]:
@@ -113,7 +113,7 @@ def throughput(fn, x: np.ndarray) -> tuple[float, float]:
     return rate, float(np.median(times)) * 1e6
 
 
-def typical_wear(train: pd.DataFrame, target: str = TARGET) -> float:
+def typical_wear(train: pd.DataFrame, target: str) -> float:
     """The null model: the median wear (``target``) of the training rows' worn states,
     whatever the features say. A network that does not beat it has learnt nothing from
     vibration."""
@@ -124,8 +124,7 @@ def typical_wear(train: pd.DataFrame, target: str = TARGET) -> float:
 GEARBOX_KEYS = ("case", "replicate", "gearbox", "n1_rpm", "torque_Nm")
 
 
-def referenced(test: pd.DataFrame, wear: np.ndarray, target: str = TARGET
-               ) -> tuple[float, float]:
+def referenced(test: pd.DataFrame, wear: np.ndarray, target: str) -> tuple[float, float]:
     """How a wear reading depends on the gearbox's unworn state: the median reading of the
     unworn rows (each gearbox's record at zero wear), and the mean relative error [%] of the
     readings referenced to them (each gearbox's reading minus that of its unworn record, as a
@@ -168,9 +167,9 @@ class Novelty:
 def evaluate(name: str, surrogate: Surrogate, est: EmpiricalInverse, typical: float,
              test: pd.DataFrame, speed: bool, novelty: Novelty | None
              ) -> tuple[list[dict], dict]:
-    """The network, the estimator and the null model (both fitted on the network's target)
-    on ``test``: one row each of :func:`wear_errors` and the columns of the module text
-    (``novel_rate`` NaN without a ``novelty`` test), and the parity plot's data."""
+    """The network, the estimator and the null model (both fitted by the caller on the
+    network's target) on ``test``: one row each of :func:`wear_errors` and the columns of the
+    module text (``novel_rate`` NaN without a ``novelty`` test), and the parity plot's data."""
     target = surrogate.schema.target
     true = test[target].to_numpy()
     pred = surrogate.predict(test[list(surrogate.schema.inputs)])
@@ -253,7 +252,7 @@ def independent_rows(seed: int = 0, pair: IndependentPair | None = None) -> pd.D
     """Feature rows of the independent spur-pair simulator (a model form other than ours):
     DTE and housing acceleration records at two operating points and six root wear depths,
     labelled with the root, largest and mean depth of its wear profile (:func:`wear_depths`)."""
-    rows, labels = [], IndependentPair() if pair is None else pair
+    rows, pair = [], pair or IndependentPair()
     for k, (n1, torque) in enumerate(INDEPENDENT_POINTS):
         for w, wear in enumerate(INDEPENDENT_WEAR_MM):
             rng = np.random.default_rng([seed, k, w])
@@ -262,7 +261,7 @@ def independent_rows(seed: int = 0, pair: IndependentPair | None = None) -> pd.D
                    for q in ("dte_m", "accel_m_s2")}
             f_dte, f_acc = features(rec["dte_m"]), features(rec["accel_m_s2"])
             rows.append({"case": 3 if (n1, torque) == (2000.0, 300.0) else 1, "cycles": np.nan,
-                         "n1_rpm": n1, "torque_Nm": torque, **wear_depths(labels, wear),
+                         "n1_rpm": n1, "torque_Nm": torque, **wear_depths(pair, wear),
                          **{f"dte_{n}": float(v[0]) for n, v in f_dte.items()},
                          **{f"acc_{n}": float(v[0]) for n, v in f_acc.items()}})
     return pd.DataFrame(rows)
@@ -330,9 +329,10 @@ def labelled_counts(root: Path, out: Path, fleet: pd.DataFrame, extra: list[str]
         atomic_write(table, lambda p, frame=subset: frame.to_csv(p, index=False))
         net, labelled, held = train_on_fleet(root, table.with_suffix(""), "case3", table, extra,
                                              "dte_scratch", draw, None)
+        target = net.schema.target
         (mine_net, mine_est, _), _ = evaluate(
-            f"dte_scratch_{n}_{draw}", net, fit_fleet_estimator(labelled),
-            typical_wear(labelled), held, speed=False, novelty=None)
+            f"dte_scratch_{n}_{draw}", net, fit_fleet_estimator(labelled, target),
+            typical_wear(labelled, target), held, speed=False, novelty=None)
         rows.append({"labelled_gearboxes": n, "draw": draw, "heldout_rows": len(held),
                      "network_mre_pct": mine_net["mean_relative_error_pct"],
                      "network_rmse": mine_net["rmse"],
@@ -407,10 +407,10 @@ def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5
             # a network trained on the fleet against the estimator and null model given the
             # same labelled gearboxes (and without the physics rows' novelty test); the
             # physics-trained one against those fitted on its rows
-            refit = fit_fleet_estimator(labelled), typical_wear(labelled)
             for label, net in nets.items():
-                own = label == name
-                e, t = (est, typical) if own else refit
+                own, mark = label == name, net.schema.target
+                e, t = ((est, typical) if own else
+                        (fit_fleet_estimator(labelled, mark), typical_wear(labelled, mark)))
                 r, plot = evaluate(f"{label}/independent_fleet_heldout", net, e, t, held,
                                    speed=False, novelty=novelty if own else None)
                 rows += [{**row, "seed": seed} for row in r]

@@ -425,7 +425,8 @@ def wear_depths(pair: IndependentPair, root_wear_mm: float, points: int = 4001
     """The wear profile of root wear ``root_wear_mm`` summarised as the physics dataset
     summarises its own (:mod:`physics.dataset.generation`): depth at the root, largest depth
     and mean depth over the path of contact (worn area per unit face width over the path's
-    length), all in mm, keyed by the dataset's column names."""
+    length), all in mm, keyed by the dataset's column names. (Its own three lines, not the
+    dataset's: this module imports nothing of the project's model.)"""
     s0, s1 = pair.path
     s = np.linspace(s0, s1, points)
     w = _wear_profile(pair, s, root_wear_mm)

@@ -120,11 +120,13 @@ def _band_energy(x, lo, hi):
     return float(np.sum(a[(f >= lo) & (f <= hi)] ** 2))
 
 
-def test_wear_depths_integrate_the_archard_profile_by_hand():
+@pytest.mark.parametrize("tip_share", [0.5, 3.0])
+def test_wear_depths_integrate_the_archard_profile_by_hand(tip_share):
     """With a vanishing zone transition the profile is piecewise linear in the roll s:
     depth ~ |s| in single contact, |s| / 2 in double contact, times the tip share beyond the
-    pitch point, h at the root. Its mean over the path is then a sum of four trapezoids."""
-    pair = IndependentPair(transition_roll_fraction=0.002)
+    pitch point, h at the root. Its mean over the path is then a sum of four trapezoids, its
+    largest depth the root's or (a large tip share) the tip's."""
+    pair = IndependentPair(transition_roll_fraction=0.002, wear_tip_share=tip_share)
     s0, s1 = pair.path
     ld = (pair.contact_ratio - 1.0) * pair.base_pitch
     h, share = 0.01, pair.wear_tip_share
@@ -138,7 +140,9 @@ def test_wear_depths_integrate_the_archard_profile_by_hand():
     d = wear_depths(pair, h)
     assert d["root_wear_mm"] == pytest.approx(h)
     assert d["mean_wear_mm"] == pytest.approx(scale * area / (s1 - s0), rel=2e-3)
-    assert d["max_wear_mm"] == pytest.approx(scale * max(0.5 * abs(s0), abs(s0 + ld)), rel=2e-3)
+    # each zone's largest depth is at its end farthest from the pitch point
+    peaks = (0.5 * abs(s0), abs(s0 + ld), share * abs(s1 - ld), share * 0.5 * s1)
+    assert d["max_wear_mm"] == pytest.approx(scale * max(peaks), rel=1e-2)
     assert wear_depths(pair, 2 * h)["mean_wear_mm"] == pytest.approx(2 * d["mean_wear_mm"])
     assert wear_depths(pair, 0.0) == {k: 0.0 for k in d}
 

@@ -420,7 +420,6 @@ def test_the_benchmarks_fleet_is_labelled_gearboxes_that_differ():
     worn = fleet[fleet.root_wear_mm > 0]
     shape = worn.mean_wear_mm / worn.root_wear_mm
     assert shape.max() - shape.min() < 1e-9 and 0 < shape.iloc[0] < 1
-    assert (worn.max_wear_mm >= worn.root_wear_mm).all()
 
 
 def test_the_estimator_refitted_on_a_fleet_ignores_the_cycle_unit_and_reads_its_gearboxes():
@@ -433,8 +432,8 @@ def test_the_estimator_refitted_on_a_fleet_ignores_the_cycle_unit_and_reads_its_
     fleet = fleet[fleet.case == 3]
     labelled, held = fleet[fleet.gearbox < 2], fleet[fleet.gearbox == 2]
     p2p, kurt = held.dte_peak_to_peak.to_numpy(), held.dte_kurtosis.to_numpy()
-    read = fit_fleet_estimator(labelled).predict(p2p, kurt).wear
-    other = fit_estimator(labelled.assign(cycles=labelled.root_wear_mm * 4e8))
+    read = fit_fleet_estimator(labelled, "root_wear_mm").predict(p2p, kurt).wear
+    other = fit_estimator(labelled.assign(cycles=labelled.root_wear_mm * 4e8), "root_wear_mm")
     np.testing.assert_allclose(other.predict(p2p, kurt).wear, read, rtol=1e-3, atol=1e-5)
     true = held.root_wear_mm.to_numpy()
     assert np.corrcoef(read, true)[0, 1] > 0.8
@@ -477,6 +476,15 @@ def test_a_mean_wear_network_is_scored_with_estimators_of_its_own_target(tmp_pat
         "t", net, benchmark.fit_fleet_estimator(labelled, "mean_wear_mm"),
         benchmark.typical_wear(labelled, "mean_wear_mm"), held, speed=False, novelty=None)
     np.testing.assert_array_equal(plot["true"], held.mean_wear_mm.to_numpy())
+    assert plot["target"] == "mean_wear_mm"
+    # the estimator reads the mean depth, 0.4 times the root depth on this geometry: on the
+    # held-out gearboxes' worn states it is nearer the mean labels than the root labels
+    worn = held.root_wear_mm.to_numpy() > 0
+    est = plot["estimator"][worn]
+    assert (np.abs(est - held.mean_wear_mm.to_numpy()[worn]).mean()
+            < 0.5 * np.abs(est - held.root_wear_mm.to_numpy()[worn]).mean())
+    assert rows[1]["rmse"] == pytest.approx(
+        np.sqrt(np.mean((plot["estimator"] - plot["true"]) ** 2)), rel=1e-6)
     null = rows[2]
     expected = benchmark.wear_errors(
         np.full(len(held), labelled.mean_wear_mm[labelled.mean_wear_mm > 0].median()),
@@ -496,7 +504,7 @@ def test_the_benchmark_summarises_seeds_and_scores_a_null_model():
     assert out.loc[("case3/x", "surrogate")].tolist() == [2, 4.0, 6.0, 0.8]
     assert out.loc[("case3/x", "null"), "mre_max"] == 15.0
     train = pd.DataFrame({"root_wear_mm": [0.0, 0.0, 0.01, 0.02, 0.04]})
-    assert typical_wear(train) == 0.02  # the unworn rows do not pull it to zero
+    assert typical_wear(train, "root_wear_mm") == 0.02  # the unworn rows do not pull it to 0
 
 
 @hypothesis.settings(max_examples=25, deadline=None)
@@ -513,11 +521,11 @@ def test_a_reading_referenced_to_the_unworn_record_loses_its_offset_not_its_slop
     test = pd.DataFrame({"replicate": np.repeat(np.arange(len(offsets)), wear.size),
                          "root_wear_mm": np.tile(wear, len(offsets))})
     reading = np.repeat(offsets, wear.size) + slope * test.root_wear_mm.to_numpy()
-    unworn, mre = referenced(test, reading)
+    unworn, mre = referenced(test, reading, "root_wear_mm")
     assert unworn == pytest.approx(np.median(offsets), abs=1e-15)
     assert mre == pytest.approx(100 * abs(slope - 1), abs=1e-9)
     assert all(np.isnan(referenced(test[test.root_wear_mm > 0],
-                                   reading[test.root_wear_mm.to_numpy() > 0])))
+                                   reading[test.root_wear_mm.to_numpy() > 0], "root_wear_mm")))
 
 
 def test_novelty_is_rare_on_the_training_distribution_and_certain_far_from_it():
