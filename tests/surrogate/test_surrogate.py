@@ -492,6 +492,23 @@ def test_a_mean_wear_network_is_scored_with_estimators_of_its_own_target(tmp_pat
     assert null["mean_relative_error_pct"] == pytest.approx(expected["mean_relative_error_pct"])
 
 
+def test_the_dry_law_test_set_wears_a_flatter_deeper_profile():
+    """The benchmark's ``dry_wear_law`` gearboxes are the premise of that test set: the same
+    draw of every other nuisance, worn by the dry law, has its root a smaller multiple of the
+    mean depth and a larger mean depth than under the lubricated law."""
+    from physics.dataset.generation import run_unit
+    from surrogate.benchmark import DRY_LAW
+
+    dry = spec_from_config({**DRY_LAW, "cases": [3], "replicates": 1, "wear_states": 2,
+                            "chunks": 1})
+    wet = dataclasses.replace(dry, nuisance=dataclasses.replace(dry.nuisance,
+                                                                boundary_share=[0.0, 0.0]))
+    (a, _), (b, _) = (run_unit(Scenario(), s, 3, 0) for s in (dry, wet))
+    a, b = a.iloc[-1], b.iloc[-1]
+    assert a.root_wear_mm / a.mean_wear_mm < 0.6 * b.root_wear_mm / b.mean_wear_mm
+    assert a.mean_wear_mm > 1.5 * b.mean_wear_mm
+
+
 def test_the_benchmark_summarises_seeds_and_scores_a_null_model():
     """Over training seeds: the mean and the worst error and the smallest coverage per model,
     test set and estimator; the null model is the median of the worn training rows."""
