@@ -415,10 +415,11 @@ def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5
             # a network trained on the fleet against the estimator and null model given the
             # same labelled gearboxes (and without the physics rows' novelty test); the
             # physics-trained one against those fitted on its rows
+            refit = {m: (fit_fleet_estimator(labelled, m), typical_wear(labelled, m))
+                     for m in {n.schema.target for label, n in nets.items() if label != name}}
             for label, net in nets.items():
-                own, mark = label == name, net.schema.target
-                e, t = ((est, typical) if own else
-                        (fit_fleet_estimator(labelled, mark), typical_wear(labelled, mark)))
+                own = label == name
+                e, t = (est, typical) if own else refit[net.schema.target]
                 r, plot = evaluate(f"{label}/independent_fleet_heldout", net, e, t, held,
                                    speed=False, novelty=novelty if own else None)
                 rows += [{**row, "seed": seed} for row in r]

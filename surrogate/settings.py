@@ -27,7 +27,8 @@ class DataConfig:
     operating_point: bool = True  # speed and torque as inputs (a user knows them)
     inputs: list[str] | None = None  # explicit input columns instead (a user's own table)
     #: the wear column to read: root_wear_mm (the thesis's), or mean_wear_mm (the flank's mean
-    #: depth over the path of contact, which reads across wear laws: docs/surrogate.md)
+    #: depth over the path of contact, which reads the independent simulator where the root
+    #: depth does not; neither reads the dry wear law: docs/surrogate.md)
     target: str = "root_wear_mm"
     # whole trajectories (case, replicate) per case, never rows of one; the validation ones
     # calibrate the interval. null: a tenth of each case's trajectories, at least 8
