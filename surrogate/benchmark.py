@@ -128,6 +128,12 @@ def typical_wear(train: pd.DataFrame, target: str) -> float:
 GEARBOX_KEYS = ("case", "replicate", "gearbox", "n1_rpm", "torque_Nm")
 
 
+def gearbox_keys(test: pd.DataFrame) -> list[str]:
+    """The columns of :data:`GEARBOX_KEYS` that ``test`` has: its rows of one gearbox at one
+    operating point, first the unworn one (the baseline record of a baseline model)."""
+    return [c for c in GEARBOX_KEYS if c in test.columns]
+
+
 def referenced(test: pd.DataFrame, wear: np.ndarray, target: str) -> tuple[float, float]:
     """How a wear reading depends on the gearbox's unworn state: the median reading of the
     unworn rows (each gearbox's record at zero wear), and the mean relative error [%] of the
@@ -136,8 +142,7 @@ def referenced(test: pd.DataFrame, wear: np.ndarray, target: str) -> tuple[float
     is unworn. An estimator that reads the change of wear right but not its level has a large
     unworn reading and a small referenced error."""
     true = test[target].to_numpy()
-    keys = [c for c in GEARBOX_KEYS if c in test.columns]
-    gearbox = test.groupby(keys, sort=False).ngroup().to_numpy()
+    gearbox = test.groupby(gearbox_keys(test), sort=False).ngroup().to_numpy()
     unworn = true == 0
     if not unworn.any():
         return math.nan, math.nan
@@ -162,7 +167,9 @@ class Novelty:
         self.radius = float(np.quantile(self.tree.query(self._scaled(val))[0], level))
 
     def _scaled(self, df: pd.DataFrame) -> np.ndarray:
-        return self.schema.scale(df[list(self.schema.inputs)].to_numpy(float))
+        inputs, keys = list(self.schema.inputs), gearbox_keys(df)
+        rows = self.schema.network_rows(df[list(dict.fromkeys([*inputs, *keys]))], keys)
+        return self.schema.scale(rows[inputs].to_numpy(float))
 
     def rate(self, test: pd.DataFrame) -> float:
         return float(np.mean(self.tree.query(self._scaled(test))[0] > self.radius))
@@ -174,9 +181,10 @@ def evaluate(name: str, surrogate: Surrogate, est: EmpiricalInverse, typical: fl
     """The network, the estimator and the null model (both fitted by the caller on the
     network's target) on ``test``: one row each of :func:`wear_errors` and the columns of the
     module text (``novel_rate`` NaN without a ``novelty`` test), and the parity plot's data."""
-    target = surrogate.schema.target
+    target, keys = surrogate.schema.target, gearbox_keys(test)
     true = test[target].to_numpy()
-    pred = surrogate.predict(test[list(surrogate.schema.inputs)])
+    pred = surrogate.predict(test[list(dict.fromkeys([*surrogate.schema.inputs, *keys]))],
+                             gearbox=keys)
     e = est.predict(test.dte_peak_to_peak.to_numpy(), test.dte_kurtosis.to_numpy())
     inside = ((true >= pred[f"{target}_lower"]) & (true <= pred[f"{target}_upper"])).mean()
     net_unworn, net_ref = referenced(test, pred[f"{target}_pred"].to_numpy(), target)
@@ -217,11 +225,15 @@ MODELS = {
     "loco2": ["case=all", "data.holdout_case=2"],
     "loco5": ["case=all", "data.holdout_case=5"],
     "case3_form": ["case=3", "experiment=model_form"],
+    "case3_baseline": ["case=3", "experiment=baseline"],
+    "all_baseline": ["case=all", "experiment=baseline"],
+    "loco2_baseline": ["case=all", "experiment=baseline", "data.holdout_case=2"],
+    "loco5_baseline": ["case=all", "experiment=baseline", "data.holdout_case=5"],
 }
 #: the dry-law test set: the dataset spec's values (8 gearboxes per case)
 DRY_LAW = {"seed": 2, "replicates": 8, "nuisance": {"boundary_share": [0.99, 0.99]}}
 #: models trained once per seed of ``--seeds``; the others train with seed 0
-SEEDED = ("case3", "case3_mean")
+SEEDED = ("case3", "case3_mean", "case3_baseline")
 #: the independent simulator's operating points and wear states (loop issue)
 INDEPENDENT_POINTS = ((2000.0, 300.0), (1800.0, 290.0))
 INDEPENDENT_WEAR_MM = (0.0, 0.003, 0.006, 0.009, 0.012, 0.015)
@@ -376,8 +388,9 @@ def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5
         typical = typical_wear(dm.frames["train"], target)
         novelty = Novelty(surrogate.schema, dm.frames["train"], dm.frames["val"])
         cases = set(dm.cases)
-        sets = {"heldout_trajectories" if name[:4] != "loco" else
-                f"heldout_operating_point_{'inside' if name == 'loco2' else 'outside'}":
+        loco = name.startswith("loco")
+        sets = {"heldout_trajectories" if not loco else
+                f"heldout_operating_point_{'inside' if name[:5] == 'loco2' else 'outside'}":
                 dm.frames["test"]}
         if name == "case3_form":  # its shifted gearboxes: the model form shifted as well
             ranges = NuisanceRanges(**cfg.data.generate.nuisance)
@@ -385,9 +398,9 @@ def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5
                 root / "data" / "dataset_shifted_model_form.parquet",
                 {"cases": [3], "seed": 1, "replicates": 8,
                  "nuisance": shifted_ranges(base=ranges)})
-        elif name[:4] != "loco":
+        elif not loco:
             sets["nuisance_shifted"] = shifted[shifted.case.isin(cases)]
-        if name[:4] != "loco":
+        if not loco:
             sets["dry_wear_law"] = dry[dry.case.isin(cases)]
             sets["independent_simulator"] = foreign[foreign.case.isin(cases)]
             sets["independent_fleet"] = fleet[fleet.case.isin(cases)]

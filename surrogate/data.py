@@ -36,7 +36,7 @@ from physics.dataset.generation import (
 )
 from physics.dataset.generation import units as dataset_units
 from physics.params import Scenario, operating_cases
-from surrogate.schema import FeatureSchema
+from surrogate.schema import FeatureSchema, baseline_changes
 
 log = logging.getLogger(__name__)
 #: the sensors a user may have: DTE (``dte_*`` features) and housing acceleration (``acc_*``)
@@ -218,7 +218,8 @@ class WearDataModule(L.LightningDataModule):
     def __init__(self, dataset: str, case: str | int = 3,
                  sensors: tuple[str, ...] = SENSORS, operating_point: bool = True,
                  inputs: list[str] | None = None, target: str = "root_wear_mm",
-                 val_replicates: int | None = None, test_replicates: int = 8,
+                 baseline: bool = False, val_replicates: int | None = None,
+                 test_replicates: int = 8,
                  holdout_case: int | None = None, batch_size: int = 64, seed: int = 0,
                  generate: dict | None = None, jobs: int = 2, table: str | None = None,
                  columns: dict[str, str] | None = None, group: str | None = None,
@@ -231,6 +232,8 @@ class WearDataModule(L.LightningDataModule):
                              f"{self.cases}")
         self.inputs = list(inputs) if inputs else input_columns(list(sensors), operating_point)
         self.target = target
+        # the features, not the operating point, are read against the baseline record
+        self.baseline = tuple(c for c in self.inputs if c not in CONDITIONS) if baseline else ()
         self.val_replicates = None if val_replicates is None else int(val_replicates)
         self.test_replicates = int(test_replicates)
         self.holdout_case = None if holdout_case is None else int(holdout_case)
@@ -276,13 +279,28 @@ class WearDataModule(L.LightningDataModule):
             raise ValueError(f"columns {missing} are not in {self.dataset}; choose from "
                              f"{list(df.columns)}")
         df = df[df.case.isin(self.cases)]
+        if self.baseline and self.table is None:
+            first = df.groupby(["case", "replicate"], sort=False).cycles.transform("first")
+            if (first != 0).any() or not df.groupby(["case", "replicate"]).cycles.apply(
+                    lambda c: c.is_monotonic_increasing).all():
+                raise ValueError(f"{self.dataset}: data.baseline needs each trajectory's rows "
+                                 "in order of cycles from its unworn record (cycles 0); "
+                                 "rebuild the dataset with physics.dataset")
         self.frames = split_trajectories(df, self.val_replicates, self.test_replicates,
                                          self.seed, self.holdout_case)
-        self.schema = FeatureSchema.fit(self.frames["train"], self.inputs, dataset_units(),
-                                        self.target)
+        self.schema = FeatureSchema.fit(self.network_rows("train"), self.inputs,
+                                        dataset_units(), self.target, self.baseline)
+
+    def network_rows(self, split: str) -> pd.DataFrame:
+        """The rows of ``split`` as the network reads them: with ``baseline``, the features as
+        changes since each trajectory's first row (:func:`baseline_changes`)."""
+        rows = self.frames[split]
+        if not self.baseline:
+            return rows
+        return baseline_changes(rows, list(self.baseline), ["case", "replicate"])
 
     def tensors(self, split: str) -> TensorDataset:
-        rows = self.frames[split]
+        rows = self.network_rows(split)
         x = self.schema.scale(rows[self.inputs].to_numpy(float))
         y = rows[self.target].to_numpy(float) / self.schema.target_scale
         return TensorDataset(torch.as_tensor(x, dtype=torch.float32),

@@ -172,15 +172,19 @@ class Surrogate:
                 None, {"x": xs[lo:lo + batch]})
         return mean, std
 
-    def predict(self, df: pd.DataFrame) -> pd.DataFrame:
+    def predict(self, df: pd.DataFrame, gearbox: list[str] | None = None) -> pd.DataFrame:
         """Wear for every row of ``df`` (checked against the schema; see FeatureSchema.check).
+
+        A model trained with a baseline (``schema.baseline``) reads feature changes since
+        each gearbox's first row: ``gearbox`` names the columns that tell the gearboxes apart
+        (:meth:`FeatureSchema.network_rows`); other models ignore it.
 
         Columns: ``<target>_pred`` (clipped at 0: wear depth is not negative), ``<target>_std``,
         ``<target>_lower`` / ``_upper`` (the conformal interval of the trained level, clipped at
         0) and
         ``out_of_range`` (an input outside the training envelope: extrapolation).
         """
-        x = self.schema.check(df)
+        x = self.schema.check(self.schema.network_rows(df, gearbox))
         mean, std = self.predict_array(x)
         bad = ~(np.isfinite(mean) & np.isfinite(std))
         if bad.any():

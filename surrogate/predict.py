@@ -4,7 +4,10 @@
 names and units are in the checkpoint; identifying columns such as ``case``, ``cycles`` or
 ``record`` are passed through). ``output`` (default: ``wear.csv`` in the run folder) gets the
 input's identifying columns (true wear included, where given) and ``root_wear_mm_pred``, its
-standard deviation, the interval bounds and the ``out_of_range`` flag. From Python::
+standard deviation, the interval bounds and the ``out_of_range`` flag. A model trained with
+``data.baseline=true`` reads each gearbox's features against its first row: ``gearbox=COLUMN``
+(or ``gearbox=[A,B]``) names the column(s) that tell the gearboxes apart, which the output keeps.
+From Python::
 
     from surrogate.inference import Surrogate
     wear = Surrogate.load("wear_surrogate.pt").predict(features_df)
@@ -46,28 +49,43 @@ class PredictJob:
     surrogate: Surrogate
     table: pd.DataFrame
     output: Path
+    gearbox: tuple[str, ...] = ()  # the columns that tell the gearboxes apart (baseline models)
+
+
+def gearbox_columns(value) -> tuple[str, ...]:
+    """``gearbox`` of the config: none, one column name or a list of them."""
+    if value is None:
+        return ()
+    names = [value] if isinstance(value, str) else list(value)
+    if not names or not all(isinstance(n, str) and n for n in names):
+        raise ValueError(f"gearbox = {value!r} must be a column name or a list of them")
+    return tuple(names)
 
 
 def prepare(cfg: DictConfig) -> PredictJob:
     """Load and check the checkpoint and the table, and the output's folder, before any work."""
     surrogate = Surrogate.load(cfg.ckpt)
     table = read_table(cfg.input)
-    surrogate.schema.check(table)
+    gearbox = gearbox_columns(cfg.get("gearbox"))
+    surrogate.schema.check(surrogate.schema.network_rows(table, list(gearbox)))
     output = Path(cfg.output)
     if output.is_dir():
         raise ValueError(f"output = {str(output)!r} is a folder; give a .csv file name")
-    return PredictJob(surrogate, table, output)
+    return PredictJob(surrogate, table, output, gearbox)
 
 
-def predict_file(ckpt: str | Path, source: str | Path, target: str | Path) -> pd.DataFrame:
+def predict_file(ckpt: str | Path, source: str | Path, target: str | Path,
+                 gearbox: tuple[str, ...] = ()) -> pd.DataFrame:
     """Predict wear for every row of ``source`` with ``ckpt``; write ``target``; return it."""
-    return execute(PredictJob(Surrogate.load(ckpt), read_table(source), Path(target)))
+    return execute(PredictJob(Surrogate.load(ckpt), read_table(source), Path(target),
+                              gearbox_columns(gearbox or None)))
 
 
 def execute(job: PredictJob) -> pd.DataFrame:
     df = job.table
-    pred = job.surrogate.predict(df)
-    keep = [c for c in df.columns if c in KEEP_COLUMNS and c not in pred.columns]
+    pred = job.surrogate.predict(df, list(job.gearbox))
+    keep = [c for c in df.columns
+            if (c in KEEP_COLUMNS or c in job.gearbox) and c not in pred.columns]
     result = pd.concat([df[keep], pred], axis=1)
     atomic_write(job.output, lambda p: result.to_csv(p, index=False))
     n_out = int(result.out_of_range.sum())

@@ -28,17 +28,22 @@ class FeatureSchema:
     high: tuple[float, ...]
     target_scale: float  # training target std
     version: int = SCHEMA_VERSION
+    #: the inputs read as changes since the gearbox's baseline record (:func:`baseline_changes`,
+    #: ``data.baseline``); empty: every input as measured
+    baseline: tuple[str, ...] = ()
 
     @classmethod
     def fit(cls, train: pd.DataFrame, inputs: list[str], units: dict[str, str],
-            target: str) -> FeatureSchema:
+            target: str, baseline: tuple[str, ...] = ()) -> FeatureSchema:
+        """The schema of a network trained on ``train`` (with ``baseline``: the rows as
+        :func:`baseline_changes` gives them, so the scaling and envelope are of the changes)."""
         x = train[inputs].to_numpy(float)
         std = x.std(axis=0)
         std = np.where(std > 0, std, 1.0)  # a constant input (one case's lubricant) stays 0
         return cls(tuple(inputs), tuple(units[c] for c in inputs), target, units[target],
                    tuple(x.mean(axis=0).tolist()), tuple(std.tolist()),
                    tuple(x.min(axis=0).tolist()), tuple(x.max(axis=0).tolist()),
-                   float(train[target].std()) or 1.0)
+                   float(train[target].std()) or 1.0, baseline=tuple(baseline))
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -49,6 +54,29 @@ class FeatureSchema:
             raise ValueError(f"checkpoint schema version {d.get('version')!r} is not "
                              f"{SCHEMA_VERSION}: retrain the model with this package version")
         return cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in d.items()})
+
+    def network_rows(self, df: pd.DataFrame, gearbox: list[str] | None = None) -> pd.DataFrame:
+        """``df`` as the network reads it: for a baseline model its :attr:`baseline` columns
+        as changes since the first row of each gearbox (the rows sharing the values of the
+        ``gearbox`` columns); gearbox columns that are neither inputs nor identifying columns
+        (:data:`KEEP_COLUMNS`) are dropped."""
+        keys = list(gearbox or [])
+        missing = [c for c in keys if c not in df.columns]
+        if missing:
+            raise ValueError(f"gearbox column(s) {missing} are not in the input; it has "
+                             f"{list(df.columns)}")
+        if self.baseline:
+            if not keys:
+                raise ValueError(
+                    f"this model reads {list(self.baseline)} as changes since each gearbox's "
+                    "baseline record: name the column(s) that tell the gearboxes apart "
+                    "(gearbox=... on the command line, predict(df, gearbox=[...]) in Python), "
+                    "with the rows of each gearbox in time order and the first its baseline "
+                    "record (when new)")
+            cols = [c for c in self.baseline if c in df.columns]  # check() names missing ones
+            df = baseline_changes(df, cols, keys)
+        return df.drop(columns=[c for c in keys if c not in self.inputs
+                                and c not in KEEP_COLUMNS])
 
     def check(self, df: pd.DataFrame) -> np.ndarray:
         """The input matrix of ``df``, after checking its columns, values and units.
@@ -82,8 +110,10 @@ class FeatureSchema:
             lo, hi = self.low[j], self.high[j]
             typical = float(np.median(np.abs(x[:, j])))
             scale = max(abs(lo), abs(hi))
-            if scale > 0 and typical > 0 and not (scale / UNIT_FACTOR**2 < typical
-                                                  < scale * UNIT_FACTOR):
+            # a change since the baseline may be near zero in any unit: only too large a value
+            # is a unit error there
+            floor = 0.0 if name in self.baseline else scale / UNIT_FACTOR**2
+            if scale > 0 and typical > 0 and not (floor < typical < scale * UNIT_FACTOR):
                 raise ValueError(
                     f"column {name}: typical value {typical:.3g} is far outside the training "
                     f"range [{lo:.3g}, {hi:.3g}] {self.units[j]}; is it in another unit? "
@@ -106,6 +136,23 @@ class FeatureSchema:
 
     def scale(self, x: np.ndarray) -> np.ndarray:
         return (x - np.asarray(self.mean)) / np.asarray(self.std)
+
+
+def baseline_changes(df: pd.DataFrame, columns: list[str], gearbox: list[str]) -> pd.DataFrame:
+    """``df`` with each of ``columns`` replaced by its change since the first row (in the
+    table's order) of the row's gearbox, the rows sharing the values of the ``gearbox`` columns.
+
+    Condition monitoring reads vibration against a reference value taken on the machine
+    itself (ISO 20816-1:2016, evaluation criterion II: the change of vibration magnitude from
+    a reference value). A gearbox's own run-out, profile error and stiffness set the level of
+    every feature before any wear; the change is what wear adds. The first row of a gearbox is
+    its baseline: its changes are zero."""
+    idx = df.groupby(gearbox, sort=False, dropna=False).ngroup().to_numpy()
+    first = np.unique(idx, return_index=True)[1]
+    values = df[columns].to_numpy(float)
+    out = df.copy()
+    out[columns] = values - values[first][idx]
+    return out
 
 
 #: identifying columns a prediction input may carry besides the features (passed through)

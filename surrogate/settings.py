@@ -30,6 +30,10 @@ class DataConfig:
     #: depth over the path of contact, which reads the independent simulator where the root
     #: depth does not; neither reads the dry wear law: docs/surrogate.md)
     target: str = "root_wear_mm"
+    #: read the features as changes since each gearbox's baseline record (its first: unworn in
+    #: the physics dataset, the first row of each group in a user's table); the operating point
+    #: stays as measured. Needs that record at inference (docs/surrogate.md, Baseline)
+    baseline: bool = False
     # whole trajectories (case, replicate) per case, never rows of one; the validation ones
     # calibrate the interval. null: a tenth of each case's trajectories, at least 8
     val_replicates: int | None = None

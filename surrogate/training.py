@@ -68,6 +68,11 @@ def prepare(cfg: DictConfig) -> TrainJob:
         raise ValueError(f"init_from = {cfg.init_from}: that network takes "
                          f"{list(init.schema.inputs)}, this run's data gives {data.inputs}; "
                          "choose the same data.sensors and data.operating_point")
+    if init is not None and tuple(init.schema.baseline) != data.baseline:
+        raise ValueError(f"init_from = {cfg.init_from}: that network reads "
+                         f"{list(init.schema.baseline) or 'no'} features against a baseline "
+                         f"record, this run's data {list(data.baseline) or 'none'}; set "
+                         f"data.baseline={str(bool(init.schema.baseline)).lower()}")
     return TrainJob(cfg, data, trainer, Path(cfg.paths.output_dir), init)
 
 
@@ -106,7 +111,8 @@ def fit(job: TrainJob) -> float:
     test = ({k: float(v) for k, v in
              trainer.test(model, dm, ckpt_path=ckpt, verbose=False)[0].items()}
             if len(dm.frames["test"]) else {})
-    mean, std = Surrogate(model, 1.0).predict_array(dm.frames["val"][dm.inputs].to_numpy(float))
+    mean, std = Surrogate(model, 1.0).predict_array(
+        dm.network_rows("val")[dm.inputs].to_numpy(float))
     scale = conformal_scale(mean, std, dm.frames["val"][dm.target].to_numpy(float),
                             float(cfg.model.interval))
     path = export(model, out / "wear_surrogate.pt", scale)
@@ -134,8 +140,8 @@ def kept(job: TrainJob) -> str:
 
 def report_test(surrogate: Surrogate, test: pd.DataFrame, out: Path) -> dict[str, float]:
     """Held-out errors in physical units, interval coverage, and the parity plot."""
-    t = surrogate.schema.target
-    pred = surrogate.predict(test[list(surrogate.schema.inputs)])
+    t, keys = surrogate.schema.target, ["case", "replicate"]  # a trajectory: one gearbox
+    pred = surrogate.predict(test[[*surrogate.schema.inputs, *keys]], gearbox=keys)
     rows = pd.concat([test[["case", "replicate", "cycles", t]].reset_index(drop=True),
                       pred.reset_index(drop=True)], axis=1)
     atomic_write(out / "test_predictions.csv", lambda p: rows.to_csv(p, index=False))

@@ -45,6 +45,7 @@ SMALL_DATASET = ["data.replicates=2", "data.wear_states=3"]
 SMALL_BUNDLE = {"records=10, duration_s=1.0": "records=6, duration_s=0.5",
                 "effect=\"friction\", seed=1)": "effect=\"friction\", seed=1, duration_s=0.4)"}
 TRAIN_CASE3 = "python train.py case=3"
+TRAIN_BASELINE = "python train.py case=3 experiment=baseline"
 DEMO = 'make_bundle("demo_bundle", Scenario(), "friction", seed=1,'
 USER_TABLE = 'rows = pd.read_parquet("data/dataset_case3.parquet")'
 TABLE_ARGS = "data.table=my_wear_table.csv data.group=rig +data.columns.p2p=dte_peak_to_peak"
@@ -70,6 +71,15 @@ def _mean_wear(folder: Path) -> None:
     run = next(folder.glob("logs/train/runs/case3_*"))
     predictions = pd.read_csv(run / "test_predictions.csv")
     assert {"mean_wear_mm", "mean_wear_mm_pred", "mean_wear_mm_upper"} <= set(predictions.columns)
+
+
+def _baseline(folder: Path) -> None:
+    """The baseline model's readings of every row, with the gearbox columns it was given."""
+    wear = pd.read_csv(folder / "wear.csv")
+    rows = pd.read_parquet(folder / "data" / "dataset_case3.parquet")
+    assert {"case", "replicate", "cycles", "mean_wear_mm_pred"} <= set(wear.columns)
+    assert len(wear) == len(rows) and wear.mean_wear_mm_pred.notna().all()
+    assert (wear.replicate.to_numpy() == rows.replicate.to_numpy()).all()
 
 
 def _summary(folder: Path) -> None:
@@ -130,6 +140,10 @@ CASES: dict[str, Case] = {
     "python -m surrogate.predict ckpt=logs/train/runs/<run>/wear_surrogate.pt "
     "input=data/dataset_case3.parquet output=wear.csv": Case(before=(TRAIN_CASE3,),
                                                        check=_files("wear.csv")),
+    TRAIN_BASELINE: Case(tuple(TINY_DATA + FAST_TRAIN), check=_mean_wear),
+    "python -m surrogate.predict ckpt=logs/train/runs/<run>/wear_surrogate.pt "
+    "input=data/dataset_case3.parquet gearbox=[case,replicate] output=wear.csv": Case(
+        before=(TRAIN_BASELINE,), check=_baseline),
     f"python train.py {TABLE_ARGS} data.sensors=[dte]": Case(
         tuple(FAST_TRAIN + SMALL_SPLIT), before=(USER_TABLE,),
         check=_files("logs/train/runs/case3_*/metrics.json")),

@@ -44,7 +44,7 @@ from surrogate.inference import (
 )
 from surrogate.model import EnsembleMLP, WearRegressor, mixture
 from surrogate.predict import predict_file
-from surrogate.schema import FeatureSchema
+from surrogate.schema import FeatureSchema, baseline_changes
 from surrogate.summarise import summarise
 from surrogate.training import train
 
@@ -566,3 +566,82 @@ def test_novelty_is_rare_on_the_training_distribution_and_certain_far_from_it():
     assert nov.rate(far.assign(a=far.a + 10)) == 1.0
     assert nov.rate(far.assign(b=far.b * 0 + 10e-5)) == 1.0
     assert nov.rate(far.assign(a=far.a * 0 + 1e-4)) < 0.1
+
+
+@hypothesis.settings(max_examples=40, deadline=None)
+@hypothesis.given(levels=st.lists(st.floats(-1e3, 1e3), min_size=1, max_size=5),
+                  rows=st.integers(1, 6), seed=st.integers(0, 2**16))
+def test_baseline_changes_are_zero_at_each_baseline_and_blind_to_a_gearboxs_level(levels, rows,
+                                                                                   seed):
+    """Gearboxes g whose feature reads ``level_g + f(t)``, their rows interleaved: the change
+    since each gearbox's first row is ``f(t) - f(t_0)`` whatever the levels, zero at the first
+    row, and the other columns stay as they were."""
+    rng = np.random.default_rng(seed)
+    g = np.repeat(np.arange(len(levels)), rows)
+    t = np.tile(np.arange(rows, dtype=float), len(levels))
+    order = np.argsort(rng.random(g.size), kind="stable")  # interleave the gearboxes ...
+    order = order[np.lexsort((t[order],))]  # ... keeping each one's rows in time order
+    f = rng.normal(size=g.size)
+    df = pd.DataFrame({"g": g, "t": t, "a": f + np.asarray(levels)[g], "b": f})[
+        ["g", "t", "a", "b"]].iloc[order].reset_index(drop=True)
+    out = baseline_changes(df, ["a"], ["g"])
+    first = df.groupby("g").b.transform("first")
+    np.testing.assert_allclose(out.a, df.b - first, atol=1e-9)
+    assert (out.a[df.t == 0] == 0).all()
+    pd.testing.assert_frame_equal(out.drop(columns="a"), df.drop(columns="a"))
+
+
+def test_a_baseline_network_reads_changes_and_needs_the_gearbox(dataset, tmp_path):
+    """``experiment=baseline``: the features, not the operating point, enter as changes since
+    each trajectory's unworn record; the model then reads a gearbox whatever its features'
+    level before wear, and refuses rows it cannot reference."""
+    cfg = train_cfg(tmp_path, dataset, "case=3", "experiment=baseline", "data.test_replicates=1",
+                    "trainer.max_epochs=20", "model.members=2", "logger=csv")
+    assert np.isfinite(train(cfg))
+    s = Surrogate.load(tmp_path / "run" / "wear_surrogate.pt")
+    assert s.schema.target == "mean_wear_mm"
+    assert set(s.schema.baseline) == set(DEFAULT_INPUTS)
+    assert {"n1_rpm", "torque_Nm"} <= set(s.schema.inputs) - set(s.schema.baseline)
+    assert pd.read_csv(tmp_path / "run" / "test_predictions.csv").mean_wear_mm_pred.notna().all()
+    df = pd.read_parquet(dataset)
+    df = df[df.case == 3].reset_index(drop=True)
+    cols, keys = list(s.schema.inputs), ["case", "replicate"]
+    with pytest.raises(ValueError, match="name the column"):
+        s.predict(df[cols])
+    with pytest.raises(ValueError, match=r"gearbox column\(s\) \['rig'\]"):
+        s.predict(df[cols], gearbox=["rig"])
+    wear = s.predict(df[[*cols, *keys]], gearbox=keys).mean_wear_mm_pred
+    # another level per gearbox before wear (its own run-out, profile error): the same reading
+    shift = df.replicate.map({r: 1 + 0.3 * r for r in df.replicate.unique()}).to_numpy()
+    other = df.assign(**{c: df[c] + 1e-6 * shift for c in DEFAULT_INPUTS if c.startswith("dte")},
+                      **{c: df[c] + 0.2 * shift for c in DEFAULT_INPUTS if c.startswith("acc")})
+    np.testing.assert_allclose(s.predict(other[[*cols, *keys]], gearbox=keys).mean_wear_mm_pred,
+                               wear, rtol=1e-5, atol=1e-9)
+    # the baseline rows all read as a row of no change at their operating point
+    zero = df.assign(**dict.fromkeys(DEFAULT_INPUTS, 0.0))
+    mean, _ = s.predict_array(zero[cols].to_numpy(float))
+    base = (df.cycles == 0).to_numpy()
+    np.testing.assert_allclose(wear[base], np.maximum(mean[base], 0), rtol=1e-5, atol=1e-9)
+    # the command line keeps the gearbox columns it was given
+    src = tmp_path / "f.csv"
+    df.assign(rig=df.replicate)[[*cols, "rig"]].to_csv(src, index=False)
+    subprocess.run([sys.executable, "-m", "surrogate.predict",
+                    f"ckpt={tmp_path / 'run' / 'wear_surrogate.pt'}", f"input={src}",
+                    "gearbox=rig", f"output={tmp_path / 'w.csv'}",
+                    f"hydra.run.dir={tmp_path / 'h'}"], check=True, cwd=ROOT, capture_output=True)
+    out = pd.read_csv(tmp_path / "w.csv")
+    np.testing.assert_allclose(out.mean_wear_mm_pred, wear, rtol=1e-5, atol=1e-9)
+    assert (out.rig == df.replicate).all()
+    # a fine-tune must read its features the way the pre-trained network did
+    with pytest.raises(ValueError, match=r"data\.baseline=true"):
+        train(train_cfg(tmp_path / "b", dataset, "case=3",
+                        f"init_from={tmp_path / 'run' / 'wear_surrogate.pt'}",
+                        "data.target=mean_wear_mm", "data.test_replicates=1"))
+
+
+def test_a_baseline_network_refuses_trajectories_that_do_not_start_unworn(dataset, tmp_path):
+    shuffled = tmp_path / "shuffled.parquet"
+    pd.read_parquet(dataset).sort_values("cycles", ascending=False).to_parquet(shuffled)
+    dm = instantiate(train_cfg(tmp_path, shuffled, "case=3", "experiment=baseline").data)
+    with pytest.raises(ValueError, match=r"in order of cycles from its unworn record"):
+        dm.setup()
