@@ -111,9 +111,12 @@ def fit(job: TrainJob) -> float:
     test = ({k: float(v) for k, v in
              trainer.test(model, dm, ckpt_path=ckpt, verbose=False)[0].items()}
             if len(dm.frames["test"]) else {})
-    mean, std = Surrogate(model, 1.0).predict_array(
-        dm.network_rows("val")[dm.inputs].to_numpy(float))
-    scale = conformal_scale(mean, std, dm.frames["val"][dm.target].to_numpy(float),
+    val_rows = dm.network_rows("val")
+    if dm.baseline:  # a baseline record is the reference, not a reading: its input is zero by
+        # construction, and kept in it would set the interval below the level of worn rows
+        val_rows = val_rows[val_rows.groupby(["case", "replicate"]).cumcount() > 0]
+    mean, std = Surrogate(model, 1.0).predict_array(val_rows[dm.inputs].to_numpy(float))
+    scale = conformal_scale(mean, std, val_rows[dm.target].to_numpy(float),
                             float(cfg.model.interval))
     path = export(model, out / "wear_surrogate.pt", scale)
     surrogate = Surrogate.load(path)

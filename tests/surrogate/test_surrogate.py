@@ -603,6 +603,15 @@ def test_a_baseline_network_reads_changes_and_needs_the_gearbox(dataset, tmp_pat
     assert set(s.schema.baseline) == set(DEFAULT_INPUTS)
     assert {"n1_rpm", "torque_Nm"} <= set(s.schema.inputs) - set(s.schema.baseline)
     assert pd.read_csv(tmp_path / "run" / "test_predictions.csv").mean_wear_mm_pred.notna().all()
+    # the interval is calibrated on the worn validation rows: the baseline records are not
+    # readings
+    dm = instantiate(cfg.data)
+    dm.setup()
+    val = dm.frames["val"]
+    worn = baseline_changes(val, list(s.schema.baseline), ["case", "replicate"])[val.cycles > 0]
+    mean, std = s.predict_array(worn[list(s.schema.inputs)].to_numpy(float))
+    assert s.interval_scale == pytest.approx(
+        conformal_scale(mean, std, worn.mean_wear_mm.to_numpy(), 0.9), rel=1e-5)
     df = pd.read_parquet(dataset)
     df = df[df.case == 3].reset_index(drop=True)
     cols, keys = list(s.schema.inputs), ["case", "replicate"]
