@@ -4,9 +4,12 @@ Models (:data:`MODELS`): ``case3`` (``case=3``) and ``case3_mean`` (the same net
 pinion's mean wear depth over the path of contact, ``data.target=mean_wear_mm``), each trained
 once per seed of ``--seeds`` (the seed draws the trajectory split and the start, and one seed's
 figures can mislead); ``all`` (``case=all``) and ``all_mean`` (its mean-wear twin),
-``all_acc`` (all cases, housing acceleration only), ``loco2`` / ``loco5`` (all cases but one)
-and ``case3_form`` (case 3 over the declared model's form uncertainty as well,
-``experiment=model_form``; its shifted set shifts the model form too).
+``all_acc`` (all cases, housing acceleration only), ``loco2`` / ``loco5`` (all cases but one),
+``case3_form`` (case 3 over the declared model's form uncertainty as well,
+``experiment=model_form``; its shifted set shifts the model form too) and the baseline
+networks ``case3_baseline`` (once per seed), ``all_baseline``, ``loco2_baseline`` and
+``loco5_baseline`` (``experiment=baseline``: the mean wear depth from the features' changes
+since each gearbox's first, unworn record, which every test set has: :func:`gearbox_keys`).
 Every model and estimator is scored on its own target (root wear unless named). Test sets:
 
 - ``heldout_trajectories``: the model's own test trajectories (never seen in training);
@@ -471,18 +474,18 @@ def seed_summary(table: pd.DataFrame) -> pd.DataFrame:
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m surrogate.benchmark",
                                      description=__doc__.split("\n\n")[0],
-                                     epilog="Takes about 9 minutes on 2 cores the first time "
-                                            "(the case-3, all-case, model-form, shifted and "
-                                            "dry-law datasets are generated once into data/), 5 "
-                                            "minutes after (16 trainings on the physics, "
-                                            "18 on the fleet's labelled gearboxes and 20 on "
-                                            "draws of them).")
+                                     epilog="Takes about 12 minutes on 2 cores the first "
+                                            "time (the case-3, all-case, model-form, shifted "
+                                            "and dry-law datasets are generated once into "
+                                            "data/), 8 minutes after (24 trainings on the "
+                                            "physics, 18 on the fleet's labelled gearboxes and "
+                                            "20 on draws of them).")
     parser.add_argument("--out", type=Path, default=None,
                         help="output folder (default: logs/benchmark/<time>)")
     parser.add_argument("--seeds", type=int, default=5,
-                        help="training seeds of the case-3 networks, root and mean wear "
-                             "(their split and start; default 5); the other models train "
-                             "with seed 0")
+                        help="training seeds of the case-3 networks of root wear, mean "
+                             "wear and the baseline one (their split and start; default 5); "
+                             "the other models train with seed 0")
     parser.add_argument("--max-epochs", type=int, default=None,
                         help="cap the training epochs (quick looks; the default config's "
                              "early stopping otherwise)")
