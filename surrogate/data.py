@@ -36,7 +36,7 @@ from physics.dataset.generation import (
 )
 from physics.dataset.generation import units as dataset_units
 from physics.params import Scenario, operating_cases
-from surrogate.schema import FeatureSchema, baseline_changes
+from surrogate.schema import FeatureSchema, baseline_changes, first_rows
 
 log = logging.getLogger(__name__)
 #: the sensors a user may have: DTE (``dte_*`` features) and housing acceleration (``acc_*``)
@@ -254,6 +254,7 @@ class WearDataModule(L.LightningDataModule):
             spec["chunks"] = min(BUILD_CHUNKS, units)
         self.generate = spec
         self.table = None
+        self.source = self.dataset if table is None else str(table)  # named in errors
         if table is not None:  # a user's own data: read and checked now, before any work
             self.table = user_table(table, dict(columns or {}), group,
                                     [*self.inputs, self.target])
@@ -279,17 +280,29 @@ class WearDataModule(L.LightningDataModule):
             raise ValueError(f"columns {missing} are not in {self.dataset}; choose from "
                              f"{list(df.columns)}")
         df = df[df.case.isin(self.cases)]
-        if self.baseline and self.table is None:
-            first = df.groupby(["case", "replicate"], sort=False).cycles.transform("first")
-            if (first != 0).any() or not df.groupby(["case", "replicate"]).cycles.apply(
-                    lambda c: c.is_monotonic_increasing).all():
-                raise ValueError(f"{self.dataset}: data.baseline needs each trajectory's rows "
-                                 "in order of cycles from its unworn record (cycles 0); "
-                                 "rebuild the dataset with physics.dataset")
+        if self.baseline:
+            self.check_baselines(df)
         self.frames = split_trajectories(df, self.val_replicates, self.test_replicates,
                                          self.seed, self.holdout_case)
         self.schema = FeatureSchema.fit(self.network_rows("train"), self.inputs,
                                         dataset_units(), self.target, self.baseline)
+
+    def check_baselines(self, df: pd.DataFrame) -> None:
+        """Each trajectory's first row must be its baseline record, its least worn (the
+        unworn one in the physics dataset); raise naming the first that is not."""
+        keys = ["case", "replicate"]
+        wear = df[self.target].to_numpy(float)
+        least = df.groupby(keys, sort=False)[self.target].transform("min").to_numpy(float)
+        bad = first_rows(df, keys) & (wear > least)
+        if bad.any():
+            r = int(np.argmax(bad))
+            which = df[keys].iloc[[r]].to_dict("records")[0]
+            raise ValueError(
+                f"{self.source}: trajectory {which} (in a table: "
+                "the replicate-th value of data.group, sorted) starts at "
+                f"{self.target} = {wear[r]:.4g}, above its least ({least[r]:.4g}); "
+                "data.baseline reads each trajectory against its first row, so that must be "
+                "its baseline record (unworn, or its least worn): put it first")
 
     def network_rows(self, split: str) -> pd.DataFrame:
         """The rows of ``split`` as the network reads them: with ``baseline``, the features as
@@ -297,7 +310,8 @@ class WearDataModule(L.LightningDataModule):
         rows = self.frames[split]
         if not self.baseline:
             return rows
-        return baseline_changes(rows, list(self.baseline), ["case", "replicate"])
+        return baseline_changes(rows, list(self.baseline), ["case", "replicate"],
+                                fixed=[c for c in self.inputs if c not in self.baseline])
 
     def tensors(self, split: str) -> TensorDataset:
         rows = self.network_rows(split)

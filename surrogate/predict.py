@@ -16,6 +16,7 @@ From Python::
 from __future__ import annotations
 
 import logging
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -56,8 +57,9 @@ def gearbox_columns(value) -> tuple[str, ...]:
     """``gearbox`` of the config: none, one column name or a list of them."""
     if value is None:
         return ()
-    names = [value] if isinstance(value, str) else list(value)
-    if not names or not all(isinstance(n, str) and n for n in names):
+    names = [value] if isinstance(value, str) else value
+    if not isinstance(names, Sequence) or not names or not all(
+            isinstance(n, str) and n for n in names):
         raise ValueError(f"gearbox = {value!r} must be a column name or a list of them")
     return tuple(names)
 
@@ -74,11 +76,9 @@ def prepare(cfg: DictConfig) -> PredictJob:
     return PredictJob(surrogate, table, output, gearbox)
 
 
-def predict_file(ckpt: str | Path, source: str | Path, target: str | Path,
-                 gearbox: tuple[str, ...] = ()) -> pd.DataFrame:
+def predict_file(ckpt: str | Path, source: str | Path, target: str | Path) -> pd.DataFrame:
     """Predict wear for every row of ``source`` with ``ckpt``; write ``target``; return it."""
-    return execute(PredictJob(Surrogate.load(ckpt), read_table(source), Path(target),
-                              gearbox_columns(gearbox or None)))
+    return execute(PredictJob(Surrogate.load(ckpt), read_table(source), Path(target)))
 
 
 def execute(job: PredictJob) -> pd.DataFrame:

@@ -57,8 +57,9 @@ class FeatureSchema:
 
     def network_rows(self, df: pd.DataFrame, gearbox: list[str] | None = None) -> pd.DataFrame:
         """``df`` as the network reads it: for a baseline model its :attr:`baseline` columns
-        as changes since the first row of each gearbox (the rows sharing the values of the
-        ``gearbox`` columns); gearbox columns that are neither inputs nor identifying columns
+        as changes since the first row of each gearbox (:func:`baseline_changes`; the rows
+        sharing the values of the ``gearbox`` columns, its other inputs, the operating point,
+        fixed); gearbox columns that are neither inputs nor identifying columns
         (:data:`KEEP_COLUMNS`) are dropped."""
         keys = list(gearbox or [])
         missing = [c for c in keys if c not in df.columns]
@@ -73,10 +74,18 @@ class FeatureSchema:
                     "(gearbox=... on the command line, predict(df, gearbox=[...]) in Python), "
                     "with the rows of each gearbox in time order and the first its baseline "
                     "record (when new)")
-            cols = [c for c in self.baseline if c in df.columns]  # check() names missing ones
-            df = baseline_changes(df, cols, keys)
+            present = [c for c in self.inputs if c in df.columns]  # check() names the others
+            df = baseline_changes(df, [c for c in present if c in self.baseline], keys,
+                                  fixed=[c for c in present if c not in self.baseline])
         return df.drop(columns=[c for c in keys if c not in self.inputs
                                 and c not in KEEP_COLUMNS])
+
+    def readings(self, df: pd.DataFrame, gearbox: list[str]) -> np.ndarray:
+        """True for the rows that are readings of wear: every row, or for a baseline model
+        every row but each gearbox's baseline record (the reference, its change zero by
+        construction and its interval clipped at zero wear: it cannot miss). Intervals are
+        calibrated and their coverage scored on these rows."""
+        return ~first_rows(df, gearbox) if self.baseline else np.ones(len(df), bool)
 
     def check(self, df: pd.DataFrame) -> np.ndarray:
         """The input matrix of ``df``, after checking its columns, values and units.
@@ -85,6 +94,9 @@ class FeatureSchema:
         value, or a column whose values lie orders of magnitude outside the training envelope
         (a unit error, e.g. micrometres given for metres).
         """
+        twice = sorted(set(df.columns[df.columns.duplicated()]))
+        if twice:
+            raise ValueError(f"input has column(s) {twice} more than once; keep one of each")
         missing = [c for c in self.inputs if c not in df.columns]
         if missing:
             units = dict(zip(self.inputs, self.units, strict=True))
@@ -105,7 +117,11 @@ class FeatureSchema:
         if bad.any():
             r, c = np.argwhere(bad)[0]
             raise ValueError(f"row {r} column {self.inputs[c]} is {x[r, c]}: every input must "
-                             "be finite; drop or repair such rows")
+                             "be finite; drop or repair such rows" + (
+                                 " (of a baseline model: the change since the gearbox's "
+                                 "baseline record, so a NaN in that record spoils every row "
+                                 "of the gearbox; repair it, do not drop it)"
+                                 if self.inputs[c] in self.baseline else ""))
         for j, name in enumerate(self.inputs):
             lo, hi = self.low[j], self.high[j]
             typical = float(np.median(np.abs(x[:, j])))
@@ -138,20 +154,51 @@ class FeatureSchema:
         return (x - np.asarray(self.mean)) / np.asarray(self.std)
 
 
-def baseline_changes(df: pd.DataFrame, columns: list[str], gearbox: list[str]) -> pd.DataFrame:
-    """``df`` with each of ``columns`` replaced by its change since the first row (in the
-    table's order) of the row's gearbox, the rows sharing the values of the ``gearbox`` columns.
+def first_rows(df: pd.DataFrame, gearbox: list[str]) -> np.ndarray:
+    """True for the first row (in the table's order) of each gearbox, the rows sharing the
+    values of the ``gearbox`` columns: its baseline record. Raises for a missing key."""
+    nan = df[gearbox].isna().any(axis=1)
+    if nan.any():
+        raise ValueError(f"{int(nan.sum())} row(s) have no value in the gearbox column(s) "
+                         f"{gearbox} (first: row {int(np.argmax(nan.to_numpy()))}); give every "
+                         "row its gearbox")
+    return ~df.duplicated(gearbox, keep="first").to_numpy()
 
-    Condition monitoring reads vibration against a reference value taken on the machine
-    itself (ISO 20816-1:2016, evaluation criterion II: the change of vibration magnitude from
-    a reference value). A gearbox's own run-out, profile error and stiffness set the level of
-    every feature before any wear; the change is what wear adds. The first row of a gearbox is
-    its baseline: its changes are zero."""
-    idx = df.groupby(gearbox, sort=False, dropna=False).ngroup().to_numpy()
-    first = np.unique(idx, return_index=True)[1]
-    values = df[columns].to_numpy(float)
+
+def baseline_changes(df: pd.DataFrame, columns: list[str], gearbox: list[str],
+                     fixed: list[str] = ()) -> pd.DataFrame:
+    """``df`` with each of ``columns`` replaced by its change since the gearbox's baseline
+    record, its first row (:func:`first_rows`): zero there. The ``fixed`` columns (the
+    operating point) must not vary within a gearbox, and a ``cycles`` column, where given,
+    must not fall: a record is compared with a baseline at its own operating point and from
+    before it.
+
+    A gearbox's own run-out, profile error and stiffness set the level of every feature
+    before any wear; the change since the baseline is free of that level (not of how these
+    shape the change). Condition monitoring reads a machine against its own reference value
+    in the same way (ISO 20816-1:2016, evaluation criterion II: the change of broadband
+    vibration magnitude from a reference value; used here for every feature by analogy)."""
+    first = first_rows(df, gearbox)
+    # groups numbered in order of first appearance: the first rows are groups 0, 1, 2, ...
+    of_row = np.flatnonzero(first)[df.groupby(gearbox, sort=False).ngroup().to_numpy()]
+    for name in [*fixed, *(["cycles"] if "cycles" in df.columns else [])]:
+        values = df[name].to_numpy(float)
+        base = values[of_row]
+        # NaN is check()'s to name; cycles: the baseline is the gearbox's earliest record
+        bad = values < base if name == "cycles" else ~np.isnan(values) & (values != base)
+        if bad.any():
+            r = int(np.argmax(bad))
+            rule = ("the baseline record first (the earliest): sort each gearbox's rows by "
+                    "cycles" if name == "cycles" else "one operating point per gearbox: add "
+                    "the operating-point column(s) to the gearbox columns and give each "
+                    "operating point its own baseline record")
+            which = df[gearbox].iloc[[r]].to_dict("records")[0]
+            raise ValueError(f"row {r}, gearbox {which}: {name} = "
+                             f"{values[r]:g} against {base[r]:g} in its baseline record (its "
+                             f"first row); a baseline model needs {rule}")
     out = df.copy()
-    out[columns] = values - values[first][idx]
+    values = df[columns].to_numpy(float)
+    out[columns] = values - values[of_row]
     return out
 
 

@@ -111,10 +111,8 @@ def fit(job: TrainJob) -> float:
     test = ({k: float(v) for k, v in
              trainer.test(model, dm, ckpt_path=ckpt, verbose=False)[0].items()}
             if len(dm.frames["test"]) else {})
-    val_rows = dm.network_rows("val")
-    if dm.baseline:  # a baseline record is the reference, not a reading: its input is zero by
-        # construction, and kept in it would set the interval below the level of worn rows
-        val_rows = val_rows[val_rows.groupby(["case", "replicate"]).cumcount() > 0]
+    val_rows = dm.network_rows("val")  # the readings (not a baseline model's baselines)
+    val_rows = val_rows[dm.schema.readings(val_rows, ["case", "replicate"])]
     mean, std = Surrogate(model, 1.0).predict_array(val_rows[dm.inputs].to_numpy(float))
     scale = conformal_scale(mean, std, val_rows[dm.target].to_numpy(float),
                             float(cfg.model.interval))
@@ -149,7 +147,8 @@ def report_test(surrogate: Surrogate, test: pd.DataFrame, out: Path) -> dict[str
                       pred.reset_index(drop=True)], axis=1)
     atomic_write(out / "test_predictions.csv", lambda p: rows.to_csv(p, index=False))
     errors = wear_errors(rows[f"{t}_pred"], rows[t])
-    inside = (rows[t] >= rows[f"{t}_lower"]) & (rows[t] <= rows[f"{t}_upper"])
+    inside = ((rows[t] >= rows[f"{t}_lower"]) & (rows[t] <= rows[f"{t}_upper"]))[
+        surrogate.schema.readings(test, keys)]
     fig = parity_figure(rows[t].to_numpy(), rows[f"{t}_pred"].to_numpy(),
                         rows[f"{t}_std"].to_numpy() * surrogate.interval_scale,
                         f"held-out trajectories: MRE {errors['mean_relative_error_pct']:.2f} %, "

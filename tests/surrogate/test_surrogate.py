@@ -43,7 +43,7 @@ from surrogate.inference import (
     torch_predict,
 )
 from surrogate.model import EnsembleMLP, WearRegressor, mixture
-from surrogate.predict import predict_file
+from surrogate.predict import gearbox_columns, predict_file
 from surrogate.schema import FeatureSchema, baseline_changes
 from surrogate.summarise import summarise
 from surrogate.training import train
@@ -652,5 +652,43 @@ def test_a_baseline_network_refuses_trajectories_that_do_not_start_unworn(datase
     shuffled = tmp_path / "shuffled.parquet"
     pd.read_parquet(dataset).sort_values("cycles", ascending=False).to_parquet(shuffled)
     dm = instantiate(train_cfg(tmp_path, shuffled, "case=3", "experiment=baseline").data)
-    with pytest.raises(ValueError, match=r"in order of cycles from its unworn record"):
+    with pytest.raises(ValueError, match=r"trajectory \{'case': 3, 'replicate': \d+\} .* starts "
+                                         r"at mean_wear_mm = [\d.e-]+, above its least \(0\)"):
         dm.setup()
+
+
+@pytest.mark.parametrize(("change", "message"), [
+    (lambda d: d.assign(g=[0.0, np.nan, 1.0, 1.0]), r"1 row\(s\) have no value in the gearbox"),
+    (lambda d: d.assign(n1_rpm=[2000.0, 1800.0, 2000.0, 2000.0]),
+     r"row 1, gearbox \{'g': 0\}: n1_rpm = 1800 against 2000.*one operating point per gearbox"),
+    (lambda d: d.assign(cycles=[5.0, 0.0, 0.0, 1.0]),
+     r"row 1.*cycles = 0 against 5.*sort each gearbox's rows by cycles"),
+])
+def test_baseline_changes_refuse_rows_they_cannot_reference(change, message):
+    rows = pd.DataFrame({"g": [0, 0, 1, 1], "cycles": [0.0, 1.0, 0.0, 1.0], "a": [1.0, 2, 3, 5],
+                         "n1_rpm": 2000.0})
+    np.testing.assert_array_equal(
+        baseline_changes(rows, ["a"], ["g"], fixed=["n1_rpm"]).a, [0.0, 1, 0, 2])
+    with pytest.raises(ValueError, match=message):
+        baseline_changes(change(rows), ["a"], ["g"], fixed=["n1_rpm"])
+
+
+def test_a_baseline_table_must_start_each_group_at_its_baseline(dataset, tmp_path):
+    """A user's table for data.baseline: each group's first row is read as its baseline
+    record, so a group that starts worn is refused, naming the rule; duplicated columns and
+    a gearbox option that is no column name are refused too."""
+    df = pd.read_parquet(dataset)
+    mine = df[df.case == 3].assign(rig=lambda d: d.replicate)
+    mine = pd.concat([mine.iloc[1:], mine.iloc[:1]])  # the first gearbox's baseline moved last
+    mine.to_csv(tmp_path / "mine.csv", index=False)
+    dm = instantiate(train_cfg(tmp_path, dataset, f"data.table={tmp_path / 'mine.csv'}",
+                               "data.group=rig", "experiment=baseline").data)
+    with pytest.raises(ValueError, match=r"mine\.csv: trajectory .* starts at mean_wear_mm"):
+        dm.setup()
+    twice = pd.concat([df[DEFAULT_INPUTS], df[["dte_kurtosis"]]], axis=1)
+    with pytest.raises(ValueError, match=r"\['dte_kurtosis'\] more than once"):
+        FeatureSchema.fit(df, DEFAULT_INPUTS, dict.fromkeys([*DEFAULT_INPUTS, "root_wear_mm"],
+                                                            "1"), "root_wear_mm").check(twice)
+    for bad in (5, [], [""]):
+        with pytest.raises(ValueError, match="must be a column name or a list of them"):
+            gearbox_columns(bad)
