@@ -3,8 +3,9 @@
 ``input`` is a CSV or parquet table with the feature columns the model was trained on (their
 names and units are in the checkpoint; identifying columns such as ``case``, ``cycles`` or
 ``record`` are passed through). ``output`` (default: ``wear.csv`` in the run folder) gets the
-input's identifying columns (true wear included, where given) and ``root_wear_mm_pred``, its
-standard deviation, the interval bounds and the ``out_of_range`` flag. A model trained with
+input's identifying columns (true wear included, where given) and ``<target>_pred`` (the
+model's wear: ``root_wear_mm`` or ``mean_wear_mm``), its standard deviation, the interval
+bounds and the ``out_of_range`` flag. A model trained with
 ``data.baseline=true`` reads each gearbox's features against its first row: ``gearbox=COLUMN``
 (or ``gearbox=[A,B]``) names the column(s) that tell the gearboxes apart, which the output keeps.
 From Python::
