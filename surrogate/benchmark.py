@@ -196,12 +196,11 @@ def evaluate(name: str, surrogate: Surrogate, est: EmpiricalInverse, typical: fl
                          "unworn")
     pred = surrogate.predict(network_columns(schema, test), gearbox=keys)
     e = est.predict(test.dte_peak_to_peak.to_numpy(), test.dte_kurtosis.to_numpy())
-    inside = ((true >= pred[f"{target}_lower"]) & (true <= pred[f"{target}_upper"]))[
-        readings].mean()
+    inside = surrogate.coverage(pred, test, keys)
     net_unworn, net_ref = referenced(test, pred[f"{target}_pred"].to_numpy(), target)
     est_unworn, est_ref = referenced(test, e.wear, target)
     rows = [{"scenario": name, "estimator": "surrogate", "test_rows": len(test),
-             **wear_errors(pred[f"{target}_pred"], true), "interval_coverage": float(inside),
+             **wear_errors(pred[f"{target}_pred"], true), "interval_coverage": inside,
              "flag_rate": float(pred.out_of_range.mean()),
              "novel_rate": novelty.rate(test) if novelty else math.nan,
              "unworn_reading": net_unworn, "referenced_mre_pct": net_ref},

@@ -172,6 +172,15 @@ class Surrogate:
                 None, {"x": xs[lo:lo + batch]})
         return mean, std
 
+    def coverage(self, pred: pd.DataFrame, df: pd.DataFrame, gearbox: list[str]) -> float:
+        """The share of the readings of ``df`` (:meth:`FeatureSchema.readings`) whose true wear
+        (``df``'s target column) lies inside the interval of ``pred`` (:meth:`predict` of
+        ``df``)."""
+        t = self.schema.target
+        true = df[t].to_numpy()
+        inside = (true >= pred[f"{t}_lower"].to_numpy()) & (true <= pred[f"{t}_upper"].to_numpy())
+        return float(inside[self.schema.readings(df, gearbox)].mean())
+
     def predict(self, df: pd.DataFrame, gearbox: list[str] | None = None) -> pd.DataFrame:
         """Wear for every row of ``df`` (checked against the schema; see FeatureSchema.check).
 
