@@ -1,7 +1,8 @@
 """Confusion matrix and timing of the measured-data loop on bundles with an undeclared effect.
 
     python bench/bench_loop.py [--generator own|independent] [--seeds 3] [--null-seeds 6]
-                               [--records 12] [--jobs 2] [--model-form] [--both] [--out DIR]
+                               [--records 12] [--jobs 2] [--model-form] [--both] [--reference]
+                               [--out DIR]
 
 For every effect of the library (acceleration bundles; ``sensor``, which only DTE records show,
 on DTE bundles) and for bundles without any effect (of both quantities: what a clean bundle of
@@ -27,6 +28,10 @@ whose residual most exceeds that of the other clean bundles of its quantity (:fu
 each operating point and wear state, as a rig with shaft encoders and an accelerometer records
 them; what one sensor's records cannot tell apart (a DTE gain from the stiffness level, a
 transfer-path mode from the mesh) the other's may.
+``--reference``: every bundle is read against a sister gearbox's clean records
+(:mod:`physics.loop.form_reference`): the same generator, another unit of the series
+(:data:`SISTER`: other errors within their tolerance, another damping and mounting), at the
+bundle's operating points and quantities; its calibration is made once and timed apart.
 Also times one bundle alone (:func:`solo_timing`); the per-bundle seconds of the table are
 those of ``--jobs`` bundles sharing the machine.
 """
@@ -56,6 +61,7 @@ from physics.loop.bundle_loop import (
     run_loop,
 )
 from physics.loop.effects import EFFECTS
+from physics.loop.form_reference import FormReference, form_reference
 from physics.loop.independent_simulator import (
     EFFECT_NAMES,
     IndependentPair,
@@ -83,12 +89,51 @@ def base_scenario(generator: str = "own"):
         "support_hz": support, "mount_hz": pair.mount_frequency_hz}})
 
 
+#: the reference unit of ``--reference``: the independent simulator's pair with other
+#: manufacturing errors (run-out and profile within one ISO 1328 grade of the bundles'),
+#: damping and bearing and housing data of another installation (10-30 % off); the own
+#: generator draws a unit's nuisance from its seed (:data:`SISTER_SEED`)
+SISTER = {"mesh_damping_ratio": 0.065, "runout1_um": 9.0,
+          "profile_harmonics_um": (1.9, 0.5, 0.35), "housing_mass_kg": 33.0,
+          "bearing_stiffness_N_um": 180.0}
+SISTER_SEED = 300
+
+
 #: the quantities of a bundle with both sensors (``--both``), and its label
 BOTH = ("dte_m", "accel_m_s2")
 
 
-def one(job: tuple[str, str | None, int, int, bool, str, tuple[str, ...], str]) -> dict:
-    generator, name, seed, records, model_form, tmp, quantities, out = job
+def sister_reference(generator: str, quantities: tuple[str, ...], records: int, tmp: Path
+                     ) -> FormReference:
+    """The declared model's form error on the sister unit's clean records of ``quantities``
+    (:data:`SISTER`), calibrated as the loop calibrates."""
+    base = base_scenario(generator)
+    folder = tmp / f"sister_{'_'.join(quantities)}"
+    if generator == "independent":
+        path, _ = make_independent_bundle(folder, None, quantities=quantities, seed=SISTER_SEED,
+                                          pair=IndependentPair(**SISTER))
+    else:
+        path, _ = make_bundle(folder, base, None, SISTER_SEED, quantity=quantities[0],
+                              records=records)
+    return form_reference(read_bundle(path), base, LoopSettings(seed=SISTER_SEED))
+
+
+def references(generator: str, both: bool, records: int, tmp: Path
+               ) -> dict[str, FormReference]:
+    """``--reference``: the sister unit's form reference for each bundle quantity, timed."""
+    t = time.perf_counter()
+    if generator == "independent":  # one sister bundle with both sensors serves every bundle
+        ref = sister_reference(generator, BOTH, records, tmp)
+        out = {"dte_m": ref, "accel_m_s2": ref, "both": ref}
+    else:
+        out = {q: sister_reference(generator, (q,), records, tmp) for q in BOTH}
+    print(f"sister unit's form reference calibrated in {time.perf_counter() - t:.1f} s")
+    return out
+
+
+def one(job: tuple[str, str | None, int, int, bool, str, tuple[str, ...], str,
+                   FormReference | None]) -> dict:
+    generator, name, seed, records, model_form, tmp, quantities, out, reference = job
     base = base_scenario(generator)
     quantity = "both" if quantities == BOTH else quantities[0]
     label = report_label(generator, name, seed, quantity)
@@ -98,7 +143,8 @@ def one(job: tuple[str, str | None, int, int, bool, str, tuple[str, ...], str]) 
     else:
         path, truth = make_bundle(folder, base, name, seed, quantity=quantity, records=records)
     t = time.perf_counter()
-    r = run_loop(read_bundle(path), base, LoopSettings(seed=seed, model_form=model_form))
+    r = run_loop(read_bundle(path), base, LoopSettings(seed=seed, model_form=model_form),
+                 reference=reference)
     seconds = time.perf_counter() - t
     write_report(r, Path(out) / "reports" / label, with_figures=False)
     rec = r.signals["rec"]
@@ -181,10 +227,12 @@ def best_candidate(r) -> dict:
             "also_passing": ";".join(c["effect"] for c in r["verdicts"][0]["also_passing"])}
 
 
-def solo_timing(generator: str, model_form: bool, tmp: Path, both: bool = False) -> None:
+def solo_timing(generator: str, model_form: bool, tmp: Path, both: bool = False,
+                reference: FormReference | None = None) -> None:
     """Time one bundle alone on the machine (the pool's bundles share its cores): the own
     generator's of 20 records of 1 s, the independent one's of 12 records of 0.5 s (the
-    issue's figure; 24 with ``both``), all with a tip relief, the loop only."""
+    issue's figure; 24 with ``both``), all with a tip relief, the loop only (a reference
+    calibrated before)."""
     base = base_scenario(generator)
     if generator == "own":
         path, _ = make_bundle(tmp / "timing", base, "tip_relief", 99, records=20)
@@ -193,7 +241,7 @@ def solo_timing(generator: str, model_form: bool, tmp: Path, both: bool = False)
                                           quantities=BOTH if both else ("accel_m_s2",), seed=99)
     bundle = read_bundle(path)
     t = time.perf_counter()
-    run_loop(bundle, base, LoopSettings(model_form=model_form))
+    run_loop(bundle, base, LoopSettings(model_form=model_form), reference=reference)
     print(f"one bundle of {len(bundle.records)} records alone: {time.perf_counter() - t:.1f} s "
           "(target: 12 records of 0.5 s in <= 120 s)")
 
@@ -212,6 +260,9 @@ def main() -> None:
                     help="calibrate the declared model's form uncertainty (loop.model_form=true)")
     ap.add_argument("--both", action="store_true",
                     help="independent generator: DTE and acceleration records in every bundle")
+    ap.add_argument("--reference", action="store_true",
+                    help="read every bundle against a sister unit's clean records "
+                         "(physics.loop.form_reference)")
     ap.add_argument("--out", default="bench_loop_out",
                     help="folder for the CSV files and the reports")
     args = ap.parse_args()
@@ -221,7 +272,10 @@ def main() -> None:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:
-        solo_timing(args.generator, args.model_form, Path(tmp), args.both)
+        refs = (references(args.generator, args.both, args.records, Path(tmp))
+                if args.reference else {})
+        solo_timing(args.generator, args.model_form, Path(tmp), args.both,
+                    refs.get("both" if args.both else "accel_m_s2"))
         names = EFFECTS if args.generator == "own" else EFFECT_NAMES
         def sensors(name: str | None) -> list[tuple[str, ...]]:
             if args.both:
@@ -230,10 +284,13 @@ def main() -> None:
                 return [("accel_m_s2",), ("dte_m",)]
             return [("dte_m",) if name == "sensor" else ("accel_m_s2",)]
 
-        jobs = [(args.generator, n, s, args.records, args.model_form, tmp, q, str(out))
+        def ref(q: tuple[str, ...]) -> FormReference | None:
+            return refs.get("both" if q == BOTH else q[0])
+
+        jobs = [(args.generator, n, s, args.records, args.model_form, tmp, q, str(out), ref(q))
                 for n in names for s in range(args.seeds) for q in sensors(n)]
-        jobs += [(args.generator, None, 100 + s, args.records, args.model_form, tmp, q, str(out))
-                 for s in range(args.null_seeds) for q in sensors(None)]
+        jobs += [(args.generator, None, 100 + s, args.records, args.model_form, tmp, q, str(out),
+                  ref(q)) for s in range(args.null_seeds) for q in sensors(None)]
         spawn = multiprocessing.get_context("spawn")  # numba's OpenMP threads do not survive fork
         with ProcessPoolExecutor(args.jobs, mp_context=spawn) as pool:
             rows = list(pool.map(one, jobs))

@@ -15,7 +15,8 @@ from omegaconf import DictConfig, OmegaConf
 
 from physics.command import register_schema, run_command
 from physics.loop.bundle import Bundle, read_measurements
-from physics.loop.bundle_loop import LoopConfig, LoopSettings, run_loop
+from physics.loop.bundle_loop import LoopConfig, LoopSettings, group_keys, run_loop
+from physics.loop.form_reference import check_reference, form_reference
 from physics.loop.report import write_report
 from physics.loop.table_loop import run_feature_table
 from physics.params import (
@@ -36,19 +37,37 @@ class LoopJob:
     settings: LoopSettings
     progress: bool
     out: Path
+    reference: Bundle | None  # a sister gearbox's bundle (``reference=``)
 
 
 def prepare(cfg: DictConfig) -> LoopJob:
     opts = OmegaConf.to_container(cfg.loop, resolve=True)
     settings = LoopSettings(**opts)
     data, scn = read_measurements(cfg.data, scenario_from_config(cfg))
+    reference = None
+    if cfg.reference is not None:
+        if not isinstance(data, Bundle):
+            raise ValueError(f"reference={cfg.reference}: a reference serves bundles of "
+                             f"records; data={cfg.data} is a feature table; leave out "
+                             "reference=")
+        reference, _ = read_measurements(cfg.reference, scenario_from_config(cfg))
+        if not isinstance(reference, Bundle):
+            raise ValueError(f"reference={cfg.reference}: must be a bundle folder "
+                             "(shared/specs/measured-bundle.md), not a feature table")
+        check_reference(data, reference.gear, group_keys(reference.manifest)[0])
     return LoopJob(data, scn, settings, bool(cfg.progress),
-                   Path(HydraConfig.get().runtime.output_dir))
+                   Path(HydraConfig.get().runtime.output_dir), reference)
 
 
 def execute(job: LoopJob) -> None:
     if isinstance(job.data, Bundle):
-        report = run_loop(job.data, job.scenario, job.settings, progress=job.progress)
+        reference = None
+        if job.reference is not None:
+            log.info("calibrating the declared model on the reference gearbox's %d records",
+                     len(job.reference.records))
+            reference = form_reference(job.reference, job.scenario, job.settings)
+        report = run_loop(job.data, job.scenario, job.settings, progress=job.progress,
+                          reference=reference)
     else:
         report = run_feature_table(job.data, job.scenario, job.settings)
     write_report(report, job.out)

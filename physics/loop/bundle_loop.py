@@ -103,7 +103,7 @@ import math
 import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -128,6 +128,9 @@ from physics.signals.order_analysis import (
     signature_segments,
     white_noise_std,
 )
+
+if TYPE_CHECKING:  # form_reference calibrates with this module: the type only
+    from physics.loop.form_reference import FormReference
 
 log = logging.getLogger(__name__)
 
@@ -308,6 +311,10 @@ class LoopConfig(PhysicsConfig):
     """Schema of ``python -m physics.loop``."""
 
     data: str = MISSING  # a bundle folder (shared/specs/measured-bundle.md) or a feature table
+    # a bundle of a sister gearbox without the effects sought, at the same operating points,
+    # quantities and sampling rates: the declared model's mean form error is measured on it
+    # and removed (physics.loop.form_reference); None: no reference
+    reference: str | None = None
     case: int | None = None  # 1-5: operating point and lubricant of Table 11 (feature tables)
     progress: bool = True
     loop: LoopSettings = field(default_factory=LoopSettings)
@@ -334,8 +341,13 @@ class Group:
 
     @property
     def label(self) -> str:
-        n1, torque, quantity, fs = self.key
-        return f"{n1:g}rpm_{torque:g}Nm_{quantity}_{fs:g}Hz"
+        return group_label(self.key)
+
+
+def group_label(key: tuple[float, float, str, float]) -> str:
+    """A group's name: ``<n1>rpm_<torque>Nm_<quantity>_<fs>Hz``."""
+    n1, torque, quantity, fs = key
+    return f"{n1:g}rpm_{torque:g}Nm_{quantity}_{fs:g}Hz"
 
 
 @dataclass
@@ -1429,12 +1441,19 @@ def second_candidates(first: Effect, values: dict, candidates: list[tuple[Effect
 
 
 def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = None,
-             progress: bool = False) -> LoopReport:
-    """The whole loop on one bundle; returns its report (see the module text)."""
+             progress: bool = False, reference: FormReference | None = None) -> LoopReport:
+    """The whole loop on one bundle; returns its report (see the module text). With a
+    ``reference`` (:func:`physics.loop.form_reference.form_reference`, a sister gearbox's
+    records) the declared model's mean form error measured there is removed from the
+    measured signatures first."""
     settings = settings or LoopSettings()
     candidates = candidates_for(set(bundle.manifest.quantity), settings)
     start = declared_nuisance(base) | declared_modes(base)  # a bad chain mode: before work
+    if reference is not None:
+        reference.check(bundle)
     rec = prepare(bundle, base, settings)
+    if reference is not None:
+        rec = reference.subtracted(rec)
     nuisance, free_nuisance = calibrate(rec, start)
     judged = with_discrepancy(rec, nuisance)
     declared = Reader("the declared model", nuisance)
@@ -1489,6 +1508,7 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
             "error_before_with_discrepancy": rms(residuals(judged, rec.test, base_test)),
             "error_after_with_discrepancy": rms(residuals(judged, rec.test, after_test)),
             "not_identifiable": [n for n in screened(settings) if n not in free_nuisance],
+            "form_reference": reference.summary() if reference is not None else None,
             "train_records": [bundle.records[i] for i in rec.train],
             "test_records": [bundle.records[i] for i in rec.test],
             "groups": group_summary(judged, base_test, after_test),

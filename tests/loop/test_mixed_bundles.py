@@ -35,12 +35,14 @@ from physics.loop.bundle_loop import (
     prepare,
     reads_wear,
     residuals,
+    residuals_db,
     rms,
     run_loop,
     second_candidates,
     signature_gain,
     split_records,
     stacked,
+    standardised,
     wear_check,
     wear_estimates,
     wear_reference,
@@ -52,7 +54,8 @@ from physics.loop.bundle_loop import (
     worn_models,
 )
 from physics.loop.effects import EFFECTS
-from physics.loop.independent_simulator import make_independent_bundle
+from physics.loop.form_reference import form_reference
+from physics.loop.independent_simulator import IndependentPair, make_independent_bundle
 from physics.loop.report import first_passing, holds, null_test, verdict_line, write_report
 from physics.loop.synthetic import make_bundle
 from physics.params import scenario_from_config
@@ -517,3 +520,67 @@ def test_once_per_revolution_modulation_is_fitted_by_the_model_not_an_effect(tmp
     assert cal["stiffness_factor"] == pytest.approx(truth["stiffness_factor"], rel=0.15)
     assert report["chosen_effect"] is None
     assert report["error_before"] < 2.0  # the calibrated model is near the noise
+
+
+# --- the form reference: the discrepancy's mean measured on a sister gearbox -----------------
+
+#: another unit of the independent simulator's series: other manufacturing errors, damping,
+#: bearing and housing data (as bench/bench_loop.py's SISTER)
+SISTER = {"mesh_damping_ratio": 0.065, "runout1_um": 9.0,
+          "profile_harmonics_um": (1.9, 0.5, 0.35), "housing_mass_kg": 33.0,
+          "bearing_stiffness_N_um": 180.0}
+
+
+@pytest.fixture(scope="module")
+def sister(tmp_path_factory, scn):
+    """The form reference of a clean sister unit of the ``mixed`` bundle's gearbox."""
+    path, _ = make_independent_bundle(tmp_path_factory.mktemp("sister") / "b", None,
+                                      operating_points=OPERATING_POINTS,
+                                      wear_mm=(0.0, 0.004, 0.008, 0.012),
+                                      quantities=("dte_m", "accel_m_s2"), seed=7,
+                                      pair=IndependentPair(**SISTER))
+    return form_reference(read_bundle(path), scn, LoopSettings(**FAST))
+
+
+def test_a_sister_units_form_reference_removes_most_of_the_form_error(mixed, sister, scn):
+    """Two reasonable gear models differ by many noise units (the ``mixed`` bundle's
+    calibrated declared model: several); a sister unit's mean residual, removed from the
+    signatures, leaves what the two units do not share: the calibrated declared model, then
+    refitted, misses the records by less than half as much in every group."""
+    rec, nuisance = mixed
+    every = np.arange(len(rec.models))
+    sub = sister.subtracted(rec)
+    refitted, _ = calibrate(sub, declared_nuisance(scn))
+    before = standardised(rec, every, model_signals(rec, every, nuisance, None, {}), False)
+    after = standardised(sub, every, model_signals(sub, every, refitted, None, {}), False)
+    for g in rec.groups:
+        b = rms(np.concatenate([before[i] for i in g.records]))
+        a = rms(np.concatenate([after[i] for i in g.records]))
+        assert b > 3 and a < 0.5 * b, g.label
+
+
+def test_the_form_reference_moves_each_group_by_its_own_mean(mixed, sister):
+    rec, nuisance = mixed
+    every = np.arange(len(rec.models))
+    sig = model_signals(rec, every, nuisance, None, {})
+    shift = [a - b for a, b in zip(residuals_db(sister.subtracted(rec), every, sig),
+                                   residuals_db(rec, every, sig), strict=True)]
+    for i in every:
+        assert np.allclose(shift[i], -sister.offsets[rec.group(i).key])
+    summary = sister.summary()
+    assert set(summary["records"]) == {g.label for g in rec.groups}
+    assert all(n == 4 for n in summary["records"].values())  # four wear states per group
+    assert all(v > 1.0 for v in summary["rms_offset_db"].values())  # the form error [dB]
+
+
+def test_a_reference_that_cannot_serve_the_bundle_is_refused(mixed, sister):
+    rec, _ = mixed
+    partial = dataclasses.replace(sister, offsets={k: v for k, v in sister.offsets.items()
+                                                   if k[2] == "dte_m"})
+    with pytest.raises(ValueError, match=r"no records at.*accel_m_s2.*record the reference"):
+        partial.check(rec.bundle)
+    other = dataclasses.replace(sister, gear={"z1": 19})
+    with pytest.raises(ValueError, match="same type"):
+        other.check(rec.bundle)
+    with pytest.raises(ValueError, match="no records at"):
+        run_loop(rec.bundle, rec.scenarios[0], LoopSettings(**FAST), reference=partial)
