@@ -167,6 +167,13 @@ def markdown(r: dict) -> str:
                   "check on it, rest on noise."]
     cal = ", ".join(f"{k} = {v:.4g}" for k, v in r["calibration"].items())
     lines += ["", f"Calibrated nuisance parameters ({r['calibrated_on']}): {cal}."]
+    ref = r.get("form_reference")
+    if ref:
+        per = ", ".join(f"{g}: {ref['records'][g]} records, {v:.2f} dB"
+                        for g, v in ref["rms_offset_db"].items())
+        lines.append(f"Read against a reference gearbox: the declared model's mean residual "
+                     f"there (RMS per group: {per}) was removed from the measured signatures "
+                     "before the calibration.")
     if r.get("not_identifiable"):
         lines.append(f"Not identifiable from these records (held at the declared value): "
                      f"{', '.join(r['not_identifiable'])}.")

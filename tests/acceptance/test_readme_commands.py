@@ -43,7 +43,8 @@ FAST_REPRO = ["solver.n_points=101", "stiffness.fem_refine=1", "stiffness.fem_re
               "evolution.table14_cycles=[0,1.5e7]"]
 SMALL_DATASET = ["data.replicates=2", "data.wear_states=3"]
 SMALL_BUNDLE = {"records=10, duration_s=1.0": "records=6, duration_s=0.5",
-                "effect=\"friction\", seed=1)": "effect=\"friction\", seed=1, duration_s=0.4)"}
+                "effect=\"friction\", seed=1)": "effect=\"friction\", seed=1, wear_mm=(0, 0.012))",
+                "seed=2,\n": "seed=2, wear_mm=(0, 0.012),\n"}
 TRAIN_CASE3 = "python train.py case=3"
 TRAIN_BASELINE = "python train.py case=3 experiment=baseline"
 DEMO = 'make_bundle("demo_bundle", Scenario(), "friction", seed=1,'
@@ -91,6 +92,14 @@ def _report(folder: Path) -> None:
     report = next(folder.glob("logs/loop/runs/*/report.json"))
     keys = set(json.loads(report.read_text()))
     assert {"chosen_effect", "error_before", "error_after"} <= keys
+
+
+def _referenced(folder: Path) -> None:
+    """The report says which reference records it was read against, per group."""
+    _report(folder)
+    report = json.loads(next(folder.glob("logs/loop/runs/*/report.json")).read_text())
+    assert report["form_reference"]["records"] == {"2000rpm_300Nm_dte_m_40960Hz": 2,
+                                                   "1800rpm_290Nm_dte_m_40960Hz": 2}
 
 
 @dataclass(frozen=True)
@@ -163,6 +172,8 @@ CASES: dict[str, Case] = {
                                                     check=_report),
     "python -m physics.loop data=demo_bundle loop.candidates=[friction,tip_relief] loop.seed=1":
         Case(("loop.max_nfev=4",), before=(DEMO,), check=_report),
+    "python -m physics.loop data=independent_bundle reference=sister_bundle": Case(
+        ("loop.max_nfev=4", "loop.explore=4"), before=(DEMO,), check=_referenced),
     "python -m physics.loop data=../shared/reference/thesis_tables/"
     "table15_measured_acceleration_features.csv": Case(("loop.max_nfev=4",),
                                                         needs_shared=True, check=_report),
@@ -173,6 +184,8 @@ CASES: dict[str, Case] = {
         ("--seeds", "1", "--null-seeds", "1"), slow=True),
     "python bench/bench_loop.py --generator independent --both": Case(
         ("--seeds", "1", "--null-seeds", "1"), slow=True),
+    "python bench/bench_loop.py --generator independent --reference": Case(
+        ("--seeds", "1", "--null-seeds", "1"), slow=True),
 }
 SNIPPETS: dict[str, Case] = {
     's = Surrogate.load("logs/train/runs/<run>/wear_surrogate.pt")': Case(before=(TRAIN_CASE3,)),
@@ -180,7 +193,8 @@ SNIPPETS: dict[str, Case] = {
     "res = simulate_wear(Scenario(operating=Operating(n1_rpm=2000, torque_Nm=300)), "
     "cycles=1e6)": Case(),
     DEMO: Case(replace=SMALL_BUNDLE, check=_files("demo_bundle/manifest.csv",
-                                                  "independent_bundle/signals/*.npy")),
+                                                  "independent_bundle/signals/*.npy",
+                                                  "sister_bundle/manifest.csv")),
 }
 
 
