@@ -22,6 +22,10 @@ its run folder.
    housing's effective mass ``m_h`` and, where the scenario declares them, the bearing support's
    mode and the housing mounting's, each with its damping, :data:`CHAIN_MODES`) belong to the
    acceleration records only; the groups' standardised residuals are concatenated into one cost.
+   With a **reference** (``reference=``, :mod:`physics.loop.form_reference`: a sister
+   gearbox's clean records at the same operating points and sensors), the declared model is
+   first calibrated on those, and its mean residual per group and entry there, the model's
+   own form error, is removed from the measured signatures before this calibration.
    A parameter that does not move the residuals (the pinion run-out on the line of action: a
    shaft-rate error is dynamically inert in the torsional model; the modulation's phase, which
    no amplitude of the signature sees unless another once-per-revolution feature is in the

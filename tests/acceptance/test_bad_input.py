@@ -62,6 +62,13 @@ def _empty_csv(folder: Path) -> Path:
     return path
 
 
+def _reference_elsewhere(folder: Path) -> Path:
+    """A bundle at 2000 r/min and, beside it (``<folder>/ref/b``), a reference of the same
+    gearbox type recorded at 1800 r/min only."""
+    bundle(folder / "ref", _set("n1_rpm", slice(None), 1800.0))
+    return bundle(folder)
+
+
 REPRODUCE = ["-m", "physics.reproduce"]
 DATASET = ["-m", "physics.dataset"]
 LOOP = ["-m", "physics.loop"]
@@ -115,6 +122,9 @@ CASES = [
     ([*LOOP, "data={input}", "loop.segment_s=0"], bundle, "loop.segment_s = 0"),
     ([*LOOP, "data={input}", "loop.candidates=[rust]"], bundle, "rust"),
     ([*LOOP, "data={input}", "loop.explore=3"], bundle, "loop.explore = 3"),
+    ([*LOOP, "data={input}", "reference=missing"], bundle, "'missing'"),
+    ([*LOOP, "data={input}", "reference={input}/../ref/b"], _reference_elsewhere,
+     "reference: no records at ['2000rpm_300Nm_dte_m_40960Hz']"),
 ]
 
 
