@@ -53,6 +53,7 @@ import pandas as pd
 
 from physics.loop.bundle import read_bundle
 from physics.loop.bundle_loop import (
+    FormReference,
     LoopSettings,
     entry_family,
     model_signals,
@@ -61,7 +62,7 @@ from physics.loop.bundle_loop import (
     run_loop,
 )
 from physics.loop.effects import EFFECTS
-from physics.loop.form_reference import FormReference, form_reference
+from physics.loop.form_reference import form_reference
 from physics.loop.independent_simulator import (
     EFFECT_NAMES,
     IndependentPair,

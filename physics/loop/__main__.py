@@ -15,8 +15,14 @@ from omegaconf import DictConfig, OmegaConf
 
 from physics.command import register_schema, run_command
 from physics.loop.bundle import Bundle, read_measurements
-from physics.loop.bundle_loop import LoopConfig, LoopSettings, group_keys, run_loop
-from physics.loop.form_reference import check_reference, form_reference
+from physics.loop.bundle_loop import (
+    LoopConfig,
+    LoopSettings,
+    check_reference,
+    group_keys,
+    run_loop,
+)
+from physics.loop.form_reference import form_reference
 from physics.loop.report import write_report
 from physics.loop.table_loop import run_feature_table
 from physics.params import (

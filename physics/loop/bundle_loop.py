@@ -107,7 +107,7 @@ import math
 import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -132,9 +132,6 @@ from physics.signals.order_analysis import (
     signature_segments,
     white_noise_std,
 )
-
-if TYPE_CHECKING:  # form_reference calibrates with this module: the type only
-    from physics.loop.form_reference import FormReference
 
 log = logging.getLogger(__name__)
 
@@ -374,6 +371,49 @@ class Records:
     def group(self, i: int) -> Group:
         """The group of record ``i``."""
         return self.groups[self.group_of[i]]
+
+
+@dataclass(frozen=True)
+class FormReference:
+    """Mean signature residual [dB] of the calibrated declared model on a reference gearbox's
+    records, per group key ``(n1_rpm, torque_Nm, quantity, fs_hz)``: the discrepancy's mean
+    (:func:`physics.loop.form_reference.form_reference` measures it)."""
+
+    offsets: dict[tuple, np.ndarray]
+    records: dict[tuple, int]  # reference records behind each group's mean
+    gear: dict  # the reference bundle's gear overrides (the type both units must share)
+    calibration: dict  # the reference's calibrated nuisance
+
+    def check(self, bundle: Bundle) -> None:
+        """Refuse a bundle this reference cannot serve (:func:`check_reference`)."""
+        check_reference(bundle, self.gear, list(self.offsets))
+
+    def subtracted(self, rec: Records) -> Records:
+        """``rec`` with each record's measured signature less its group's reference mean."""
+        measured = [m - self.offsets[rec.group(i).key] for i, m in enumerate(rec.measured)]
+        return dataclasses.replace(rec, measured=measured)
+
+    def summary(self) -> dict:
+        """For the report: each group's reference records and RMS mean residual [dB]."""
+        return {"records": {group_label(k): n for k, n in self.records.items()},
+                "rms_offset_db": {group_label(k): rms(v) for k, v in self.offsets.items()},
+                "calibration": self.calibration}
+
+
+def check_reference(bundle: Bundle, gear: dict, keys: list[tuple]) -> None:
+    """Refuse, before any work, a reference of gear overrides ``gear`` and group ``keys`` for
+    ``bundle``: another gear, or a group (operating point, quantity, sampling rate) of the
+    bundle the reference has no records of."""
+    if bundle.gear != gear:
+        raise ValueError(f"reference: its gear.yaml overrides {gear} differ from the "
+                         f"bundle's {bundle.gear}; the reference must be a gearbox of the "
+                         "same type (same gear data); record it with the same gear.yaml")
+    missing = [group_label(k) for k in group_keys(bundle.manifest)[0] if k not in keys]
+    if missing:
+        raise ValueError(f"reference: no records at {missing} (the reference has "
+                         f"{[group_label(k) for k in keys]}); its mean residual is per "
+                         "operating point, quantity and sampling rate: record the reference "
+                         "gearbox at each of them, or leave out reference=")
 
 
 def split_records(man: pd.DataFrame, test_fraction: float, seed: int,

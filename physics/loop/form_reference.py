@@ -16,7 +16,8 @@ that is referred to the reference, not the signature).
 :func:`form_reference` calibrates the declared model on such a reference bundle exactly as the
 loop calibrates it on the measured one and keeps, for each group (operating point, quantity,
 sampling rate), the mean residual of each signature entry over all reference records
-[dB]; :meth:`FormReference.subtracted` removes it from the measured signatures of the bundle
+[dB] (:class:`physics.loop.bundle_loop.FormReference`); ``run_loop(..., reference=...)``
+removes it from the measured signatures of the bundle
 under study, group by group, before the loop calibrates anything. What remains is the
 residual the declared model does not share with the reference gearbox: an undeclared effect,
 the two units' difference, the noise.
@@ -28,67 +29,20 @@ reference gearbox carries too; both are the user's choice of reference.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
-
 import numpy as np
 
 from physics.loop.bundle import Bundle
 from physics.loop.bundle_loop import (
+    FormReference,
     LoopSettings,
-    Records,
     calibrate,
     declared_modes,
     declared_nuisance,
-    group_keys,
-    group_label,
     model_signals,
     prepare,
     residuals_db,
-    rms,
 )
 from physics.params import Scenario
-
-
-@dataclass(frozen=True)
-class FormReference:
-    """Mean signature residual [dB] of the calibrated declared model on a reference gearbox's
-    records, per group key ``(n1_rpm, torque_Nm, quantity, fs_hz)``."""
-
-    offsets: dict[tuple, np.ndarray]
-    records: dict[tuple, int]  # reference records behind each group's mean
-    gear: dict  # the reference bundle's gear overrides (the type both units must share)
-    calibration: dict  # the reference's calibrated nuisance
-
-    def check(self, bundle: Bundle) -> None:
-        """Refuse a bundle this reference cannot serve (:func:`check_reference`)."""
-        check_reference(bundle, self.gear, list(self.offsets))
-
-    def subtracted(self, rec: Records) -> Records:
-        """``rec`` with each record's measured signature less its group's reference mean."""
-        measured = [m - self.offsets[rec.group(i).key] for i, m in enumerate(rec.measured)]
-        return replace(rec, measured=measured)
-
-    def summary(self) -> dict:
-        """For the report: each group's reference records and RMS mean residual [dB]."""
-        return {"records": {group_label(k): n for k, n in self.records.items()},
-                "rms_offset_db": {group_label(k): rms(v) for k, v in self.offsets.items()},
-                "calibration": self.calibration}
-
-
-def check_reference(bundle: Bundle, gear: dict, keys: list[tuple]) -> None:
-    """Refuse, before any work, a reference of gear overrides ``gear`` and group ``keys`` for
-    ``bundle``: another gear, or a group (operating point, quantity, sampling rate) of the
-    bundle the reference has no records of."""
-    if bundle.gear != gear:
-        raise ValueError(f"reference: its gear.yaml overrides {gear} differ from the "
-                         f"bundle's {bundle.gear}; the reference must be a gearbox of the "
-                         "same type (same gear data); record it with the same gear.yaml")
-    missing = [group_label(k) for k in group_keys(bundle.manifest)[0] if k not in keys]
-    if missing:
-        raise ValueError(f"reference: no records at {missing} (the reference has "
-                         f"{[group_label(k) for k in keys]}); its mean residual is per "
-                         "operating point, quantity and sampling rate: record the reference "
-                         "gearbox at each of them, or leave out reference=")
 
 
 def form_reference(reference: Bundle, base: Scenario, settings: LoopSettings) -> FormReference:
