@@ -49,14 +49,15 @@ class LoopJob:
 def prepare(cfg: DictConfig) -> LoopJob:
     opts = OmegaConf.to_container(cfg.loop, resolve=True)
     settings = LoopSettings(**opts)
-    data, scn = read_measurements(cfg.data, scenario_from_config(cfg))
+    base = scenario_from_config(cfg)
+    data, scn = read_measurements(cfg.data, base)
     reference = None
     if cfg.reference is not None:
         if not isinstance(data, Bundle):
             raise ValueError(f"reference={cfg.reference}: a reference serves bundles of "
                              f"records; data={cfg.data} is a feature table; leave out "
                              "reference=")
-        reference, _ = read_measurements(cfg.reference, scenario_from_config(cfg))
+        reference, _ = read_measurements(cfg.reference, base)
         if not isinstance(reference, Bundle):
             raise ValueError(f"reference={cfg.reference}: must be a bundle folder "
                              "(shared/specs/measured-bundle.md), not a feature table")
