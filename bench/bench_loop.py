@@ -30,7 +30,7 @@ them; what one sensor's records cannot tell apart (a DTE gain from the stiffness
 transfer-path mode from the mesh) the other's may.
 ``--reference``: every bundle is read against a sister gearbox's clean records
 (:mod:`physics.loop.form_reference`): the same generator, another unit of the series
-(:data:`SISTER`: other errors within their tolerance, another damping and mounting), at the
+(:data:`SISTER_UNIT`: other errors within their tolerance, another damping and mounting), at the
 bundle's operating points and quantities; its calibration is made once and timed apart.
 Also times one bundle alone (:func:`solo_timing`); the per-bundle seconds of the table are
 those of ``--jobs`` bundles sharing the machine.
@@ -65,6 +65,7 @@ from physics.loop.effects import EFFECTS
 from physics.loop.form_reference import form_reference
 from physics.loop.independent_simulator import (
     EFFECT_NAMES,
+    SISTER_UNIT,
     IndependentPair,
     make_independent_bundle,
 )
@@ -90,13 +91,8 @@ def base_scenario(generator: str = "own"):
         "support_hz": support, "mount_hz": pair.mount_frequency_hz}})
 
 
-#: the reference unit of ``--reference``: the independent simulator's pair with other
-#: manufacturing errors (run-out and profile within one ISO 1328 grade of the bundles'),
-#: damping and bearing and housing data of another installation (10-30 % off); the own
-#: generator draws a unit's nuisance from its seed (:data:`SISTER_SEED`)
-SISTER = {"mesh_damping_ratio": 0.065, "runout1_um": 9.0,
-          "profile_harmonics_um": (1.9, 0.5, 0.35), "housing_mass_kg": 33.0,
-          "bearing_stiffness_N_um": 180.0}
+#: the seed of the sister unit of ``--reference`` (the independent simulator's is
+#: :data:`SISTER_UNIT`; the own generator draws a unit's nuisance from its seed)
 SISTER_SEED = 300
 
 
@@ -107,12 +103,12 @@ BOTH = ("dte_m", "accel_m_s2")
 def sister_reference(generator: str, quantities: tuple[str, ...], records: int, tmp: Path
                      ) -> FormReference:
     """The declared model's form error on the sister unit's clean records of ``quantities``
-    (:data:`SISTER`), calibrated as the loop calibrates."""
+    (:data:`SISTER_UNIT`), calibrated as the loop calibrates."""
     base = base_scenario(generator)
     folder = tmp / f"sister_{'_'.join(quantities)}"
     if generator == "independent":
         path, _ = make_independent_bundle(folder, None, quantities=quantities, seed=SISTER_SEED,
-                                          pair=IndependentPair(**SISTER))
+                                          pair=IndependentPair(**SISTER_UNIT))
     else:
         path, _ = make_bundle(folder, base, None, SISTER_SEED, quantity=quantities[0],
                               records=records)

@@ -143,6 +143,14 @@ _EFFECTS: dict[str, tuple[dict, dict, tuple[str, ...]]] = {
 _ALIASES = {"defect": "tooth_defect"}
 EFFECT_NAMES = tuple(_EFFECTS)
 
+#: another unit of the default pair's series (``IndependentPair(**SISTER_UNIT)``), the sister
+#: of the loop's form reference (:mod:`physics.loop.form_reference`): other manufacturing
+#: errors (run-out and profile within one ISO 1328 grade), mesh damping, bearing and housing
+#: data of another installation (10-30 % off the defaults; a choice, no standard)
+SISTER_UNIT = {"mesh_damping_ratio": 0.065, "runout1_um": 9.0,
+               "profile_harmonics_um": (1.9, 0.5, 0.35), "housing_mass_kg": 33.0,
+               "bearing_stiffness_N_um": 180.0}
+
 
 def _bad(name: str, value, rule: str) -> ValueError:
     return ValueError(f"{name} = {value!r} {rule}")

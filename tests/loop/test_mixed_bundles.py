@@ -30,6 +30,7 @@ from physics.loop.bundle_loop import (
     discrepancy_allowance,
     discrepancy_sd,
     entry_family,
+    group_errors,
     model_signals,
     noise_only,
     prepare,
@@ -42,7 +43,6 @@ from physics.loop.bundle_loop import (
     signature_gain,
     split_records,
     stacked,
-    standardised,
     wear_check,
     wear_estimates,
     wear_reference,
@@ -55,7 +55,11 @@ from physics.loop.bundle_loop import (
 )
 from physics.loop.effects import EFFECTS
 from physics.loop.form_reference import form_reference
-from physics.loop.independent_simulator import IndependentPair, make_independent_bundle
+from physics.loop.independent_simulator import (
+    SISTER_UNIT,
+    IndependentPair,
+    make_independent_bundle,
+)
 from physics.loop.report import first_passing, holds, null_test, verdict_line, write_report
 from physics.loop.synthetic import make_bundle
 from physics.params import scenario_from_config
@@ -524,13 +528,6 @@ def test_once_per_revolution_modulation_is_fitted_by_the_model_not_an_effect(tmp
 
 # --- the form reference: the discrepancy's mean measured on a sister gearbox -----------------
 
-#: another unit of the independent simulator's series: other manufacturing errors, damping,
-#: bearing and housing data (as bench/bench_loop.py's SISTER)
-SISTER = {"mesh_damping_ratio": 0.065, "runout1_um": 9.0,
-          "profile_harmonics_um": (1.9, 0.5, 0.35), "housing_mass_kg": 33.0,
-          "bearing_stiffness_N_um": 180.0}
-
-
 @pytest.fixture(scope="module")
 def sister(tmp_path_factory, scn):
     """The form reference of a clean sister unit of the ``mixed`` bundle's gearbox."""
@@ -538,7 +535,7 @@ def sister(tmp_path_factory, scn):
                                       operating_points=OPERATING_POINTS,
                                       wear_mm=(0.0, 0.004, 0.008, 0.012),
                                       quantities=("dte_m", "accel_m_s2"), seed=7,
-                                      pair=IndependentPair(**SISTER))
+                                      pair=IndependentPair(**SISTER_UNIT))
     return form_reference(read_bundle(path), scn, LoopSettings(**FAST))
 
 
@@ -551,12 +548,11 @@ def test_a_sister_units_form_reference_removes_most_of_the_form_error(mixed, sis
     every = np.arange(len(rec.models))
     sub = sister.subtracted(rec)
     refitted, _ = calibrate(sub, declared_nuisance(scn))
-    before = standardised(rec, every, model_signals(rec, every, nuisance, None, {}), False)
-    after = standardised(sub, every, model_signals(sub, every, refitted, None, {}), False)
-    for g in rec.groups:
-        b = rms(np.concatenate([before[i] for i in g.records]))
-        a = rms(np.concatenate([after[i] for i in g.records]))
-        assert b > 3 and a < 0.5 * b, g.label
+    before = group_errors(rec, every, model_signals(rec, every, nuisance, None, {}), False)
+    after = group_errors(sub, every, model_signals(sub, every, refitted, None, {}), False)
+    assert set(before) == {g.label for g in rec.groups}
+    for label, b in before.items():
+        assert b > 3 and after[label] < 0.5 * b, label
 
 
 def test_the_form_reference_moves_each_group_by_its_own_mean(mixed, sister):
