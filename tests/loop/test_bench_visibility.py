@@ -63,3 +63,15 @@ def test_a_bundle_stands_out_only_above_every_other_clean_bundle_of_its_quantity
     assert seen.loc[("none", 101), "excess_db"] == pytest.approx(round((17 / 3) ** 0.5 - 2, 1))
     assert seen.loc[("none", 100), "excess_db"] <= 0.0
     assert ("none", 100) in seen.index and len(seen) == 3  # the DTE bundle has no other clean one
+
+
+def test_halving_is_attainable_only_where_the_effect_stands_twice_above_the_clean_floor(bench):
+    """The floor is the smallest clean bundle's error of the same quantity: a perfect fit of
+    the effect leaves at best what the declared model misses without any effect."""
+    runs = pd.DataFrame({
+        "truth": ["none", "none", "none", "friction", "tip_relief", "sensor"],
+        "quantity": ["accel_m_s2", "accel_m_s2", "dte_m", "accel_m_s2", "accel_m_s2", "dte_m"],
+        "error_before": [3.3, 3.9, 3.4, 6.6, 6.5, 3.7]})
+    out = bench.attainable(runs)
+    assert out.clean_floor.tolist() == [3.3, 3.3, 3.4, 3.3, 3.3, 3.4]
+    assert out.halving_attainable.tolist() == [False, False, False, True, False, False]
