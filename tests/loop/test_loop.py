@@ -313,6 +313,21 @@ def test_tooth_defect_is_once_per_revolution(scn, healthy):
     assert a[1] > 3 * a[0]
 
 
+@pytest.mark.parametrize("centre_mm", [-3.0, -2.0, -0.5])  # on pair A's stretch
+def test_tooth_defect_sits_where_its_centre_says_and_spans_its_length(healthy, centre_mm):
+    """The pit lowers tooth 0's stiffness around its centre on the roll coordinate, over its
+    length, and nowhere else on the flank."""
+    g = healthy.geometry
+    values = EFFECTS["tooth_defect"].defaults() | {"centre_mm": centre_mm, "length_mm": 1.0}
+    pit = effect("tooth_defect").model(healthy, values)
+    n = len(healthy.k_a)
+    s = g.s_start + g.base_pitch * np.arange(n) / n  # roll of pair A over one mesh period
+    lost = 1 - pit.k_a[:n] / healthy.k_a  # tooth 0 is pair A of the first period
+    assert s[np.argmax(lost)] == pytest.approx(centre_mm * 1e-3, abs=g.base_pitch / n)
+    assert np.all(lost[np.abs(s - centre_mm * 1e-3) >= 0.5e-3] < 1e-12)
+    assert lost.max() == pytest.approx(values["face_share"], rel=1e-2)
+
+
 def test_transfer_path_peaks_at_its_mode():
     fn, zeta = 3000.0, 0.05
     t = np.arange(int(FS)) / FS
