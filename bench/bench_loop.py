@@ -324,10 +324,9 @@ def main() -> None:
     print(f"right effect named, or passing the null test beside the named one: "
           f"{np.mean(among):.0%} of them")
     print(f"held-out error at least halved: {halved.mean():.0%} of them (target >= 90 %)")
-    reach = eff[eff.halving_attainable]
     print(f"  halving attainable (error before at least twice the smallest clean bundle's of "
-          f"its quantity) on {len(reach)} of them; halved on "
-          f"{int((reach.error_after <= 0.5 * reach.error_before).sum())} of those")
+          f"its quantity) on {int(eff.halving_attainable.sum())} of them; halved on "
+          f"{int(halved[eff.halving_attainable].sum())} of those")
     at_floor = eff.error_after <= 1.1 * eff.error_true_model
     print(f"held-out error after within 10 % of the true model's: {at_floor.mean():.0%}")
     n_clean = int((runs.truth == "none").sum())
