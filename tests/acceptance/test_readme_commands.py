@@ -110,6 +110,7 @@ class Case:
     slow: bool = False
     needs_shared: bool = False  # reads ../shared beside the repository
     replace: dict[str, str] = field(default_factory=dict)  # size changes of a snippet
+    timeout: float = 900  # [s] a hang's guard; a bench's own solo timing alone takes minutes
 
 
 CASES: dict[str, Case] = {
@@ -179,13 +180,13 @@ CASES: dict[str, Case] = {
                                                         needs_shared=True, check=_report),
     "python -m physics.loop --help": Case(),
     "python bench/bench_loop.py": Case(("--seeds", "1", "--null-seeds", "1", "--records", "6"),
-                                       slow=True),
+                                       slow=True, timeout=2700),
     "python bench/bench_loop.py --generator independent": Case(
-        ("--seeds", "1", "--null-seeds", "1"), slow=True),
+        ("--seeds", "1", "--null-seeds", "1"), slow=True, timeout=2700),
     "python bench/bench_loop.py --generator independent --both": Case(
-        ("--seeds", "1", "--null-seeds", "1"), slow=True),
+        ("--seeds", "1", "--null-seeds", "1"), slow=True, timeout=2700),
     "python bench/bench_loop.py --generator independent --reference": Case(
-        ("--seeds", "1", "--null-seeds", "1"), slow=True),
+        ("--seeds", "1", "--null-seeds", "1"), slow=True, timeout=2700),
 }
 SNIPPETS: dict[str, Case] = {
     's = Surrogate.load("logs/train/runs/<run>/wear_surrogate.pt")': Case(before=(TRAIN_CASE3,)),
@@ -243,7 +244,7 @@ def run_step(key: str, folder: Path) -> subprocess.CompletedProcess:
         argv[1] = str(ROOT / argv[1])
     if case.needs_shared:
         argv = [a.replace("../shared", str(ROOT.parent / "shared")) for a in argv]
-    return _run(argv + list(case.size), folder)
+    return _run(argv + list(case.size), folder, case.timeout)
 
 
 def test_every_readme_command_has_an_acceptance_test():
