@@ -232,25 +232,25 @@ class Tribology:
     (:mod:`physics.tribology.asperity_table`); ``"regression"``, the Masjedi-Khonsari formulas
     the thesis prints (2.4), kept for comparison.
 
-    ``wear_coeff`` is the wear coefficient k of the lubricated law ``dh = k psi L_a p L / H``
-    (2.6). The thesis states k = 5e-4 (Table 1); with the solver's asperity share (0.0045 % at
-    the baseline pitch point, against the 6.5 % of the thesis's tables) and the oil-film
-    deficiency coefficient psi (6e-6 to 3e-4 along the path) that gives a baseline average
-    pinion wear of 7.0e-5 um after 1e6 cycles, 3500 times below the thesis's 0.245 um (Table
-    2). The default is therefore calibrated, once, to that one figure by
-    ``python -m physics.tribology.calibration`` (with ``asperity_model = "solver"`` and the
-    other defaults): k = 1.96, 3900 times the thesis's value. Every other table follows from it
-    uncalibrated (``docs/reproduction.md``). k is an effective coefficient: ``k psi`` (1e-5 to
-    6e-4 along the baseline path; psi carries the temperature and sliding-speed dependence) is
-    the Archard coefficient of the asperity contacts, so k itself may exceed 1. With
-    ``asperity_model = "regression"``, ``wear_coeff = 5e-4`` recovers the thesis's model as
-    printed.
+    ``wear_coeff`` is ``k_a``, the Archard coefficient of the asperity contacts the oil film
+    leaves unprotected, in the lubricated law ``k_eff = min(k_a L_a psi, k_dry)`` on the total
+    load (thesis 2.6, bounded by the dry law: :mod:`physics.tribology.wear`). The thesis's
+    ``k = 5e-4`` (Table 1) belongs to an asperity share of 6.5 % (Table 2) that its formulas do
+    not give; the default is calibrated once, to the quasi-static pinion root wear of Table 8
+    (2.7 um after 1.5e7 cycles), by ``python -m physics.tribology.calibration``: ``k_a = 0.277``
+    (with ``asperity_model = "solver"`` and the other defaults). On the baseline path the
+    Archard coefficient on the total load it implies is 6.9e-10 (load- and sliding-weighted
+    mean; at most 5.5e-9; ``k/H`` = 1.1e-19 m^2/N), below the thesis's dry 2e-8 and three
+    orders below the mild boundary-lubricated wear of slow gears (of the order of 1e-16 m^2/N:
+    Flodin & Andersson, Wear 207 (1997) 16-23), as a mostly separating film should be. ``k_a``
+    itself is the coefficient of clean metal contacts, a severe adhesive value. Every other
+    table follows from it uncalibrated (``docs/reproduction.md``).
     """
 
     sigma_um: float = bounded(0.5, 0.0, 10.0, "composite RMS roughness in um")
     wear_coeff: float = bounded(
-        1.96, 0.0, 1e4, "the lubricated law's effective wear coefficient (calibrated 1.96 with "
-        "the solver; the thesis's 5e-4 with the regression)")
+        0.277, 0.0, 1.0, "the Archard coefficient of unprotected asperity contacts, k_a "
+        "(calibrated 0.277 with the solver)")
     dry_wear_coeff: float = bounded(2e-8, 0.0, 1.0)
     dry_friction_coeff: float = bounded(0.1, 0.0, 1.0)
     regime: str = choice("mixed", "mixed", "dry")

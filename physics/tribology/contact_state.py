@@ -57,20 +57,20 @@ class ContactState:
 
 
 def solve_contact_state(
-    scn: Scenario, load: np.ndarray, R1: np.ndarray, R2: np.ndarray,
-    v1: np.ndarray, v2: np.ndarray,
+    scn: Scenario, load: np.ndarray, R: np.ndarray, v1: np.ndarray, v2: np.ndarray,
 ) -> ContactState:
     """Consistent contact state for pair loads ``load`` [N].
 
-    ``R1, R2`` are the flank radii of curvature [m] (worn: thesis 2.6), ``v1, v2`` the rolling
-    velocities of the flanks [m/s] (set by the unworn kinematics, ``omega r_b tan(alpha) + s``).
+    ``R`` is the equivalent radius [m] of the Hertz contact the film sees (of the unworn
+    involutes, or of the worn band's peak pressure: :mod:`physics.tribology.wear`), ``v1, v2``
+    the rolling velocities of the flanks [m/s] (set by the unworn kinematics).
     """
     g, mat, lub, tri, op = scn.gear, scn.material, scn.lubricant, scn.tribology, scn.operating
     load = np.asarray(load, dtype=float)
     loaded = load > 0
     w = np.where(loaded, load, 1.0) / g.face_width  # placeholder 1 N where unloaded, masked below
     e_star = contact.reduced_modulus(mat, mat)
-    R = contact.equivalent_radius(R1, R2)
+    R = np.asarray(R, dtype=float)
     b = contact.hertz_half_width(w, R, e_star)
     p_max = contact.hertz_max_pressure(w, b)
     p_mean = contact.hertz_mean_pressure(w, b)

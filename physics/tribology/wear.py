@@ -1,23 +1,36 @@
 """Archard wear of pinion and gear flanks in mixed lubrication (thesis 2.6).
 
-Local Archard law ``dh/ds = k p / H`` applied to the asperity share of the pressure. A flank point
-of the pinion crosses the Hertz band once per pinion revolution and slides ``L1 = 2b|1 - v2/v1|``
-against the gear; integrating the law over the band gives the wear per pass
+The local Archard law ``dh/ds = k p / H`` (thesis 2.6) is integrated over each flank point's pass
+through the contact band. The band's pressure comes from the contact of the worn flanks, solved
+with the wear depth as a gap (:mod:`physics.tribology.worn_contact`); a point of flank i slides
+``|1 - v_j/v_i|`` of each unit of band it crosses, so the wear per pass is
 
-    dh1 = k psi L_a p_mean L1 / H        (per pinion cycle)
-    dh2 = (z1/z2) k psi L_a p_mean L2 / H (a gear tooth meshes z1/z2 times per pinion cycle)
+    dh_i(point) = sum over the band's sweep of  k_eff p |1 - v_j / v_i| dx / H
 
-with ``p_mean = w / (2b)``, ``L_a`` the fraction of the load carried by asperities (from the
-numerical mixed-EHL solver by default, or the Masjedi-Khonsari regression: ``tribology.
-asperity_model``, see :mod:`physics.tribology.contact_state`) and ``psi`` the oil-film
-deficiency coefficient; ``k`` is ``tribology.wear_coeff`` (calibrated, see
-:class:`physics.params.Tribology`). The dry mode (thesis 2.7.5) uses ``L_a = psi = 1`` and the
-dry coefficient; ``tribology.boundary_share`` b blends the two laws, ``(1 - b)`` lubricated
-``+ b`` dry, for a gearbox that runs part of its time under boundary lubrication. Wear is
-integrated in cycle blocks: each block is as long as it can be without any point of either
-flank wearing more than ``solver.update_um``, after which the profile (radii of
-curvature ``R_new = R_old - h_w`` and the wear gap of the load sharing) and every contact quantity
-are recomputed (thesis 2.6; Flodin & Andersson, Wear 207 (1997) 16-23).
+(:meth:`~physics.tribology.worn_contact.WornContact.sweep`; Bajpai, Kahraman & Anderson,
+J. Tribol. 126 (2004) 787-796). For an unworn band of constant conditions this is the thesis's
+``k p_mean L_i / H`` with ``L_i = 2 b |1 - v_j/v_i|``; a gear tooth meshes ``z1/z2`` times per
+pinion cycle.
+
+``k_eff`` is the Archard coefficient on the total load:
+
+- dry (thesis 2.7.5): ``k_eff = k_dry`` (``tribology.dry_wear_coeff``);
+- mixed (thesis 2.6): ``k_eff = min(k_a L_a psi, k_dry)``, where ``L_a`` is the asperity share of
+  the load (numerical mixed-EHL solver by default, or the Masjedi-Khonsari regression:
+  ``tribology.asperity_model``), ``psi`` the oil-film deficiency coefficient (the share of
+  asperity contacts left without an adsorbed film, :func:`film_deficiency`) and ``k_a``
+  (``tribology.wear_coeff``) the Archard coefficient of those unprotected asperity contacts
+  (calibrated once: :mod:`physics.tribology.calibration`). A share of the load cannot wear more
+  than all of it: the lubricated coefficient never exceeds the dry one, and at full, unprotected
+  asperity contact (``L_a = psi = 1``) it is the dry law;
+- ``tribology.boundary_share`` b blends them: ``(1 - b)`` mixed ``+ b`` dry, for a gearbox that
+  runs part of its time under boundary lubrication.
+
+Wear is integrated in cycle blocks: each block is as long as it can be without any point of
+either flank wearing more than ``solver.update_um``, after which the load sharing (with the wear
+gap), the worn contact and every contact quantity are recomputed (thesis 2.6; Flodin &
+Andersson, Wear 207 (1997) 16-23). The thesis's update of the radius of curvature
+``R_new = R_old - h_w`` is replaced by the gap: ``docs/reproduction.md``.
 
 Cycles count pinion revolutions throughout.
 """
@@ -29,14 +42,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from physics.gear import kinematics
+from physics.gear import contact, kinematics
 from physics.gear.geometry import MeshGeometry, mesh_geometry
 from physics.gear.load_sharing import PairStiffness, pair_loads
 from physics.gear.stiffness import MeshStiffness
-from physics.params import R_GAS, Lubricant, OutOfScope, Scenario
+from physics.params import R_GAS, Lubricant, OutOfScope, Scenario, Tribology
 from physics.scope import check_scope, shakedown_pressure
 from physics.tribology.asperity_table import check_scenario
 from physics.tribology.contact_state import ContactState, solve_contact_state
+from physics.tribology.worn_contact import WornContact, band_reach, solve_worn_contact
 
 #: ``force(s, wear1, wear2) -> F [N]`` on the grid s: the total normal mesh force per mesh
 #: position for the current worn profiles (the dynamic model supplies one; default quasi-static).
@@ -66,45 +80,90 @@ def film_deficiency(v_s: np.ndarray, T: np.ndarray, lub: Lubricant) -> np.ndarra
 
 @dataclass(frozen=True)
 class WearRate:
-    """Wear per pinion cycle [m] at each grid point, with the state that produced it."""
+    """Wear per pinion cycle [m] with the state that produced it. ``flank1, flank2`` are on the
+    flank grid, which reaches beyond the path of contact (``path`` picks the path's points);
+    everything else is per mesh position on the path."""
 
-    pinion: np.ndarray
-    gear: np.ndarray
+    flank1: np.ndarray
+    flank2: np.ndarray
+    path: slice
     load: np.ndarray  # pair load [N]
     psi: np.ndarray
+    coefficient: np.ndarray  # Archard coefficient on the total load, k_eff
+    contact: WornContact  # pressure across the band of the worn flanks
     state: ContactState
+
+    @property
+    def pinion(self) -> np.ndarray:
+        """Pinion wear per cycle at the path's points [m]."""
+        return self.flank1[self.path]
+
+    @property
+    def gear(self) -> np.ndarray:
+        """Gear wear per cycle at the path's points [m]."""
+        return self.flank2[self.path]
+
+
+def wear_coefficient(tri: Tribology, asperity_ratio: np.ndarray, psi: np.ndarray) -> np.ndarray:
+    """Archard coefficient on the total load (module text): dry ``k_dry``; mixed
+    ``min(k_a L_a psi, k_dry)``; blended by the boundary share."""
+    if tri.regime == "dry":
+        return np.full_like(np.asarray(psi, dtype=float), tri.dry_wear_coeff)
+    mixed = np.minimum(tri.wear_coeff * asperity_ratio * psi, tri.dry_wear_coeff)
+    b = tri.boundary_share
+    return (1 - b) * mixed + b * tri.dry_wear_coeff
+
+
+def flank_grid(scn: Scenario, geom: MeshGeometry, s: np.ndarray) -> tuple[np.ndarray, slice]:
+    """The grid the wear is tracked on: the path's grid ``s`` extended at both ends, at its
+    spacing, by the roll distance a band of twice the static load presses beyond them, within
+    the involutes (:func:`physics.tribology.worn_contact.band_reach`); and the slice of the path
+    in it."""
+    R1, R2 = geom.curvature_radii(s)
+    w = 2 * quasi_static_force(scn, geom) / scn.gear.face_width
+    b = contact.hertz_half_width(w, contact.equivalent_radius(R1, R2),
+                                 contact.reduced_modulus(scn.material, scn.material))
+    ds = s[1] - s[0]
+    before, after = band_reach(b, R1, R2, geom.rb1, geom.rb2)
+    n0, n1 = int(before // ds), int(after // ds)
+    grid = np.concatenate([s[0] - np.arange(n0, 0, -1) * ds, s, s[-1] + np.arange(1, n1 + 1) * ds])
+    return grid, slice(n0, n0 + s.size)
 
 
 def wear_rate(
     scn: Scenario, geom: MeshGeometry, s: np.ndarray, wear1: np.ndarray, wear2: np.ndarray,
-    force: np.ndarray, stiffness: PairStiffness,
+    force: np.ndarray, stiffness: PairStiffness, flank: tuple[np.ndarray, slice] | None = None,
 ) -> WearRate:
-    """Wear depth per pinion cycle on both flanks for the current worn profiles (module doc)."""
-    R1, R2 = geom.curvature_radii(s)
-    # rolling velocities follow the (unchanged) base-circle kinematics; the worn flank's radius
-    # of curvature is the involute's minus the wear depth (thesis 2.6: R_new = R_old - h_w)
+    """Wear depth per pinion cycle on both flanks for the current worn profiles (module doc).
+
+    ``wear1, wear2`` [m] are on the flank grid ``flank`` (:func:`flank_grid`; by default the
+    path's grid ``s`` itself, for unworn flanks)."""
+    grid, path = flank if flank is not None else (s, slice(0, s.size))
+    R1, R2 = geom.curvature_radii(s)  # the unworn involutes; the wear enters as a gap
     v1, v2 = kinematics.surface_velocities(R1, R2, scn.operating.omega1, scn.gear.z1,
                                            scn.gear.z2)
-    total = wear1 + wear2
+    total = wear1[path] + wear2[path]
 
     def gap(x: np.ndarray) -> np.ndarray:
         return np.interp(x, s, total)
 
     load = pair_loads(geom, s, force, gap, stiffness)
-    state = solve_contact_state(scn, load, R1 - wear1, R2 - wear2, v1, v2)
-    L1, L2 = kinematics.sliding_distances(state.half_width, state.v1, state.v2)
+    w = load / scn.gear.face_width
+    e_star = contact.reduced_modulus(scn.material, scn.material)
+    band = solve_worn_contact(s, w, R1, R2, geom.rb1, geom.rb2, e_star, grid, wear1, wear2)
+    # the film forms in the inlet, whose geometry the involutes' curvature sets: the film, the
+    # asperity share and the flash temperature are those of the band at the pair's load
+    state = solve_contact_state(scn, load, contact.equivalent_radius(R1, R2), v1, v2)
     tri = scn.tribology
-    if tri.regime == "dry":
-        k, psi = tri.dry_wear_coeff, np.ones_like(s)
-        share = np.ones_like(s)
-    else:
-        k, psi = tri.wear_coeff, film_deficiency(state.v_s, state.temperature, scn.lubricant)
-        share = state.asperity_ratio * psi
-        if tri.boundary_share:  # time under boundary lubrication wears by the dry law
-            b = tri.boundary_share
-            k, share = 1.0, (1 - b) * tri.wear_coeff * share + b * tri.dry_wear_coeff
-    base = k * share * state.p_mean / scn.material.hardness
-    return WearRate(base * L1, base * L2 * scn.gear.z1 / scn.gear.z2, load, psi, state)
+    psi = (np.ones_like(s) if tri.regime == "dry"
+           else film_deficiency(state.v_s, state.temperature, scn.lubricant))
+    k_eff = wear_coefficient(tri, state.asperity_ratio, psi)
+    slide = np.abs(v1 - v2)
+    per_hardness = k_eff / scn.material.hardness
+    pinion = band.sweep(s, grid, R1 / geom.rb1, per_hardness * slide / v1)
+    gear = band.sweep(s, grid, R2 / geom.rb2, per_hardness * slide / v2) * (scn.gear.z1
+                                                                          / scn.gear.z2)
+    return WearRate(pinion, gear, path, load, psi, k_eff, band, state)
 
 
 @dataclass(frozen=True)
@@ -135,15 +194,19 @@ class WearResult:
         return float(np.trapezoid(getattr(self, side), self.s))
 
 
-def check_shakedown(state: ContactState, limit: float, w1: np.ndarray, w2: np.ndarray,
-                    cycles: float) -> None:
-    """Raise :class:`OutOfScope` when the largest Hertz pressure on the current (worn) flanks
-    passes the shakedown ``limit`` [Pa] (:func:`physics.scope.shakedown_pressure`)."""
-    p, deepest = float(np.nanmax(state.p_max)), max(w1.max(), w2.max()) * 1e6
-    if p > limit:
+def check_shakedown(p_max: np.ndarray, s: np.ndarray, limit: float, w1: np.ndarray,
+                    w2: np.ndarray, cycles: float) -> None:
+    """Raise :class:`OutOfScope` when the largest contact pressure on the current (worn) flanks,
+    from the worn contact's pressure field, passes the shakedown ``limit`` [Pa]
+    (:func:`physics.scope.shakedown_pressure`), naming where and when."""
+    p_max = np.nan_to_num(np.asarray(p_max, dtype=float), nan=0.0)
+    at = int(np.argmax(p_max))
+    if p_max[at] > limit:
+        deepest = max(w1.max(), w2.max()) * 1e6
         raise OutOfScope(
             f"after {cycles:.3g} cycles the worn flanks (deepest wear {deepest:.0f} um) carry a "
-            f"Hertz pressure of {p / 1e9:.2f} GPa, above the {limit / 1e9:.2f} GPa "
+            f"contact pressure of {p_max[at] / 1e9:.2f} GPa at roll coordinate "
+            f"{s[at] * 1e3:+.2f} mm from the pitch point, above the {limit / 1e9:.2f} GPa "
             "shakedown limit of rolling contact: the flank would yield at every cycle; the wear "
             "model is outside its scope")
 
@@ -191,11 +254,13 @@ def simulate_wear(
 
     step = scn.solver.update_um * 1e-6
     limit = shakedown_pressure(scn.material.hardness)
-    w1, w2 = np.zeros_like(s), np.zeros_like(s)
+    grid, path = flank = flank_grid(scn, geom, s)
+    f1, f2 = np.zeros_like(grid), np.zeros_like(grid)  # wear on the flank grid
     done, blocks, taken = 0.0, 0, {}
     pending = list(marks)
     first = None
     while True:
+        w1, w2 = f1[path], f2[path]
         while pending and pending[0] <= done:
             taken[pending.pop(0)] = (w1.copy(), w2.copy())
         f = np.asarray(force(s, w1, w2), dtype=float)
@@ -203,16 +268,16 @@ def simulate_wear(
             raise ValueError(
                 f"mesh force has shape {f.shape} (grid {s.shape}) or non-finite/negative values; "
                 "give one force per grid point, finite and >= 0 [N]")
-        rate = wear_rate(scn, geom, s, w1, w2, f, stiffness(s, w1, w2))
+        rate = wear_rate(scn, geom, s, f1, f2, f, stiffness(s, w1, w2), flank)
         first = first or rate
-        check_shakedown(rate.state, limit, w1, w2, done)
+        check_shakedown(rate.contact.p_max, s, limit, w1, w2, done)
         if done >= cycles:
             break
-        peak = max(rate.pinion.max(), rate.gear.max())
+        peak = max(rate.flank1.max(), rate.flank2.max())
         block = cycles - done if peak <= 0 else min(cycles - done, step / peak)
         if pending:
             block = min(block, pending[0] - done)
-        w1, w2 = w1 + rate.pinion * block, w2 + rate.gear * block
+        f1, f2 = f1 + rate.flank1 * block, f2 + rate.flank2 * block
         done = cycles if cycles - (done + block) <= 1e-9 * cycles else done + block
         blocks += 1
     return WearResult(geom, s, w1, w2, float(cycles), blocks, first, rate, taken)

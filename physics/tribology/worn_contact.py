@@ -1,0 +1,312 @@
+"""The line contact of worn flanks, solved with the wear as a gap (thesis 2.6, done numerically).
+
+A worn flank is no longer an involute: its wear depth varies over tens of micrometres of profile
+arc, as narrow as the Hertz band itself, so no radius of curvature describes it (the thesis's
+``R_new = R_old - h_w`` treats a depth as a radius). Here the wear enters the contact as what it
+is, a gap. Across the band, at tangent offset ``x`` from the contact point at roll coordinate
+``s``, the two flanks stand apart by
+
+    g(x) = x^2 / (2 R) + [h1(s1(x)) - h1(s)] + [h2(s2(x)) - h2(s)],
+
+where ``R`` is the unworn involutes' equivalent radius and ``s_i(x) = s + x r_bi / R_i`` the
+roll coordinate at which flank i's point at arc offset ``x`` meets the line of action (on an
+involute ``dl = R dR / r_b``, and ``R_i`` grows with ``s`` on both flanks' path). The normal
+pressure ``p(x) >= 0`` then solves the elastic half-space line contact
+
+    g(x) + u(x) - delta >= 0,  p (g + u - delta) = 0,  int p dx = w,
+    u(x) = -(2 / (pi E*)) int p(x') ln|x - x'| dx'     (Johnson, Contact Mechanics, eq. 2.25b)
+
+by the projected conjugate-gradient method of Polonsky & Keer (Wear 231 (1999) 206-219), the
+deflection by FFT convolution of piecewise-constant pressure cells (the kernel of
+:mod:`physics.tribology.mixed_ehl`). Every position is solved at once, in Hertz units of its
+unworn contact (``X = x / b``, ``P = p / p_max``, gap over ``b^2 / R``): the cells have one width
+for all positions, so one kernel serves the whole batch. An unworn position (gap correction
+below ``GAP_TOL`` of ``b^2/R`` once its tilt is removed, which only shifts the band) keeps the
+closed-form Hertz ellipse; this also makes the zero-wear result exact.
+
+Each flank point wears as the band sweeps over it: the per-pass wear of a point is the Archard
+integral over the pressure it meets (Bajpai, Kahraman & Anderson, J. Tribol. 126 (2004)
+787-796). :meth:`WornContact.sweep` carries that out with the cumulative load of each position's
+pressure, so the load is conserved however few flank points fall inside a band.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+import scipy.fft as sfft
+from scipy.interpolate import make_interp_spline
+
+#: half-length of the solution window, in unworn Hertz half-widths, around the gap's minimum
+#: (doubled for the positions whose contact reaches the window's edge)
+WINDOW = 2.5
+#: cells across the window (2 WINDOW / CELLS = 0.078 b: Hertz p_max within 0.1 %)
+CELLS = 64
+#: a position whose gap correction (tilt removed) stays below this share of b^2/R keeps Hertz
+#: (the pressure moves by about that share of p_max)
+GAP_TOL = 2e-3
+#: wear ripples shorter than this share of the smallest Hertz half-width are levelled
+#: (:func:`flank_profile`)
+LEVEL = 0.5
+#: convergence of the pressure: relative change of P between two iterations
+TOL = 1e-6
+MAX_ITER = 400
+
+
+@lru_cache(maxsize=4)
+def _kernel(n: int, dx: float) -> tuple[np.ndarray, int]:
+    """FFT of the deflection kernel ``-(1/pi) int_cell ln|X - X'| dX'`` of uniform cells."""
+    m = np.arange(n, dtype=float)
+
+    def prim(t: np.ndarray) -> np.ndarray:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(t == 0, 0.0, t * np.log(np.abs(t)) - t)
+
+    k = -(prim((m + 0.5) * dx) - prim((m - 0.5) * dx)) / math.pi
+    full = np.concatenate([k[:0:-1], k])
+    nfft = sfft.next_fast_len(3 * n - 2, real=True)
+    kf = sfft.rfft(full, nfft)
+    kf.setflags(write=False)
+    return kf, nfft
+
+
+def _deflect(P: np.ndarray, kf: np.ndarray, nfft: int) -> np.ndarray:
+    """Deflection (Hertz units) of each row's cell pressures, by linear FFT convolution."""
+    n = P.shape[-1]
+    return sfft.irfft(sfft.rfft(P, nfft, axis=-1) * kf, nfft, axis=-1)[..., n - 1: 2 * n - 1]
+
+
+def solve_gap_contact(gap: np.ndarray, dX: float, load: float = math.pi / 2,
+                      tol: float = TOL, max_iter: int = MAX_ITER) -> tuple[np.ndarray, int]:
+    """Pressure of elastic line contacts with rigid gaps ``gap`` (rows, Hertz units).
+
+    Every row is a contact on cells of width ``dX``; ``gap`` is ``g / (b^2/R)``; the pressure
+    ``P`` (over ``p_max`` of Hertz) carries ``int P dX = load`` (pi/2 for the Hertz load) and
+    satisfies the contact conditions with the deflection ``-(1/pi) int P ln|X - X'|``.
+    Polonsky & Keer's constrained conjugate gradient, vectorised over rows; returns ``P`` and
+    the iterations taken. Raises ``RuntimeError`` when a row does not converge.
+    """
+    gap = np.atleast_2d(np.asarray(gap, dtype=float))
+    m, n = gap.shape
+    kf, nfft = _kernel(n, float(dX))
+    # start from a uniform pressure where the rigid gap is within the Hertz approach of its minimum
+    near = gap - gap.min(axis=1, keepdims=True) < 0.5
+    P = np.where(near, 1.0, 0.0)
+    P *= load / (P.sum(axis=1, keepdims=True) * dX)
+    t = np.zeros_like(P)
+    g_old = np.ones(m)
+    delta = np.zeros(m)
+    for it in range(1, max_iter + 1):
+        on = P > 0
+        count = on.sum(axis=1)
+        g_raw = _deflect(P, kf, nfft) + gap
+        g_mean = np.where(on, g_raw, 0.0).sum(axis=1) / count
+        g = np.where(on, g_raw - g_mean[:, None], 0.0)
+        G = (g * g).sum(axis=1)
+        t = np.where(on, g + (delta * G / g_old)[:, None] * t, 0.0)
+        g_old = np.where(G > 0, G, 1.0)
+        r = _deflect(t, kf, nfft)
+        r_mean = np.where(on, r, 0.0).sum(axis=1) / count
+        r = np.where(on, r - r_mean[:, None], 0.0)
+        rt = (r * t).sum(axis=1)
+        tau = np.where(rt > 0, (g * t).sum(axis=1) / np.where(rt > 0, rt, 1.0), 0.0)
+        P_old = P
+        P = np.maximum(P - tau[:, None] * t, 0.0)
+        # open cells that interpenetrate join the contact (the method's overlap step, on the
+        # gap of this iteration's start)
+        open_gap = g_raw - g_mean[:, None]
+        overlap = ~on & (open_gap < 0)
+        delta = np.where(overlap.any(axis=1), 0.0, 1.0)
+        P = np.where(overlap, -tau[:, None] * open_gap, P)
+        P *= load / (P.sum(axis=1, keepdims=True) * dX)
+        change = np.abs(P - P_old).sum(axis=1) / P.sum(axis=1)
+        if np.all(change < tol):
+            return P, it
+    worst = int(np.argmax(change))
+    raise RuntimeError(f"the worn contact did not converge in {max_iter} iterations (row {worst}: "
+                       f"relative change {change[worst]:.2g})")
+
+
+def hertz_cumulative(X: np.ndarray) -> np.ndarray:
+    """``int_{-inf}^X sqrt(1 - t^2) dt`` of the Hertz ellipse (Hertz units): 0 to pi/2."""
+    c = np.clip(X, -1.0, 1.0)
+    return 0.5 * (c * np.sqrt(1.0 - c * c) + np.arcsin(c)) + math.pi / 4
+
+
+@dataclass(frozen=True)
+class WornContact:
+    """Pressure across the band at every mesh position, in Hertz units of the unworn contact.
+
+    ``solved`` marks the positions solved numerically (the others are Hertz ellipses centred at
+    ``centre``); for those, ``P`` holds the cell pressures on ``X = X0 + (i + 1/2) dX``.
+    """
+
+    half_width: np.ndarray  # unworn Hertz half-width b [m] (0 where unloaded)
+    p_hertz: np.ndarray  # unworn Hertz p_max [Pa]
+    centre: np.ndarray  # band centre for Hertz rows, window start X0 for solved rows [-]
+    solved: np.ndarray  # bool per position
+    P: np.ndarray  # (solved rows, CELLS) cell pressures / p_hertz
+    dX: float
+
+    @property
+    def p_max(self) -> np.ndarray:
+        """Largest pressure at each position [Pa]."""
+        peak = np.ones_like(self.p_hertz)
+        peak[self.solved] = self.P.max(axis=1)
+        return peak * self.p_hertz
+
+    def cumulative(self, X: np.ndarray) -> np.ndarray:
+        """Load passed up to offset ``X`` (rows: positions; Hertz units, 0 to pi/2)."""
+        out = hertz_cumulative(X - self.centre[:, None])
+        if self.solved.any():
+            rows = np.flatnonzero(self.solved)
+            Q = np.concatenate([np.zeros((rows.size, 1)), np.cumsum(self.P, axis=1) * self.dX],
+                               axis=1)
+            k = (X[rows] - self.centre[rows, None]) / self.dX
+            i = np.clip(np.floor(k).astype(int), 0, Q.shape[1] - 2)
+            f = np.clip(k - i, 0.0, 1.0)
+            lo = np.take_along_axis(Q, i, axis=1)
+            hi = np.take_along_axis(Q, i + 1, axis=1)
+            out[rows] = lo + f * (hi - lo)
+        return out
+
+    def sweep(self, s: np.ndarray, points: np.ndarray, scale: np.ndarray, weight: np.ndarray
+              ) -> np.ndarray:
+        """Per-pass integral ``sum_j weight_j int p_j dx`` over the band's sweep of each flank
+        point at roll coordinates ``points`` (uniformly spaced, like ``s``), for contact centres
+        at ``s``: ``scale_j = R_j / r_b`` maps a roll offset to an arc offset of the flank.
+        Contact centres are cells ``[s_{j-1/2}, s_{j+1/2}]``, cut at the path's ends;
+        ``points`` may reach beyond them, where the band still presses the flank."""
+        edges = np.concatenate([[s[0]], 0.5 * (s[1:] + s[:-1]), [s[-1]]])
+        b = np.where(self.half_width > 0, self.half_width, 1.0)
+        to_X = scale / b
+        # each position presses the points within its window's reach (a band of the matrix)
+        span = np.abs(self.centre) + WINDOW * np.where(self.solved, 8.0, 1.0)
+        step = points[1] - points[0]
+        k = int(np.ceil(np.max(span / to_X) / step)) + 1
+        near = np.clip(np.rint((s - points[0]) / step).astype(int)[:, None]
+                       + np.arange(-k, k + 1), 0, points.size - 1)
+        at = points[near]
+        hi = self.cumulative((at - edges[:-1, None]) * to_X[:, None])
+        lo = self.cumulative((at - edges[1:, None]) * to_X[:, None])
+        load = (self.p_hertz * self.half_width * weight)[:, None]  # p_max b carries P
+        part = load * (hi - lo)
+        # a clipped index repeats an end point: count each point once per position
+        first = np.ones_like(near, dtype=bool)
+        first[:, 1:] = near[:, 1:] != near[:, :-1]
+        return np.bincount(near[first], weights=part[first], minlength=points.size)
+
+
+def worn_gap(at: np.ndarray, X: np.ndarray, half_width: np.ndarray, R: np.ndarray,
+             scale1: np.ndarray, scale2: np.ndarray,
+             h1: Callable[[np.ndarray], np.ndarray], h2: Callable[[np.ndarray], np.ndarray]
+             ) -> np.ndarray:
+    """The wear's part of the gap, over ``b^2/R``, at offsets ``X`` (rows: the positions
+    ``at``) for the worn flanks ``h1, h2`` (:func:`flank_profile`)."""
+    x = X * half_width[:, None]
+    here = (h1(at) + h2(at))[:, None]
+    worn = h1(at[:, None] + x * scale1[:, None]) + h2(at[:, None] + x * scale2[:, None])
+    return (worn - here) * (R / half_width**2)[:, None]
+
+
+def flank_profile(s: np.ndarray, wear: np.ndarray, arc: np.ndarray, level: float
+                  ) -> Callable[[np.ndarray], np.ndarray]:
+    """The worn flank as the band feels it: the wear depths on the grid ``s`` levelled over
+    ``level`` [m] of profile arc, then a cubic spline, constant beyond the grid.
+
+    ``arc`` is the profile arc length at the grid points (on an involute ``R^2 / (2 r_b)``).
+    A wear ripple of wavelength ``lambda`` under the band raises the pressure by about ``pi E*
+    delta / lambda`` (Johnson, Contact Mechanics, 13.2) and so wears itself away at a rate
+    ``pi E* / (lambda p_mean)`` times the mean wear rate: ripples shorter than the band vanish
+    within a small part of one profile update, so their end state, a level flank, is what the
+    band sees (a Gaussian of standard deviation ``level`` in arc length). Without it an explicit
+    update step would have to resolve that decay (well below 0.1 um). The spline avoids the
+    corners of straight segments, each a wedge with a log-singular pressure (Johnson, 5.2).
+    """
+    if level > 0:
+        cell = np.gradient(arc)  # arc length each point stands for (|d arc| on either flank)
+        weight = np.exp(-0.5 * ((arc[:, None] - arc[None, :]) / level)**2) * np.abs(cell)
+        wear = weight @ wear / weight.sum(axis=1)
+    spline = make_interp_spline(s, wear, k=3)
+
+    def h(x: np.ndarray) -> np.ndarray:
+        return spline(np.clip(x, s[0], s[-1]))
+
+    return h
+
+
+def solve_worn_contact(s: np.ndarray, load_per_width: np.ndarray, R1: np.ndarray,
+                       R2: np.ndarray, rb1: float, rb2: float, e_star: float,
+                       flank: np.ndarray, wear1: np.ndarray, wear2: np.ndarray) -> WornContact:
+    """Pressure across the band at each roll coordinate ``s`` for loads ``w`` [N/m] on unworn
+    involutes of radii ``R1, R2`` [m] worn by ``wear1, wear2`` [m], given on the flank grid
+    ``flank`` (roll coordinates that reach beyond the path by the band's sweep; module text)."""
+    w = np.asarray(load_per_width, dtype=float)
+    loaded = w > 0
+    R = R1 * R2 / (R1 + R2)
+    b = np.where(loaded, np.sqrt(4 * np.where(loaded, w, 0.0) * R / (math.pi * e_star)), 0.0)
+    p_h = np.where(loaded, 2 * w / (math.pi * np.where(loaded, b, 1.0)), 0.0)
+    scale1, scale2 = rb1 / R1, rb2 / R2
+    bb = np.where(loaded, b, 1.0)
+    # the flanks' arc lengths on the flank grid (R grows with s on the pinion, falls on the gear)
+    level = LEVEL * np.min(b[loaded]) if loaded.any() else 0.0
+    h1 = flank_profile(flank, wear1, (R1[0] + flank - s[0])**2 / (2 * rb1), level)
+    h2 = flank_profile(flank, wear2, (R2[0] - flank + s[0])**2 / (2 * rb2), level)
+    # a coarse look at the gap correction: its tilt only shifts the band
+    probe = np.linspace(-WINDOW, WINDOW, 61)
+    corr = worn_gap(s, np.broadcast_to(probe, (s.size, probe.size)), bb, R, scale1, scale2,
+                    h1, h2)
+    tilt = (corr[:, -1] - corr[:, 0]) / (2 * WINDOW)
+    rest = corr - tilt[:, None] * probe
+    solved = loaded & (np.abs(rest).max(axis=1) > GAP_TOL)
+    centre = np.where(loaded, -tilt, 0.0)  # X^2/2 + tilt X is least at X = -tilt
+    dX = 2 * WINDOW / CELLS
+    rows = np.flatnonzero(solved)
+    P = np.zeros((rows.size, CELLS))
+    centre = centre.copy()
+    if rows.size:
+        # centre each window on the least total rigid gap within reach of the band
+        low = probe[np.argmin(probe**2 / 2 + corr[rows], axis=1)]
+        P, centre[rows] = _solve_rows(s[rows], low, bb[rows], R[rows], scale1[rows],
+                                      scale2[rows], h1, h2, dX)
+    return WornContact(b, p_h, centre, solved, P, dX)
+
+
+def _solve_rows(at: np.ndarray, low: np.ndarray, b: np.ndarray, R: np.ndarray,
+                scale1: np.ndarray, scale2: np.ndarray, h1: Callable, h2: Callable, dX: float,
+                cells: int = CELLS) -> tuple[np.ndarray, np.ndarray]:
+    """Cell pressures and window starts of the positions ``at`` whose gap is least at ``low``.
+    A contact that reaches its window's edge is solved again in a window twice as wide; the
+    other rows are then padded with open cells to the same width."""
+    x0 = low - cells * dX / 2
+    X = x0[:, None] + (np.arange(cells) + 0.5) * dX
+    gap = X**2 / 2 + worn_gap(at, X, b, R, scale1, scale2, h1, h2)
+    P, _ = solve_gap_contact(gap, dX)
+    edge = (P[:, 0] > 0) | (P[:, -1] > 0)
+    if not edge.any():
+        return P, x0
+    if cells >= 8 * CELLS:
+        raise RuntimeError(f"the worn contact at roll coordinate {at[edge][0] * 1e3:+.3f} mm "
+                           f"spreads beyond {cells * dX / 2:g} Hertz half-widths")
+    wide, wide_x0 = _solve_rows(at[edge], low[edge], b[edge], R[edge], scale1[edge],
+                                scale2[edge], h1, h2, dX, 2 * cells)
+    pad = (wide.shape[1] - cells) // 2
+    out = np.pad(P, ((0, 0), (pad, wide.shape[1] - cells - pad)))
+    out[edge] = wide
+    start = x0 - pad * dX
+    start[edge] = wide_x0
+    return out, start
+
+
+def band_reach(half_width: np.ndarray, R1: np.ndarray, R2: np.ndarray, rb1: float, rb2: float
+               ) -> tuple[float, float]:
+    """Roll distances [m] before the path's start and after its end that a band of these
+    half-widths presses (the solution window, in roll coordinates), each at most half the
+    radius of curvature there: the involute ends at the base circle, and the band's linear map
+    of arc to roll distance holds only where the curvature changes little over it."""
+    reach = WINDOW * half_width * np.maximum(rb1 / R1, rb2 / R2)
+    return float(min(reach[0], 0.5 * R1[0])), float(min(reach[-1], 0.5 * R2[-1]))
