@@ -241,10 +241,12 @@ def flank_profile(s: np.ndarray, wear: np.ndarray, arc: np.ndarray, level: float
 
 def solve_worn_contact(s: np.ndarray, load_per_width: np.ndarray, R1: np.ndarray,
                        R2: np.ndarray, rb1: float, rb2: float, e_star: float,
-                       flank: np.ndarray, wear1: np.ndarray, wear2: np.ndarray) -> WornContact:
+                       flank: np.ndarray, wear1: np.ndarray, wear2: np.ndarray,
+                       cells: int = CELLS) -> WornContact:
     """Pressure across the band at each roll coordinate ``s`` for loads ``w`` [N/m] on unworn
     involutes of radii ``R1, R2`` [m] worn by ``wear1, wear2`` [m], given on the flank grid
-    ``flank`` (roll coordinates that reach beyond the path by the band's sweep; module text)."""
+    ``flank`` (roll coordinates that reach beyond the path by the band's sweep; module text),
+    on ``cells`` cells across the window."""
     w = np.asarray(load_per_width, dtype=float)
     loaded = w > 0
     R = R1 * R2 / (R1 + R2)
@@ -264,21 +266,21 @@ def solve_worn_contact(s: np.ndarray, load_per_width: np.ndarray, R1: np.ndarray
     rest = corr - tilt[:, None] * probe
     solved = loaded & (np.abs(rest).max(axis=1) > GAP_TOL)
     centre = np.where(loaded, -tilt, 0.0)  # X^2/2 + tilt X is least at X = -tilt
-    dX = 2 * WINDOW / CELLS
+    dX = 2 * WINDOW / cells
     rows = np.flatnonzero(solved)
-    P = np.zeros((rows.size, CELLS))
+    P = np.zeros((rows.size, cells))
     centre = centre.copy()
     if rows.size:
         # centre each window on the least total rigid gap within reach of the band
         low = probe[np.argmin(probe**2 / 2 + corr[rows], axis=1)]
         P, centre[rows] = _solve_rows(s[rows], low, bb[rows], R[rows], scale1[rows],
-                                      scale2[rows], h1, h2, dX)
+                                      scale2[rows], h1, h2, dX, cells)
     return WornContact(b, p_h, centre, solved, P, dX)
 
 
 def _solve_rows(at: np.ndarray, low: np.ndarray, b: np.ndarray, R: np.ndarray,
                 scale1: np.ndarray, scale2: np.ndarray, h1: Callable, h2: Callable, dX: float,
-                cells: int = CELLS) -> tuple[np.ndarray, np.ndarray]:
+                cells: int) -> tuple[np.ndarray, np.ndarray]:
     """Cell pressures and window starts of the positions ``at`` whose gap is least at ``low``.
     A contact that reaches its window's edge is solved again in a window twice as wide; the
     other rows are then padded with open cells to the same width."""
@@ -289,7 +291,7 @@ def _solve_rows(at: np.ndarray, low: np.ndarray, b: np.ndarray, R: np.ndarray,
     edge = (P[:, 0] > 0) | (P[:, -1] > 0)
     if not edge.any():
         return P, x0
-    if cells >= 8 * CELLS:
+    if cells * dX >= 16 * WINDOW:
         raise RuntimeError(f"the worn contact at roll coordinate {at[edge][0] * 1e3:+.3f} mm "
                            f"spreads beyond {cells * dX / 2:g} Hertz half-widths")
     wide, wide_x0 = _solve_rows(at[edge], low[edge], b[edge], R[edge], scale1[edge],

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import types
 
 import numpy as np
 import pytest
@@ -36,51 +35,81 @@ def worn(baseline):
     return simulate_wear(baseline, CYCLES)
 
 
+def _reach(res, at: float) -> float:
+    """Roll distance the band's sweep spreads wear over at roll coordinate ``at`` [m]."""
+    i = int(np.argmin(np.abs(res.s - at)))
+    c, geom = res.first_rate.contact, res.geometry
+    R1, R2 = geom.curvature_radii(res.s[i])
+    return float(c.half_width[i] * max(geom.rb1 / R1, geom.rb2 / R2))
+
+
 def test_wear_shape_of_thesis_2_7(worn):
+    """Least wear at the pitch point, most at the pinion root and the gear tip, falling from the
+    root to the pitch point and rising towards the tip (thesis 2.7, Figure 1), each feature
+    spread over the band's sweep."""
     s, h1, h2 = worn.s, worn.pinion, worn.gear
     pitch = np.argmin(np.abs(s))
-    assert np.argmin(h1) == pitch  # minimum at the pitch point
-    assert h1[pitch] < 1e-2 * h1.max()  # no sliding, (almost) no wear there
-    assert np.argmax(h1) == 0  # pinion root (start of contact)
-    assert np.argmax(h2) == 0  # gear tip meets the pinion root
+    assert abs(s[np.argmin(h1)]) <= _reach(worn, 0.0)
+    assert h1[pitch] < 0.05 * h1.max()  # no sliding, little wear there
+    assert np.argmax(h1) < len(s) // 10 and np.argmax(h2) < len(s) // 10  # pinion root, gear tip
     assert worn.mean_depth("pinion") > worn.mean_depth("gear")
     assert h1.max() > h2.max()
-    # within each zone, wear falls from the root to the pitch point and rises towards the tip
     lo, hi = worn.geometry.single_zone
-    for piece in (s < lo, (s >= lo) & (s <= 0), (s >= 0) & (s <= hi), s > hi):
-        d = np.diff(h1[piece])
-        assert np.all(d <= 0) if s[piece][0] < 0 else np.all(d >= 0)
+    at = [s[0] + 2 * _reach(worn, s[0]), lo - _reach(worn, lo), lo + _reach(worn, lo), 0.0,
+          hi - _reach(worn, hi), hi + _reach(worn, hi), s[-1]]
+    h = np.interp(at, s, h1)
+    assert h[0] > h[1] and h[2] > h[3] < h[4] and h[5] < h[6]
 
 
-def test_step_at_both_zone_transitions(worn):
-    s, h = worn.s, worn.pinion
-    for edge in worn.geometry.single_zone:
-        i = int(np.argmin(np.abs(s - edge)))
-        jump = abs(h[i] - h[i - 1]) if edge < 0 else abs(h[i + 1] - h[i])
-        smooth = abs(h[i + 2] - h[i + 1]) if edge < 0 else abs(h[i - 1] - h[i - 2])
-        assert jump > 10 * smooth  # a step, not a slope
-        # the single-tooth side carries the whole load: more wear next to the double zone
-        single, double = (h[i], h[i - 1]) if edge < 0 else (h[i], h[i + 1])
-        assert single > 2 * double
+def test_step_at_both_zone_transitions(baseline):
+    """The load halves where a second pair comes into contact: beside each zone transition the
+    dry wear per unit of sliding (the load the flank point met) is about twice as large on the
+    single-tooth side as on the double-tooth side, the change spread over the band's sweep
+    (Bajpai et al. 2004) rather than the thesis's step at a point."""
+    worn = simulate_wear(_with(baseline, "tribology", regime="dry"), 0.0)
+    s, rate = worn.s, worn.first_rate
+    met = rate.pinion / (2e-8 / 7e9 * np.abs(1 - rate.state.v2 / rate.state.v1) / 0.030)
+    lo, hi = worn.geometry.single_zone
+    for edge, inside in ((lo, +1), (hi, -1)):
+        reach = _reach(worn, edge)
+        single, double, far = np.interp(
+            [edge + inside * 1.5 * reach, edge - inside * 1.5 * reach,
+             edge - inside * 3 * reach], s, met)
+        assert 1.6 < single / double < 2.4
+        assert abs(double - far) < 0.1 * double  # the change sits at the transition
 
 
-def test_gear_meshes_z1_over_z2_times_per_pinion_cycle(baseline):
-    """Dry Archard: h2/h1 per cycle = (z1/z2) L2/L1 = (z1/z2) v1/v2 at every point."""
+def test_swept_wear_keeps_archard_wear_volume(baseline):
+    """Dry Archard: the band's sweep moves wear along the flank but keeps its volume: the worn
+    area of each flank is the thesis's per-pass wear ``k w |1 - v_j/v_i| / H`` integrated along
+    the path, and the gear's is z1/z2 times its own (it meshes that often per pinion cycle)."""
     dry = _with(baseline, "tribology", regime="dry")
-    rate = simulate_wear(dry, 0.0).last_rate
-    st_ = rate.state
-    ok = st_.v_s > 1e-6
-    ratio = rate.gear[ok] / rate.pinion[ok]
-    assert np.allclose(ratio, 18 / 27 * st_.v1[ok] / st_.v2[ok], rtol=1e-12)
+    res = simulate_wear(dry, 0.0)
+    rate, s = res.first_rate, res.s
+    grid = res.s[0] + (np.arange(rate.flank1.size) - rate.path.start) * (s[1] - s[0])
+    w = rate.load / 0.030
+    slide = np.abs(rate.state.v1 - rate.state.v2)
+    for flank, v, ratio in ((rate.flank1, rate.state.v1, 1.0), (rate.flank2, rate.state.v2,
+                                                                 18 / 27)):
+        point = ratio * 2e-8 * w * slide / v / 7e9
+        inner = (grid > s[0] + 0.1 * (s[-1] - s[0])) & (grid < s[-1] - 0.1 * (s[-1] - s[0]))
+        band = (s > s[0] + 0.1 * (s[-1] - s[0])) & (s < s[-1] - 0.1 * (s[-1] - s[0]))
+        assert np.trapezoid(flank, grid) == pytest.approx(np.trapezoid(point, s), rel=0.02)
+        assert np.trapezoid(flank[inner], grid[inner]) == pytest.approx(
+            np.trapezoid(point[band], s[band]), rel=0.02)
 
 
-def test_dry_archard_hand_calculation_at_the_pinion_root(baseline):
-    """dh1 = k F |1 - v2/v1| / (B H) per cycle for the pair carrying F (Archard over one pass)."""
+def test_dry_archard_hand_calculation_in_the_single_tooth_zone(baseline):
+    """dh1 = k F |1 - v2/v1| / (B H) per cycle for the pair carrying F (Archard over one pass),
+    away from the zone transitions, where the conditions change little over the band."""
     dry = _with(baseline, "tribology", regime="dry")
-    rate = simulate_wear(dry, 0.0).last_rate
+    res = simulate_wear(dry, 0.0)
+    rate, s = res.first_rate, res.s
+    lo, _ = res.geometry.single_zone
+    i = int(np.argmin(np.abs(s - (lo + 0.6e-3))))
     st_ = rate.state
-    expected = 2e-8 * rate.load[0] / 0.030 * abs(1 - st_.v2[0] / st_.v1[0]) / 7e9
-    assert rate.pinion[0] == pytest.approx(expected, rel=1e-12)
+    expected = 2e-8 * rate.load[i] / 0.030 * abs(1 - st_.v2[i] / st_.v1[i]) / 7e9
+    assert rate.pinion[i] == pytest.approx(expected, rel=0.01)
 
 
 def test_load_shared_by_stiffness_and_conserved(geom):
@@ -253,9 +282,9 @@ def test_wear_physical_over_operating_range(n1, torque, sigma):
     res = simulate_wear(scn, 1e6)
     for h in (res.pinion, res.gear):
         assert np.all(np.isfinite(h)) and np.all(h >= 0)
-    assert np.argmax(res.pinion) == 0
+    assert np.argmax(res.pinion) < len(res.s) // 8  # near the root
     pitch = np.argmin(np.abs(res.s))
-    assert res.pinion[pitch] < 0.2 * res.pinion[0]  # the root wears far more than the pitch
+    assert res.pinion[pitch] < 0.2 * res.pinion.max()  # the root wears far more than the pitch
 
 
 def test_bad_cycles_refused(baseline):
@@ -267,22 +296,23 @@ def test_bad_cycles_refused(baseline):
 
 
 def test_a_flank_past_the_shakedown_limit_leaves_the_scope():
-    """The check itself: silent at the limit, out of scope above it, naming the pressure, the
-    limit and the deepest wear."""
-    w = np.array([0.0, 40e-6])
-    check_shakedown(types.SimpleNamespace(p_max=np.array([np.nan, 2e9, 5e9])), 5e9, w, w, 1e6)
-    with pytest.raises(OutOfScope, match=r"40 um\) carry a Hertz pressure of 5.10 GPa, above "
+    """The check itself: silent at the limit, out of scope above it, naming the pressure, where
+    it acts, the limit and the deepest wear."""
+    w = np.array([0.0, 40e-6, 0.0])
+    s = np.array([-1e-3, 0.0, 1e-3])
+    check_shakedown(np.array([np.nan, 2e9, 5e9]), s, 5e9, w, w, 1e6)
+    with pytest.raises(OutOfScope, match=r"40 um\) carry a contact pressure of 5.10 GPa at roll "
+                                         r"coordinate \+1.00 mm from the pitch point, above "
                                          r"the 5.00 GPa shakedown limit"):
-        check_shakedown(types.SimpleNamespace(p_max=np.array([2e9, 5.1e9])), 5e9, w, w, 1e6)
+        check_shakedown(np.array([2e9, 1e9, 5.1e9]), s, 5e9, w, w, 1e6)
 
 
-def test_a_runaway_gearbox_stops_at_the_shakedown_limit_not_at_its_centre_line():
+def test_the_harshest_dataset_gearbox_stays_below_the_shakedown_limit():
     """Replicate 136 of the 256 case-3 gearboxes (high torque and wear coefficient, low
-    damping) wears its pinion root at an accelerating rate; the worn groove's Hertz pressure
-    passes 5.4 GPa at about 90 um of wear (it would have been followed to 1.6 mm, 31 s)."""
+    damping): with the worn band's pressure from the gap, its pinion root wears to the end of
+    the record with every flank pressure below the shakedown limit."""
     from physics.dataset.generation import DatasetSpec, run_unit
 
-    with pytest.raises(OutOfScope, match="shakedown limit") as err:
-        run_unit(Scenario(), DatasetSpec(cases=(3,), replicates=256), 3, 136)
-    deepest = float(str(err.value).split("deepest wear ")[1].split(" um")[0])
-    assert 20 < deepest < 200
+    rows, _ = run_unit(Scenario(), DatasetSpec(cases=(3,), replicates=256), 3, 136)
+    wear = rows["root_wear_mm"].to_numpy()
+    assert np.all(np.diff(wear) >= 0) and wear[-1] > 0
