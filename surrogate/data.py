@@ -409,6 +409,10 @@ class WearDataModule(L.LightningDataModule):
                 f"{self.target} = {wear[r]:.4g}, above its least ({least[r]:.4g}); "
                 "data.baseline reads each trajectory against its first row, so that must be "
                 "its baseline record (unworn, or its least worn): put it first")
+        from surrogate.inference import check_gearboxes  # single rows, rows out of time order
+
+        check_gearboxes(df, keys, None, f"{self.source} (a gearbox is a trajectory: in a table "
+                                        "the replicate-th value of data.group, sorted)")
 
     def network_rows(self, split: str) -> pd.DataFrame:
         """The rows of ``split`` as the network reads them: with ``baseline``, the features as
