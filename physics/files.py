@@ -162,3 +162,24 @@ def release_lock(path: str | os.PathLike) -> None:
     holder = read_lock(path)
     if holder is not None and holder.get("pid") == os.getpid():
         Path(path).unlink(missing_ok=True)
+
+
+def check_writable(path: str | os.PathLike, key: str) -> None:
+    """Refuse (ValueError, one line) an output folder ``path`` that cannot be written, before
+    any work: the nearest existing folder of its chain must be a folder and must take a file
+    (tried with a temporary file that is removed at once: permission bits alone do not tell,
+    e.g. for root or on a read-only mount)."""
+    import tempfile
+
+    path = Path(path).absolute()
+    existing = next(p for p in (path, *path.parents) if p.exists())
+    if not existing.is_dir():
+        raise ValueError(f"{key} = {str(path)!r}: {existing} is a file, not a folder; give a "
+                         "folder")
+    try:
+        with tempfile.TemporaryFile(dir=existing):
+            pass
+    except OSError as err:
+        reason = err.strerror or type(err).__name__
+        raise ValueError(f"{key} = {str(path)!r}: cannot write in {existing} ({reason}); "
+                         "choose a folder you can write to") from None

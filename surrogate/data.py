@@ -206,7 +206,7 @@ def check_user_table(df: pd.DataFrame, path: Path | str, needed: list[str], grou
         if unit not in PLAUSIBLE:
             continue
         lo, hi = PLAUSIBLE[unit]
-        if name == target and (values[:, c] < 0).any():
+        if name == target and unit == "mm" and (values[:, c] < 0).any():
             r = int(np.argmax(values[:, c] < 0))
             raise ValueError(f"{path}: row {r + 1}, column {name!r} = {values[r, c]:.6g} is "
                              "negative; wear is a depth (>= 0, in mm): repair the reading")
@@ -229,8 +229,8 @@ def check_user_table(df: pd.DataFrame, path: Path | str, needed: list[str], grou
                              f"{hi_g!r} but {med.min():.3g} in group {lo_g!r}, more than "
                              f"{MIXED_UNITS_RATIO:g} times apart: mixed units; give every "
                              f"group in {unit_of[name]}")
-    if target is None or target not in needed:
-        return
+    if target is None or target not in needed or unit_of.get(target) != "mm":
+        return  # the order rule is wear's
     wear = values[:, needed.index(target)]
     order = next((c for c in ORDER_COLUMNS if c in df.columns), None)
     if order is None:

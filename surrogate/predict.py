@@ -29,7 +29,7 @@ import pandas as pd
 from omegaconf import DictConfig
 
 from physics.command import run_command
-from physics.files import atomic_write
+from physics.files import atomic_write, check_writable
 from surrogate.inference import Surrogate, check_gearboxes
 from surrogate.schema import KEEP_COLUMNS
 
@@ -79,6 +79,7 @@ def prepare(cfg: DictConfig) -> PredictJob:
     output = Path(cfg.output)
     if output.is_dir():
         raise ValueError(f"output = {str(output)!r} is a folder; give a .csv file name")
+    check_writable(output.parent, "output")
     return PredictJob(surrogate, table, output, gearbox)
 
 

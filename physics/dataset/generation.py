@@ -47,6 +47,7 @@ from physics.dynamics.model import build_model, simulate
 from physics.dynamics.model_form import FACTORS
 from physics.files import (
     atomic_write,
+    check_writable,
     lock_is_live,
     lock_message,
     read_lock,
@@ -572,6 +573,7 @@ def plan_dataset(base: Scenario, spec: DatasetSpec, out_dir: str | Path, name: s
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise ValueError(f"out_dir = {str(out_dir)!r} is a file; give a folder")
+    check_writable(out, "out_dir")
     digest = dataset_digest(base, spec)
     folder = chunk_folder(out, name)
     manifest = read_manifest(folder) if folder.is_dir() else {}
