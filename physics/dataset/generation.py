@@ -318,11 +318,12 @@ def chunk_path(folder: Path, chunk: int) -> Path:
 MANIFEST = "manifest.json"
 
 
-def read_manifest(folder: Path) -> dict[str, dict]:
+def read_manifest(folder: Path, repair: bool = False) -> dict[str, dict]:
     """The manifest of a chunk folder: ``{chunk file name: {"hash": config hash, "sha256": of
     the file's bytes, "signals_sha256": of its records or None}}`` ({} where there is none).
     It lives outside the chunks, so a chunk's damage cannot vouch for itself. An unreadable
-    manifest is set aside (``*.damaged``) with a warning and counts as empty."""
+    manifest counts as empty; with ``repair`` (a build, not its planning) it is set aside
+    (``*.damaged``) with a warning."""
     path = folder / MANIFEST
     try:
         data = json.loads(path.read_text())
@@ -333,6 +334,8 @@ def read_manifest(folder: Path) -> dict[str, dict]:
     except FileNotFoundError:
         return {}
     except (OSError, ValueError, KeyError, TypeError) as err:
+        if not repair:
+            return {}
         aside = set_aside(path)
         log.warning("the chunk manifest %s is unreadable (%s); set aside as %s, its chunks are "
                     "computed again", path, err, aside.name)
@@ -348,7 +351,7 @@ def _record_chunk(folder: Path, name: str, entry: dict) -> None:
     fd = os.open(folder, os.O_RDONLY)
     try:
         fcntl.flock(fd, fcntl.LOCK_EX)
-        chunks = read_manifest(folder)
+        chunks = read_manifest(folder, repair=True)
         chunks[name] = entry
         write_text(folder / MANIFEST, json.dumps({"chunks": chunks}, indent=1, sort_keys=True)
                    + "\n")
@@ -390,7 +393,7 @@ def set_aside_damaged(folder: Path, chunks, digest: str, keep_signals: bool = Fa
                       ) -> list[int]:
     """Rename every damaged chunk of ``chunks`` (and its records) to ``*.damaged`` with a
     one-line warning naming it; returns those chunks (to be computed again)."""
-    manifest = read_manifest(folder)
+    manifest = read_manifest(folder, repair=folder.is_dir())
     damaged = []
     for c in chunks:
         if chunk_state(folder, c, digest, keep_signals, manifest) != "damaged":
@@ -463,8 +466,9 @@ def merge(spec: DatasetSpec, out: Path, name: str, digest: str, sidecar: dict[st
     missing = [c for c, s in states.items() if s != "done"]
     if missing:
         raise ValueError(f"chunks {missing} of this config (hash {digest}) in {folder} are "
-                         f"{sorted({states[c] for c in missing})} (not matching the manifest); "
-                         "run the same command again without chunk= to compute them and merge")
+                         f"{sorted({states[c] for c in missing})}, not as the manifest records "
+                         "them; a whole build (python -m physics.dataset without chunk=, or "
+                         "build_dataset) computes them again before it merges")
     read = [_read_chunk(chunk_path(folder, c)) for c in range(spec.chunks)]
     df = pd.concat([f for f, _ in read], ignore_index=True)
     left = [u for _, lft in read for u in lft]

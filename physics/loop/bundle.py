@@ -328,4 +328,11 @@ def read_feature_table(path: str | Path) -> pd.DataFrame:
             raise ValueError(f"feature table {path}: row {row + 1}, column {col!r}: "
                              f"{df[col].iloc[row]!r} is not a finite number")
         df[col] = values
+    wear = df["wear_mm"].to_numpy(float)
+    out = (wear < 0) | (wear > 10)
+    if out.any():
+        row = int(np.argmax(out))
+        raise ValueError(f"feature table {path}: row {row + 1}, column 'wear_mm' = "
+                         f"{wear[row]:g} lies outside [0, 10] mm, what a wear depth can be; give "
+                         "it in mm")
     return df

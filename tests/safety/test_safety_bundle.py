@@ -134,3 +134,12 @@ def test_written_bundles_are_readable_by_the_group(tmp_path):
     assert stat.S_IMODE((path / "signals").stat().st_mode) == 0o755
     for f in (path / "manifest.csv", path / "gear.yaml", path / "signals" / "r0.npy"):
         assert stat.S_IMODE(f.stat().st_mode) == 0o644
+
+
+def test_a_feature_table_with_wear_outside_its_unit_is_refused(tmp_path):
+    from physics.loop.bundle import read_feature_table
+
+    path = tmp_path / "t.csv"
+    pd.DataFrame({"wear_mm": [0.0, 24.0], "rms_m_s2": [1.0, 2.0]}).to_csv(path, index=False)
+    with pytest.raises(ValueError, match=r"row 2, column 'wear_mm' = 24 lies outside \[0, 10\]"):
+        read_feature_table(path)

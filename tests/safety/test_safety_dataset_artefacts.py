@@ -126,3 +126,17 @@ def test_acceptance_flipped_bit_is_not_merged_through_the_app(tmp_path, referenc
     assert "chunk_000.parquet" in run.stderr + run.stdout
     assert (path.parent / "chunk_000.parquet.damaged").is_file()
     assert (out / "dataset.parquet").read_bytes() == reference.read_bytes()
+
+
+def test_a_damaged_manifest_is_set_aside_and_its_chunks_computed_again(tmp_path, reference,
+                                                                      caplog):
+    out = tmp_path / "man"
+    job, _ = generate(out, chunk=0)
+    (job.folder / MANIFEST).write_text("{not json")
+    planned = plan_dataset(BASE, spec_from_config(SMALL), out, jobs=1, progress=False)
+    assert planned.todo == (0, 1) and (job.folder / MANIFEST).is_file()  # planning writes not
+    with caplog.at_level(logging.WARNING):
+        merged = build_dataset(planned)
+    assert (job.folder / "manifest.json.damaged").is_file()
+    assert any("manifest" in r.getMessage() for r in caplog.records)
+    assert merged.read_bytes() == reference.read_bytes()
