@@ -183,3 +183,12 @@ def check_writable(path: str | os.PathLike, key: str) -> None:
         reason = err.strerror or type(err).__name__
         raise ValueError(f"{key} = {str(path)!r}: cannot write in {existing} ({reason}); "
                          "choose a folder you can write to") from None
+
+
+def check_inside(path: str | os.PathLike, root: str | os.PathLike, key: str) -> None:
+    """Refuse (ValueError, one line) a ``path`` that resolves outside ``root`` (e.g. a run
+    folder made from ``task_name=../../x``): ``..`` and links are resolved first."""
+    p, r = Path(path).resolve(), Path(root).resolve()
+    if p != r and r not in p.parents:
+        raise ValueError(f"{key} puts {str(path)!r} at {p}, outside {r}; use a plain name "
+                         "(letters, digits, '_', '-', '.'; no '..' or '/')")

@@ -88,3 +88,17 @@ def _tiny_model(tmp: Path) -> Path:
             "logger=csv"])
     train(cfg)
     return tmp / "run" / "wear_surrogate.pt"
+
+
+def test_check_inside_refuses_a_folder_that_escapes_its_root(tmp_path):
+    from physics.files import check_inside
+
+    check_inside(tmp_path / "logs" / "train" / "runs", tmp_path / "logs", "task_name")
+    with pytest.raises(ValueError, match=r"task_name puts .* outside .*logs; use a plain name"):
+        check_inside(tmp_path / "logs" / ".." / ".." / "x", tmp_path / "logs", "task_name")
+
+
+def test_an_existing_file_as_out_dir_is_refused_at_once(tmp_path):
+    (tmp_path / "out").write_text("mine")
+    with pytest.raises(ValueError, match=r"is a file, not a folder"):
+        check_writable(tmp_path / "out", "out_dir")
