@@ -13,7 +13,8 @@ atomically to ``<name>_chunks/chunk_<i>.parquet`` under the output folder; the f
 sha256 of the chunk's bytes. A finished chunk of the same hash whose bytes still match is not
 computed again (a killed run resumes); one whose bytes do not (damaged on disk) is set aside as
 ``*.damaged`` with a warning and computed again, on resume and before the merge. One build
-writes a dataset at a time (:func:`acquire_output`). :func:`merge` joins the chunks into
+writes a dataset at a time (:func:`acquire_output`). The storage (manifest, chunk states,
+locks) is :mod:`physics.dataset.chunks`. :func:`merge` joins the chunks into
 ``<name>.parquet`` and a JSON sidecar. Everything is seeded, so the same config gives
 byte-identical files.
 """
@@ -42,21 +43,21 @@ import pyarrow.parquet as pq
 from joblib import Parallel, delayed
 from tqdm import tqdm
 
+from physics.dataset.chunks import (
+    chunk_folder,
+    chunk_is_done,
+    chunk_path,
+    chunk_state,
+    lock_file,
+    read_manifest,
+    record_chunk,
+    set_aside_damaged,
+    take_dataset_lock,
+)
 from physics.dynamics.evolution import simulate_dynamic_wear
 from physics.dynamics.model import build_model, simulate
 from physics.dynamics.model_form import FACTORS
-from physics.files import (
-    atomic_write,
-    check_writable,
-    lock_is_live,
-    lock_message,
-    read_lock,
-    release_lock,
-    set_aside,
-    sha256_file,
-    take_lock,
-    write_text,
-)
+from physics.files import atomic_write, check_writable, read_lock, release_lock, sha256_file
 from physics.gear.stiffness import MeshStiffness, SainsotRangeWarning
 from physics.params import (
     OutOfScope,
@@ -306,107 +307,6 @@ def _write_parquet(df: pd.DataFrame, path: Path, meta: dict[str, str]) -> None:
     atomic_write(path, lambda p: pq.write_table(table, p, compression="zstd"))
 
 
-def chunk_folder(out: Path, name: str) -> Path:
-    """Where the chunks of dataset ``name`` live (one folder per dataset name)."""
-    return out / f"{name}_chunks"
-
-
-def chunk_path(folder: Path, chunk: int) -> Path:
-    return folder / f"chunk_{chunk:03d}.parquet"
-
-
-MANIFEST = "manifest.json"
-
-
-def read_manifest(folder: Path, repair: bool = False) -> dict[str, dict]:
-    """The manifest of a chunk folder: ``{chunk file name: {"hash": config hash, "sha256": of
-    the file's bytes, "signals_sha256": of its records or None}}`` ({} where there is none).
-    It lives outside the chunks, so a chunk's damage cannot vouch for itself. An unreadable
-    manifest counts as empty; with ``repair`` (a build, not its planning) it is set aside
-    (``*.damaged``) with a warning."""
-    path = folder / MANIFEST
-    try:
-        data = json.loads(path.read_text())
-        chunks = data["chunks"]
-        if not isinstance(chunks, dict):
-            raise TypeError("chunks is not a mapping")
-        return chunks
-    except FileNotFoundError:
-        return {}
-    except (OSError, ValueError, KeyError, TypeError) as err:
-        if not repair:
-            return {}
-        aside = set_aside(path)
-        log.warning("the chunk manifest %s is unreadable (%s); set aside as %s, its chunks are "
-                    "computed again", path, err, aside.name)
-        return {}
-
-
-def _record_chunk(folder: Path, name: str, entry: dict) -> None:
-    """Put one finished chunk's entry into the manifest (read-modify-write under an exclusive
-    ``flock`` of the folder, so parallel chunk jobs do not lose each other's entries; the file
-    itself is replaced atomically)."""
-    import fcntl
-
-    fd = os.open(folder, os.O_RDONLY)
-    try:
-        fcntl.flock(fd, fcntl.LOCK_EX)
-        chunks = read_manifest(folder, repair=True)
-        chunks[name] = entry
-        write_text(folder / MANIFEST, json.dumps({"chunks": chunks}, indent=1, sort_keys=True)
-                   + "\n")
-    finally:
-        os.close(fd)  # also releases the flock
-
-
-def chunk_state(folder: Path, chunk: int, digest: str, keep_signals: bool = False,
-                manifest: dict[str, dict] | None = None) -> str:
-    """``"done"`` (in the manifest with this config's hash and the file's sha256 matches it),
-    ``"missing"`` (no file), ``"damaged"`` (recorded for this config, but its bytes, or its
-    records', no longer match) or ``"stale"`` (not recorded for this config: another config's,
-    or a killed job's)."""
-    path = chunk_path(folder, chunk)
-    if not path.is_file():
-        return "missing"
-    entry = (read_manifest(folder) if manifest is None else manifest).get(path.name)
-    if not isinstance(entry, dict) or entry.get("hash") != digest:
-        return "stale"
-    try:
-        if sha256_file(path) != entry.get("sha256"):
-            return "damaged"
-        if keep_signals:
-            npy = path.with_suffix(".npy")
-            if not entry.get("signals_sha256") or not npy.is_file():
-                return "stale"  # computed without its records
-            if sha256_file(npy) != entry["signals_sha256"]:
-                return "damaged"
-    except OSError:
-        return "damaged"
-    return "done"
-
-
-def chunk_is_done(folder: Path, chunk: int, digest: str, keep_signals: bool = False) -> bool:
-    return chunk_state(folder, chunk, digest, keep_signals) == "done"
-
-
-def set_aside_damaged(folder: Path, chunks, digest: str, keep_signals: bool = False
-                      ) -> list[int]:
-    """Rename every damaged chunk of ``chunks`` (and its records) to ``*.damaged`` with a
-    one-line warning naming it; returns those chunks (to be computed again)."""
-    manifest = read_manifest(folder, repair=folder.is_dir())
-    damaged = []
-    for c in chunks:
-        if chunk_state(folder, c, digest, keep_signals, manifest) != "damaged":
-            continue
-        path = chunk_path(folder, c)
-        aside = [set_aside(p).name for p in (path, path.with_suffix(".npy")) if p.is_file()]
-        log.warning("chunk %s does not match the sha256 the manifest %s holds for it (damaged "
-                    "on disk); set aside as %s and computed again", path,
-                    folder / MANIFEST, ", ".join(aside))
-        damaged.append(c)
-    return damaged
-
-
 def run_chunk(base: Scenario, spec: DatasetSpec, chunk: int, folder: Path, digest: str,
               keep_signals: bool = False) -> bool:
     """Compute and write one chunk into ``folder`` unless it is there; True if computed.
@@ -435,7 +335,7 @@ def run_chunk(base: Scenario, spec: DatasetSpec, chunk: int, folder: Path, diges
         signals_sha = sha256_file(npy)
     df = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=list(units()))
     _write_parquet(df, path, {"gearwear_hash": digest, "gearwear_left_scope": json.dumps(left)})
-    _record_chunk(folder, path.name, {"hash": digest, "sha256": sha256_file(path),
+    record_chunk(folder, path.name, {"hash": digest, "sha256": sha256_file(path),
                                       "signals_sha256": signals_sha})
     return True
 
@@ -589,36 +489,15 @@ def plan_dataset(base: Scenario, spec: DatasetSpec, out_dir: str | Path, name: s
 
 
 def lock_path(job: DatasetJob) -> Path:
-    """The lock of a build: ``<out>/<name>.lock`` for a whole build, ``<out>/<name>.chunk_<i>
-    .lock`` for one chunk's job (the jobs of one multirun run side by side)."""
-    if job.chunk is None:
-        return job.out / f"{job.name}.lock"
-    return job.out / f"{job.name}.chunk_{job.chunk:03d}.lock"
+    """The lock file of a build (:func:`physics.dataset.chunks.lock_file`)."""
+    return lock_file(job.out, job.name, job.chunk)
 
 
 def acquire_output(job: DatasetJob) -> Path:
-    """Make this process the one writer of the dataset ``job`` builds, before any work.
-
-    The lock file is created with ``O_CREAT | O_EXCL`` (:func:`physics.files.take_lock`). A
-    whole build shares its dataset with no other build; a chunk job shares it only with the
-    other chunk jobs of the same config. A conflict raises ValueError naming the other run's
-    pid and its lock file; a lock left by a dead process is taken over with a warning."""
-    import glob
-
-    what = f"the dataset {job.path}"
-    own = take_lock(lock_path(job), what, {"digest": job.digest})
-    stem = glob.escape(job.name)
-    for other in sorted([*job.out.glob(f"{stem}.lock"), *job.out.glob(f"{stem}.chunk_*.lock")]):
-        if other == own:
-            continue
-        holder = read_lock(other)
-        if holder is None or not lock_is_live(holder):
-            continue
-        whole = other.name == f"{job.name}.lock"
-        if job.chunk is None or whole or holder.get("digest") != job.digest:
-            release_lock(own)
-            raise ValueError(lock_message(other, holder, what))
-    return own
+    """Make this process the one writer of the dataset ``job`` builds, before any work
+    (:func:`physics.dataset.chunks.take_dataset_lock`); raises ValueError naming the other
+    run's pid and its lock file."""
+    return take_dataset_lock(job.out, job.name, job.chunk, job.digest)
 
 
 def build_dataset(job: DatasetJob) -> Path | None:

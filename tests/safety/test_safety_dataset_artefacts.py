@@ -11,8 +11,8 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
+from physics.dataset.chunks import MANIFEST
 from physics.dataset.generation import (
-    MANIFEST,
     build_dataset,
     chunk_folder,
     chunk_path,
