@@ -50,3 +50,145 @@ def pyplot():
     import matplotlib.pyplot as plt
 
     return plt
+
+
+def sha256_file(path: str | os.PathLike) -> str:
+    """The sha256 (hex) of a file's bytes, read in blocks."""
+    import hashlib
+
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def write_text(path: str | os.PathLike, text: str) -> Path:
+    """Write ``text`` to ``path`` atomically."""
+    return atomic_write(path, lambda p: p.write_text(text))
+
+
+def set_aside(path: str | os.PathLike, suffix: str = ".damaged") -> Path:
+    """Rename ``path`` to ``<path><suffix>`` (``<path><suffix>.1``, ... if taken); nothing is
+    deleted. Returns the new name."""
+    path = Path(path)
+    target, i = path.with_name(path.name + suffix), 0
+    while target.exists():
+        i += 1
+        target = path.with_name(f"{path.name}{suffix}.{i}")
+    os.replace(path, target)
+    return target
+
+
+# --- one writer per output ------------------------------------------------------------------
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # another user's live process
+        return True
+    except OverflowError:
+        return False
+    return True
+
+
+def read_lock(path: str | os.PathLike) -> dict | None:
+    """The holder written in lock file ``path`` (pid, host, command, ...), None if absent.
+    An unreadable lock counts as held by an unknown process."""
+    import json
+
+    try:
+        return json.loads(Path(path).read_text())
+    except FileNotFoundError:
+        return None
+    except (OSError, ValueError):
+        return {"pid": None, "host": None, "command": "?"}
+
+
+def lock_is_live(holder: dict) -> bool:
+    """Whether the holder of a lock still runs (on another host: assumed so)."""
+    import socket
+
+    pid = holder.get("pid")
+    if holder.get("host") != socket.gethostname() or not isinstance(pid, int):
+        return True
+    return pid == os.getpid() or _pid_alive(pid)
+
+
+def take_lock(path: str | os.PathLike, what: str, extra: dict | None = None) -> Path:
+    """Create lock file ``path`` atomically (``O_CREAT | O_EXCL``) holding this process's pid,
+    host and command line (and ``extra``). A lock left by a dead process on this host is taken
+    over with a warning; a live one raises ValueError naming its pid and the lock's path."""
+    import json
+    import logging
+    import socket
+    import sys
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    body = json.dumps({"pid": os.getpid(), "host": socket.gethostname(),
+                       "command": " ".join(sys.argv), **(extra or {})}, sort_keys=True)
+    for _ in range(3):
+        try:
+            fd = os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+        except FileExistsError:
+            holder = read_lock(path)
+            if holder is None:
+                continue  # released meanwhile
+            if lock_is_live(holder):
+                raise ValueError(lock_message(path, holder, what)) from None
+            logging.getLogger(__name__).warning(
+                "taking over the stale lock %s of %s (pid %s on %s, no longer running)", path,
+                what, holder.get("pid"), holder.get("host"))
+            path.unlink(missing_ok=True)
+            continue
+        with os.fdopen(fd, "w") as f:
+            f.write(body + "\n")
+        return path
+    raise ValueError(f"could not take the lock {path} of {what}; another run keeps taking it: "
+                     "wait until it ends")
+
+
+def lock_message(path: Path, holder: dict, what: str) -> str:
+    return (f"{what} is being written by another run (pid {holder.get('pid')} on "
+            f"{holder.get('host')}: {holder.get('command')}), lock {path}; wait until it ends, "
+            "or remove the lock file if that run is gone")
+
+
+def release_lock(path: str | os.PathLike) -> None:
+    """Remove lock file ``path`` if this process holds it."""
+    holder = read_lock(path)
+    if holder is not None and holder.get("pid") == os.getpid():
+        Path(path).unlink(missing_ok=True)
+
+
+def check_writable(path: str | os.PathLike, key: str) -> None:
+    """Refuse (ValueError, one line) an output folder ``path`` that cannot be written, before
+    any work: the nearest existing folder of its chain must be a folder and must take a file
+    (tried with a temporary file that is removed at once: permission bits alone do not tell,
+    e.g. for root or on a read-only mount)."""
+    import tempfile
+
+    path = Path(path).absolute()
+    existing = next(p for p in (path, *path.parents) if p.exists())
+    if not existing.is_dir():
+        raise ValueError(f"{key} = {str(path)!r}: {existing} is a file, not a folder; give a "
+                         "folder")
+    try:
+        with tempfile.TemporaryFile(dir=existing):
+            pass
+    except OSError as err:
+        reason = err.strerror or type(err).__name__
+        raise ValueError(f"{key} = {str(path)!r}: cannot write in {existing} ({reason}); "
+                         "choose a folder you can write to") from None
+
+
+def check_inside(path: str | os.PathLike, root: str | os.PathLike, key: str) -> None:
+    """Refuse (ValueError, one line) a ``path`` that resolves outside ``root`` (e.g. a run
+    folder made from ``task_name=../../x``): ``..`` and links are resolved first."""
+    p, r = Path(path).resolve(), Path(root).resolve()
+    if p != r and r not in p.parents:
+        raise ValueError(f"{key} puts {str(path)!r} at {p}, outside {r}; use a plain name "
+                         "(letters, digits, '_', '-', '.'; no '..' or '/')")

@@ -150,11 +150,116 @@ def load_dataset(path: str | Path, spec: dict | None = None, jobs: int = 2) -> p
     return pd.read_parquet(path)
 
 
+#: the range (low, high) each unit allows a user's column: a value outside is a unit error or
+#: a broken reading. DTE features: 1 mm of transmission error is far beyond any running spur
+#: pair (a worn one shows tens of um); housing acceleration: 1e5 m/s^2 (10^4 g); wear depth: a
+#: tooth of module 2 is 4.5 mm high, so 10 mm is no wear depth; dimensionless shape features
+#: (kurtosis, crest, ...) of a finite record stay far below 1e6
+PLAUSIBLE = {"m": (0.0, 1e-3), "m/s^2": (0.0, 1e5), "1": (-1e6, 1e6), "mm": (0.0, 10.0),
+             "r/min": (0.0, 1e5), "N m": (-1e6, 1e6), "Pa s": (0.0, 1e3), "um": (0.0, 1e4),
+             "kg": (0.0, 1e5), "Hz": (0.0, 1e6), "dB": (-300.0, 300.0)}
+#: per-group medians of one dimensional feature further apart than this: mixed units
+MIXED_UNITS_RATIO = 100.0
+#: the columns of a user table that order a trajectory's rows in time (after data.columns)
+ORDER_COLUMNS = ("cycles", "time_s", "time_h", "time")
+
+
+def _shown(value) -> str:
+    """A cell as a message shows it: numbers plainly, text quoted."""
+    try:
+        return f"{float(value):.6g}"
+    except (TypeError, ValueError):
+        return repr(value)
+
+
+def check_user_table(df: pd.DataFrame, path: Path | str, needed: list[str], group: str,
+                     target: str | None = None) -> None:
+    """A user's table checked before any training, one refusal per rule naming the column,
+    the row (1-based, as the file's data rows) or the group, and the fix:
+
+    - every group key present (no empty or NaN ``group`` value);
+    - every needed value a finite number;
+    - every value within the range its unit allows (:data:`PLAUSIBLE`, by the dataset's
+      units of our column names): a DTE in m of 1e-2 is a unit error;
+    - one unit per column: a dimensional feature whose per-group median differs more than
+      :data:`MIXED_UNITS_RATIO` times between two groups mixes units;
+    - wear (``target``) not negative and, where an :data:`ORDER_COLUMNS` column is given, not
+      falling within a group in its order.
+    """
+    keys = df[group]
+    empty = keys.isna() | (keys.astype(str).str.strip() == "")
+    if empty.any():
+        r = int(np.argmax(empty.to_numpy()))
+        raise ValueError(f"{path}: row {r + 1} has no value in the group column {group!r} "
+                         f"({keys.iloc[r]!r}); every row needs its trajectory (gearbox, run): "
+                         "fill it in or drop the row")
+    values = df[needed].apply(pd.to_numeric, errors="coerce").to_numpy(float)
+    bad = ~np.isfinite(values)
+    if bad.any():
+        r, c = np.argwhere(bad)[0]
+        raise ValueError(f"{path}: row {r + 1}, column {needed[c]!r} = "
+                         f"{_shown(df[needed[c]].iloc[r])} is not a finite number; repair or "
+                         "drop the row")
+    unit_of = dataset_units()
+    for c, name in enumerate(needed):
+        unit = unit_of.get(name)
+        if unit not in PLAUSIBLE:
+            continue
+        lo, hi = PLAUSIBLE[unit]
+        if name == target and unit == "mm" and (values[:, c] < 0).any():
+            r = int(np.argmax(values[:, c] < 0))
+            raise ValueError(f"{path}: row {r + 1}, column {name!r} = {values[r, c]:.6g} is "
+                             "negative; wear is a depth (>= 0, in mm): repair the reading")
+        out = (values[:, c] < lo) | (values[:, c] > hi)
+        if out.any():
+            r = int(np.argmax(out))
+            fix = ("it is dimensionless: repair the reading" if unit == "1" else
+                   f"convert the column to {unit} (data.columns maps names, not units)")
+            raise ValueError(f"{path}: row {r + 1}, column {name!r} = {values[r, c]:.6g} lies "
+                             f"outside [{lo:g}, {hi:g}], what its unit {unit} allows; {fix}")
+    codes, names = pd.factorize(keys, sort=True)
+    for c, name in enumerate(needed):
+        if name == target or name in CONDITIONS or unit_of.get(name) in (None, "1"):
+            continue
+        med = pd.Series(np.abs(values[:, c])).groupby(codes).median()
+        med = med[med > 0]
+        if len(med) > 1 and med.max() > MIXED_UNITS_RATIO * med.min():
+            hi_g, lo_g = names[med.idxmax()], names[med.idxmin()]
+            raise ValueError(f"{path}: column {name!r} has a median of {med.max():.3g} in group "
+                             f"{hi_g!r} but {med.min():.3g} in group {lo_g!r}, more than "
+                             f"{MIXED_UNITS_RATIO:g} times apart: mixed units; give every "
+                             f"group in {unit_of[name]}")
+    if target is None or target not in needed or unit_of.get(target) != "mm":
+        return  # the order rule is wear's
+    wear = values[:, needed.index(target)]
+    order = next((c for c in ORDER_COLUMNS if c in df.columns), None)
+    if order is None:
+        return
+    t = pd.to_numeric(df[order], errors="coerce").to_numpy(float)
+    if not np.isfinite(t).all():
+        r = int(np.argmax(~np.isfinite(t)))
+        raise ValueError(f"{path}: row {r + 1}, column {order!r} = {_shown(df[order].iloc[r])} "
+                         "is not a finite number; repair or drop the row")
+    frame = pd.DataFrame({"g": codes, "t": t, "w": wear, "row": np.arange(len(df))})
+    frame = frame.sort_values(["g", "t"], kind="stable")
+    same = frame.g.to_numpy()[1:] == frame.g.to_numpy()[:-1]
+    falls = same & (np.diff(frame.w.to_numpy()) < 0)
+    if falls.any():
+        i = int(np.argmax(falls))
+        a, b = frame.iloc[i], frame.iloc[i + 1]
+        raise ValueError(f"{path}: group {names[int(b.g)]!r}: {target} falls from {a.w:.6g} "
+                         f"(row {int(a.row) + 1}, {order} {a.t:g}) to {b.w:.6g} (row "
+                         f"{int(b.row) + 1}, {order} {b.t:g}); wear does not heal: repair the "
+                         f"readings or the {order} column")
+
+
 def user_table(path: str | Path, columns: dict[str, str], group: str | None,
-               needed: list[str]) -> pd.DataFrame:
+               needed: list[str], target: str | None = None) -> pd.DataFrame:
     """A user's labelled feature table as the data module's rows: columns renamed by
     ``columns`` (the table's name -> ours), each ``group`` value one trajectory (``case`` 0,
-    ``replicate`` its index). Features and wear in the dataset's units (``units()``)."""
+    ``replicate`` its index). Features and wear in the dataset's units (``units()``), checked
+    by :func:`check_user_table` before any training. A ``cycles`` column, where given, is
+    kept (else NaN); the rows of each trajectory are read in the table's order."""
     path = Path(path)
     if path.suffix not in (".csv", ".parquet") or not path.is_file():
         raise ValueError(f"data.table = {str(path)!r} must be an existing .csv or .parquet file")
@@ -174,15 +279,16 @@ def user_table(path: str | Path, columns: dict[str, str], group: str | None,
     if missing:
         raise ValueError(f"{path} lacks column(s) {missing}; map yours with data.columns "
                          "(units as in the dataset: README, The dataset)")
-    values = df[needed].apply(pd.to_numeric, errors="coerce").to_numpy(float)
-    bad = ~np.isfinite(values)
-    if bad.any():
-        r, c = np.argwhere(bad)[0]
-        raise ValueError(f"{path}: row {r + 1}, column {needed[c]!r} is not a finite number")
+    if df.empty:
+        raise ValueError(f"data.table = {path} has no rows")
+    if target is None:
+        target = next((c for c in needed if dataset_units().get(c) == "mm"), None)
+    check_user_table(df, path, needed, group, target)
     out = df[needed].astype(float)
     out["case"] = 0
     out["replicate"] = pd.factorize(df[group], sort=True)[0]
-    out["cycles"] = np.nan
+    out["cycles"] = (df["cycles"].astype(float) if "cycles" in df.columns and "cycles"
+                     not in needed else np.nan)
     return out
 
 
@@ -257,7 +363,7 @@ class WearDataModule(L.LightningDataModule):
         self.source = self.dataset if table is None else str(table)  # named in errors
         if table is not None:  # a user's own data: read and checked now, before any work
             self.table = user_table(table, dict(columns or {}), group,
-                                    [*self.inputs, self.target])
+                                    [*self.inputs, self.target], self.target)
             self.cases = [0]
         elif not Path(self.dataset).is_file():
             dataset_job(self.dataset, self.generate, self.jobs)  # checks the build's settings
@@ -303,6 +409,10 @@ class WearDataModule(L.LightningDataModule):
                 f"{self.target} = {wear[r]:.4g}, above its least ({least[r]:.4g}); "
                 "data.baseline reads each trajectory against its first row, so that must be "
                 "its baseline record (unworn, or its least worn): put it first")
+        from surrogate.inference import check_gearboxes  # single rows, rows out of time order
+
+        check_gearboxes(df, keys, None, f"{self.source} (a gearbox is a trajectory: in a table "
+                                        "the replicate-th value of data.group, sorted)")
 
     def network_rows(self, split: str) -> pd.DataFrame:
         """The rows of ``split`` as the network reads them: with ``baseline``, the features as

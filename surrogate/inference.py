@@ -113,6 +113,66 @@ def onnx_session(model: WearRegressor, schema: FeatureSchema, threads: int
     return ort.InferenceSession(buf.getvalue(), options, providers=["CPUExecutionProvider"])
 
 
+def check_gearboxes(df: pd.DataFrame, gearbox: list[str], target: str | None = None,
+                    source: str = "input") -> None:
+    """What a baseline model needs of each gearbox (the rows sharing the ``gearbox`` columns'
+    values), refused with one line naming the gearbox:
+
+    - at least two rows: the first is its baseline record (read as no change), so a gearbox
+      of one row has nothing to read against it;
+    - its rows in time order: where a ``cycles`` column is given its values must not fall
+      from row to row (the first row, the baseline record, is then the earliest). Without
+      one, the table's row order is taken as the time order;
+    - where the true wear (``target``) is given, the first row is the least worn.
+    """
+    from surrogate.schema import first_rows
+
+    keys = list(gearbox)
+    if not keys or any(k not in df.columns for k in keys) or df.empty:
+        return  # network_rows names what is missing
+    first = first_rows(df, keys)  # refuses a row without its gearbox
+    groups = df.groupby(keys, sort=False, dropna=False)
+    rows = np.arange(len(df))
+
+    def name(g) -> str:
+        values = g if isinstance(g, tuple) else (g,)
+        return repr({k: v.item() if isinstance(v, np.generic) else v
+                     for k, v in zip(keys, values, strict=True)})
+
+    sizes = groups.size()
+    if (sizes < 2).any():
+        g = sizes.index[int(np.argmax((sizes < 2).to_numpy()))]
+        raise ValueError(f"{source}: gearbox {name(g)} has a single row; a baseline model reads "
+                         "each row as its change since the gearbox's baseline record (its first "
+                         "row), so each gearbox needs its baseline record and later records: "
+                         "add them, or leave this gearbox out")
+    for col, rule in (("cycles", "sort each gearbox's rows by cycles"),):
+        if col not in df.columns:
+            continue
+        values = pd.to_numeric(df[col], errors="coerce").to_numpy(float)
+        for g, idx in groups.indices.items():
+            v = values[idx]
+            ok = np.isfinite(v)
+            falls = np.flatnonzero(np.diff(v[ok]) < 0)
+            if falls.size:
+                a, b = rows[idx][ok][falls[0]], rows[idx][ok][falls[0] + 1]
+                raise ValueError(f"{source}: gearbox {name(g)}: rows {a} and {b} are out of "
+                                 f"time order ({col} {values[a]:g} then {values[b]:g}); a "
+                                 "baseline model reads the first row as the baseline record "
+                                 f"and the rest after it: {rule}")
+    if target is not None and target in df.columns:
+        wear = pd.to_numeric(df[target], errors="coerce").to_numpy(float)
+        least = df.assign(_w=wear).groupby(keys, sort=False)["_w"].transform("min").to_numpy()
+        bad = first & (wear > least)
+        if bad.any():
+            r = int(np.argmax(bad))
+            g = tuple(df[keys].iloc[r]) if len(keys) > 1 else df[keys[0]].iloc[r]
+            raise ValueError(f"{source}: gearbox {name(g)} has no baseline record: its first "
+                             f"row (row {r}) has {target} = {wear[r]:.4g}, above its least "
+                             f"({least[r]:.4g}); put the gearbox's earliest (least worn) "
+                             "record first")
+
+
 class Surrogate:
     """A loaded ensemble: ``predict(df)`` returns wear with its interval and flags."""
 
@@ -193,6 +253,8 @@ class Surrogate:
         0) and
         ``out_of_range`` (an input outside the training envelope: extrapolation).
         """
+        if self.schema.baseline:
+            check_gearboxes(df, list(gearbox or []), self.schema.target)
         x = self.schema.check(self.schema.network_rows(df, gearbox))
         mean, std = self.predict_array(x)
         bad = ~(np.isfinite(mean) & np.isfinite(std))

@@ -8,9 +8,12 @@ model's wear: ``root_wear_mm`` or ``mean_wear_mm``), its standard deviation, the
 bounds and the ``out_of_range`` flag. A model trained with
 ``data.baseline=true`` reads each gearbox's features against its first row: ``gearbox=COLUMN``
 (or ``gearbox=[A,B]``) names the column(s) that tell the gearboxes apart, which the output keeps.
+Each gearbox needs its baseline record first and at least one record after it; where a
+``cycles`` column is given each gearbox's rows must be sorted by it, and without one the
+table's row order is taken as the time order (the first row of a gearbox is its baseline).
 From Python::
 
-    from surrogate.inference import Surrogate
+    from surrogate.inference import Surrogate, check_gearboxes
     wear = Surrogate.load("wear_surrogate.pt").predict(features_df)
 """
 
@@ -26,8 +29,8 @@ import pandas as pd
 from omegaconf import DictConfig
 
 from physics.command import run_command
-from physics.files import atomic_write
-from surrogate.inference import Surrogate
+from physics.files import atomic_write, check_writable
+from surrogate.inference import Surrogate, check_gearboxes
 from surrogate.schema import KEEP_COLUMNS
 
 log = logging.getLogger(__name__)
@@ -70,10 +73,13 @@ def prepare(cfg: DictConfig) -> PredictJob:
     surrogate = Surrogate.load(cfg.ckpt)
     table = read_table(cfg.input)
     gearbox = gearbox_columns(cfg.get("gearbox"))
+    if surrogate.schema.baseline:
+        check_gearboxes(table, list(gearbox), surrogate.schema.target, f"input = {cfg.input}")
     surrogate.schema.check(surrogate.schema.network_rows(table, list(gearbox)))
     output = Path(cfg.output)
     if output.is_dir():
         raise ValueError(f"output = {str(output)!r} is a folder; give a .csv file name")
+    check_writable(output.parent, "output")
     return PredictJob(surrogate, table, output, gearbox)
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import logging
 import math
+import os
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -101,6 +102,16 @@ def fit(job: TrainJob) -> float:
     log.info("training on %d rows (%d trajectories), validating on %d, testing on %d",
              len(dm.frames["train"]), dm.frames["train"].groupby(["case", "replicate"]).ngroups,
              len(dm.frames["val"]), len(dm.frames["test"]))
+    try:
+        return _fit_and_export(job, dm, trainer, model, out)
+    except Exception:
+        set_aside_checkpoints(out)
+        raise
+
+
+def _fit_and_export(job: TrainJob, dm: WearDataModule, trainer: L.Trainer, model, out: Path
+                    ) -> float:
+    cfg = job.cfg
     trainer.fit(model, dm)
     if trainer.interrupted:
         raise KeyboardInterrupt
@@ -116,21 +127,43 @@ def fit(job: TrainJob) -> float:
     mean, std = Surrogate(model, 1.0).predict_array(val_rows[dm.inputs].to_numpy(float))
     scale = conformal_scale(mean, std, val_rows[dm.target].to_numpy(float),
                             float(cfg.model.interval))
-    path = export(model, out / "wear_surrogate.pt", scale)
-    surrogate = Surrogate.load(path)
-    metrics = {**val, **test, "epochs": trainer.current_epoch,
-               "train_rows": len(dm.frames["train"]), "interval_scale": scale}
-    if len(dm.frames["test"]):
-        metrics.update(report_test(surrogate, dm.frames["test"], out))
-    text = json.dumps(metrics, indent=2, sort_keys=True)
-    atomic_write(out / "metrics.json", lambda p: p.write_text(text + "\n"))
-    atomic_write(out / "config.yaml", lambda p: p.write_text(OmegaConf.to_yaml(cfg)))
+    # the exported model gets its name only at the successful end: a run that fails on the
+    # way leaves no wear_surrogate.pt that a later command would take for a finished one
+    path, staged = out / "wear_surrogate.pt", out / ".wear_surrogate.pt.staged"
+    try:
+        export(model, staged, scale)
+        surrogate = Surrogate.load(staged)
+        metrics = {**val, **test, "epochs": trainer.current_epoch,
+                   "train_rows": len(dm.frames["train"]), "interval_scale": scale}
+        if len(dm.frames["test"]):
+            metrics.update(report_test(surrogate, dm.frames["test"], out))
+        value = metrics.get(cfg.optimized_metric)
+        if value is None:
+            raise ValueError(f"optimized_metric = {cfg.optimized_metric!r} is not among the "
+                             f"logged metrics {sorted(metrics)}")
+        text = json.dumps(metrics, indent=2, sort_keys=True)
+        atomic_write(out / "metrics.json", lambda p: p.write_text(text + "\n"))
+        atomic_write(out / "config.yaml", lambda p: p.write_text(OmegaConf.to_yaml(cfg)))
+        os.replace(staged, path)
+    except BaseException:
+        staged.unlink(missing_ok=True)
+        raise
     log.info("model: %s; metrics: %s", path, text)
-    value = metrics.get(cfg.optimized_metric)
-    if value is None:
-        raise ValueError(f"optimized_metric = {cfg.optimized_metric!r} is not among the logged "
-                         f"metrics {sorted(metrics)}")
     return float(value) if math.isfinite(value) else float("inf")
+
+
+def set_aside_checkpoints(out: Path) -> Path | None:
+    """After a run failed past its start: its Lightning checkpoints renamed to
+    ``checkpoints.failed`` (kept, not deleted, but no ``best.ckpt`` under the usual name)."""
+    from physics.files import set_aside
+
+    folder = out / "checkpoints"
+    if not folder.is_dir():
+        return None
+    aside = set_aside(folder, ".failed")
+    log.warning("the run failed after training started; its checkpoints are set aside as %s "
+                "and nothing is exported", aside)
+    return aside
 
 
 def kept(job: TrainJob) -> str:

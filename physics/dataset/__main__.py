@@ -15,8 +15,10 @@ from physics.command import register_schema, run_command
 from physics.dataset.generation import (
     DatasetConfig,
     DatasetJob,
+    acquire_output,
     base_scenario,
     build_dataset,
+    chunk_is_done,
     chunks_kept,
     plan_dataset,
     spec_from_config,
@@ -34,13 +36,19 @@ def prepare(cfg: DictConfig) -> DatasetJob:
     if len(job.todo) < (job.spec.chunks if job.merge else 1):
         log.info("finished chunks of this config (hash %s) are kept in %s and skipped",
                  job.digest, job.folder)
+    acquire_output(job)  # the last check: one writer per dataset (released by build_dataset)
     return job
 
 
 def execute(job: DatasetJob) -> None:
     path = build_dataset(job)
     if path is None:
-        log.info("chunk written into %s; run without chunk= to merge", job.folder)
+        done = sum(chunk_is_done(job.folder, c, job.digest, job.store_signals)
+                   for c in range(job.spec.chunks))
+        rest = ("run the same command without chunk= to merge them" if done == job.spec.chunks
+                else "run the same command without chunk= to compute the others and merge")
+        log.info("chunk %d is in %s (%d of %d chunks of this config finished); %s", job.chunk,
+                 job.folder, done, job.spec.chunks, rest)
     else:
         log.info("dataset: %s", path)
 

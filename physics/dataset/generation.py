@@ -8,9 +8,13 @@ features of :mod:`physics.features` are taken of both (columns ``dte_*`` and ``a
 A unit gives one row per cycle count.
 
 Units are grouped in *chunks*, the independent jobs of a Hydra multirun; each chunk is written
-atomically to ``<name>_chunks/chunk_<i>.parquet`` under the output folder, with the hash of
-everything that determines it in its file metadata, and a finished chunk with the same hash is
-not computed again (a killed run resumes). :func:`merge` joins the chunks into
+atomically to ``<name>_chunks/chunk_<i>.parquet`` under the output folder; the folder's
+``manifest.json`` holds, per finished chunk, the hash of everything that determines it and the
+sha256 of the chunk's bytes. A finished chunk of the same hash whose bytes still match is not
+computed again (a killed run resumes); one whose bytes do not (damaged on disk) is set aside as
+``*.damaged`` with a warning and computed again, on resume and before the merge. One build
+writes a dataset at a time (:func:`acquire_output`). The storage (manifest, chunk states,
+locks) is :mod:`physics.dataset.chunks`. :func:`merge` joins the chunks into
 ``<name>.parquet`` and a JSON sidecar. Everything is seeded, so the same config gives
 byte-identical files.
 """
@@ -23,6 +27,7 @@ import json
 import logging
 import math
 import numbers
+import os
 import re
 import warnings
 from collections.abc import Mapping
@@ -38,10 +43,21 @@ import pyarrow.parquet as pq
 from joblib import Parallel, delayed
 from tqdm import tqdm
 
+from physics.dataset.chunks import (
+    chunk_folder,
+    chunk_is_done,
+    chunk_path,
+    chunk_state,
+    lock_file,
+    read_manifest,
+    record_chunk,
+    set_aside_damaged,
+    take_dataset_lock,
+)
 from physics.dynamics.evolution import simulate_dynamic_wear
 from physics.dynamics.model import build_model, simulate
 from physics.dynamics.model_form import FACTORS
-from physics.files import atomic_write
+from physics.files import atomic_write, check_writable, read_lock, release_lock, sha256_file
 from physics.gear.stiffness import MeshStiffness, SainsotRangeWarning
 from physics.params import (
     OutOfScope,
@@ -291,30 +307,12 @@ def _write_parquet(df: pd.DataFrame, path: Path, meta: dict[str, str]) -> None:
     atomic_write(path, lambda p: pq.write_table(table, p, compression="zstd"))
 
 
-def chunk_folder(out: Path, name: str) -> Path:
-    """Where the chunks of dataset ``name`` live (one folder per dataset name)."""
-    return out / f"{name}_chunks"
-
-
-def chunk_path(folder: Path, chunk: int) -> Path:
-    return folder / f"chunk_{chunk:03d}.parquet"
-
-
-def chunk_is_done(path: Path, digest: str) -> bool:
-    if not path.is_file():
-        return False
-    try:
-        meta = pq.read_schema(path).metadata or {}
-    except (OSError, pa.ArrowInvalid):
-        return False  # unreadable: compute it again
-    return meta.get(b"gearwear_hash", b"").decode() == digest
-
-
 def run_chunk(base: Scenario, spec: DatasetSpec, chunk: int, folder: Path, digest: str,
               keep_signals: bool = False) -> bool:
-    """Compute and write one chunk into ``folder`` unless it is there; True if computed."""
+    """Compute and write one chunk into ``folder`` unless it is there; True if computed.
+    The chunk's sha256 goes into the folder's manifest once its files are in place."""
     path = chunk_path(folder, chunk)
-    if chunk_is_done(path, digest):
+    if chunk_is_done(folder, chunk, digest, keep_signals):
         return False
     frames, signals, left = [], [], []
     with warnings.catch_warnings():
@@ -329,11 +327,16 @@ def run_chunk(base: Scenario, spec: DatasetSpec, chunk: int, folder: Path, diges
             frames.append(rows)
             if sig is not None:
                 signals.append(sig)
+    signals_sha = None
     if keep_signals:
         stack = np.concatenate(signals) if signals else np.empty((0, 2, 0), np.float32)
-        atomic_write(path.with_suffix(".npy"), lambda p: np.save(p.open("wb"), stack))
+        npy = path.with_suffix(".npy")
+        atomic_write(npy, lambda p: np.save(p.open("wb"), stack))
+        signals_sha = sha256_file(npy)
     df = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=list(units()))
     _write_parquet(df, path, {"gearwear_hash": digest, "gearwear_left_scope": json.dumps(left)})
+    record_chunk(folder, path.name, {"hash": digest, "sha256": sha256_file(path),
+                                      "signals_sha256": signals_sha})
     return True
 
 
@@ -343,17 +346,32 @@ def left_scope(path: Path) -> list[dict]:
     return json.loads(meta.get(b"gearwear_left_scope", b"[]").decode())
 
 
+def _read_chunk(path: Path) -> tuple[pd.DataFrame, list[dict]]:
+    try:
+        return pq.read_table(path).to_pandas(), left_scope(path)
+    except (OSError, pa.ArrowException, ValueError) as err:
+        raise ValueError(f"chunk {path} cannot be read ({type(err).__name__}); set it aside "
+                         "(rename it) and run the same command again to compute it") from None
+
+
 def merge(spec: DatasetSpec, out: Path, name: str, digest: str, sidecar: dict[str, Any],
           keep_signals: bool = False) -> Path:
-    """Join the finished chunks into ``<name>.parquet`` (+ ``.json``, and ``_signals.npy``)."""
+    """Join the finished chunks into ``<name>.parquet`` (+ ``.json``, and ``_signals.npy``).
+    Each chunk is checked against the sha256 in the manifest first; the sidecar holds the
+    sha256 of the files it describes."""
     folder = chunk_folder(out, name)
-    missing = [c for c in range(spec.chunks) if not chunk_is_done(chunk_path(folder, c), digest)]
+    manifest = read_manifest(folder)
+    states = {c: chunk_state(folder, c, digest, keep_signals, manifest)
+              for c in range(spec.chunks)}
+    missing = [c for c, s in states.items() if s != "done"]
     if missing:
-        raise ValueError(f"chunks {missing} of this config are not finished in {out}; run them "
-                         f"first (chunk=<i>) or run without chunk= to do all")
-    frames = [pq.read_table(chunk_path(folder, c)).to_pandas() for c in range(spec.chunks)]
-    df = pd.concat(frames, ignore_index=True)
-    left = [u for c in range(spec.chunks) for u in left_scope(chunk_path(folder, c))]
+        raise ValueError(f"chunks {missing} of this config (hash {digest}) in {folder} are "
+                         f"{sorted({states[c] for c in missing})}, not as the manifest records "
+                         "them; a whole build (python -m physics.dataset without chunk=, or "
+                         "build_dataset) computes them again before it merges")
+    read = [_read_chunk(chunk_path(folder, c)) for c in range(spec.chunks)]
+    df = pd.concat([f for f, _ in read], ignore_index=True)
+    left = [u for _, lft in read for u in lft]
     if left:
         log.warning("%d of %d trajectories left the model's scope during their wear life and "
                     "are not in the dataset (listed in %s.json, left_scope): %s", len(left),
@@ -363,14 +381,16 @@ def merge(spec: DatasetSpec, out: Path, name: str, digest: str, sidecar: dict[st
     df = df.iloc[order].reset_index(drop=True)
     target = out / f"{name}.parquet"
     _write_parquet(df, target, {"gearwear_hash": digest})
+    shas = {"sha256": sha256_file(target)}
     if keep_signals:
         sig = np.concatenate([np.load(chunk_path(folder, c).with_suffix(".npy"))
                               for c in range(spec.chunks)])[order]
-        atomic_write(out / f"{name}_signals.npy", lambda p: np.save(p.open("wb"), sig))
+        sig_path = out / f"{name}_signals.npy"
+        atomic_write(sig_path, lambda p: np.save(p.open("wb"), sig))
+        shas["signals_sha256"] = sha256_file(sig_path)
     text = json.dumps({**sidecar, "schema_version": SCHEMA_VERSION, "hash": digest,
-                       "rows": len(df), "units": units(), "left_scope": left}, indent=2,
-                      sort_keys=True,
-                      default=str)
+                       "rows": len(df), "units": units(), "left_scope": left, **shas},
+                      indent=2, sort_keys=True, default=str)
     atomic_write(out / f"{name}.json", lambda p: p.write_text(text + "\n"))
     return target
 
@@ -415,6 +435,7 @@ class DatasetJob:
     jobs: int = 2
     store_signals: bool = False
     progress: bool = True
+    chunk: int | None = None  # the one chunk asked for (a multirun job), None for all
 
     @property
     def digest(self) -> str:
@@ -456,33 +477,74 @@ def plan_dataset(base: Scenario, spec: DatasetSpec, out_dir: str | Path, name: s
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise ValueError(f"out_dir = {str(out_dir)!r} is a file; give a folder")
+    check_writable(out, "out_dir")
     digest = dataset_digest(base, spec)
     folder = chunk_folder(out, name)
-    todo = tuple(c for c in chunks if not chunk_is_done(chunk_path(folder, c), digest))
+    manifest = read_manifest(folder) if folder.is_dir() else {}
+    todo = tuple(c for c in chunks
+                 if chunk_state(folder, c, digest, bool(store_signals), manifest) != "done")
     return DatasetJob(base, spec, out, name, todo, chunk is None, int(jobs),
-                      bool(store_signals), bool(progress))
+                      bool(store_signals), bool(progress),
+                      None if chunk is None else int(chunk))
+
+
+def lock_path(job: DatasetJob) -> Path:
+    """The lock file of a build (:func:`physics.dataset.chunks.lock_file`)."""
+    return lock_file(job.out, job.name, job.chunk)
+
+
+def acquire_output(job: DatasetJob) -> Path:
+    """Make this process the one writer of the dataset ``job`` builds, before any work
+    (:func:`physics.dataset.chunks.take_dataset_lock`); raises ValueError naming the other
+    run's pid and its lock file."""
+    return take_dataset_lock(job.out, job.name, job.chunk, job.digest)
 
 
 def build_dataset(job: DatasetJob) -> Path | None:
     """Compute the chunks of ``job`` (in ``job.jobs`` processes) and merge them into the
-    dataset when all were asked for; returns the dataset's path (None for a single chunk)."""
-    if job.todo:
+    dataset when all were asked for; returns the dataset's path (None for a single chunk).
+
+    The build holds the dataset's lock (:func:`acquire_output`; taken here unless the app took
+    it already) and releases it at the end, also when it fails. Damaged chunks are set aside
+    and computed again, before the work and again before the merge."""
+    own = lock_path(job)
+    held = (read_lock(own) or {}).get("pid") == os.getpid()
+    if not held:
+        acquire_output(job)
+    try:
+        return _build(job)
+    finally:
+        release_lock(own)
+
+
+def _compute(job: DatasetJob, todo: tuple[int, ...]) -> None:
+    set_aside_damaged(job.folder, todo, job.digest, job.store_signals)
+    if todo:
         MeshStiffness(job.base.gear, job.base.material)  # states the gear-body warning once
-    jobs = max(1, min(job.jobs, len(job.todo)))
+    jobs = max(1, min(job.jobs, len(todo)))
     args = (job.base, job.spec)
-    with tqdm(total=len(job.todo), desc="chunks", unit="chunk", disable=not job.progress) as bar:
+    with tqdm(total=len(todo), desc="chunks", unit="chunk", disable=not job.progress) as bar:
         if jobs == 1:
-            for c in job.todo:
+            for c in todo:
                 run_chunk(*args, c, job.folder, job.digest, job.store_signals)
                 bar.update(1)
         else:  # loky processes: they also start inside a joblib-launched multirun job
             runs = Parallel(n_jobs=jobs, return_as="generator_unordered")(
                 delayed(run_chunk)(*args, c, job.folder, job.digest, job.store_signals)
-                for c in job.todo)
+                for c in todo)
             for _ in runs:
                 bar.update(1)
+
+
+def _build(job: DatasetJob) -> Path | None:
+    _compute(job, job.todo)
     if not job.merge:
         return None
+    # the chunks this run did not compute are checked again before they are merged
+    again = tuple(c for c in range(job.spec.chunks)
+                  if chunk_state(job.folder, c, job.digest, job.store_signals) != "done")
+    if again:
+        _compute(job, again)
     sidecar = {"config": {"scenario": dataclasses.asdict(job.base),
                           "data": dataclasses.asdict(job.spec)},
                "seed": job.spec.seed, "package_version": version("gearwear"),
@@ -493,8 +555,8 @@ def build_dataset(job: DatasetJob) -> Path | None:
 
 def chunks_kept(job: DatasetJob) -> str:
     """What an interrupted build kept, and how to go on."""
-    done = [c for c in range(job.spec.chunks) if chunk_is_done(chunk_path(job.folder, c),
-                                                                job.digest)]
+    done = [c for c in range(job.spec.chunks)
+            if chunk_is_done(job.folder, c, job.digest, job.store_signals)]
     return (f"{len(done)} of {job.spec.chunks} chunks are kept in {job.folder}; the same command "
             "resumes from them")
 

@@ -34,6 +34,10 @@ QUANTITIES = ("dte_m", "accel_m_s2")
 #: optional columns that set a record's lubricant or roughness
 OPTIONAL_NUMERIC = ("eta0_Pa_s", "sigma_um")
 _NAME = re.compile(r"^[A-Za-z0-9_-]+$")
+#: the largest gear.yaml read (a gear pair's overrides are a few hundred bytes)
+MAX_YAML_BYTES = 64 * 1024
+#: the most the records of one bundle may take in memory together, as float64
+MAX_RECORDS_BYTES = 2 * 1024**3
 
 
 @dataclass(frozen=True)
@@ -64,6 +68,13 @@ def read_bundle(path: str | Path, gear: GearPair | None = None) -> Bundle:
     man = _read_manifest(path)
     overrides = _read_gear(path, gear)
     z1 = dataclasses.replace(gear, **overrides).z1
+    sizes = {rec: _signal_size(path, rec) for rec in man.record}
+    total = sum(sizes.values()) * 8
+    if total > MAX_RECORDS_BYTES:
+        raise _fail(path, None, f"the records hold {sum(sizes.values()):,} samples together, "
+                                f"{total / 1e9:.3g} GB as float64, above the limit of "
+                                f"{MAX_RECORDS_BYTES / 1e9:.3g} GB; split the bundle or "
+                                "shorten its records")
     signals = {}
     for row in man.itertuples(index=False):
         rec = row.record
@@ -133,10 +144,20 @@ def _read_gear(path: Path, gear: GearPair) -> dict:
     f = path / "gear.yaml"
     if not f.is_file():
         return {}
-    try:  # OmegaConf's YAML reads 4.9e4 as a number (PyYAML's YAML 1.1 reads a string)
-        overrides = OmegaConf.to_container(OmegaConf.create(f.read_text() or "{}"))
+    size = f.stat().st_size
+    if size > MAX_YAML_BYTES:
+        raise _fail(path, None, f"gear.yaml holds {size:,} bytes, above the limit of "
+                                f"{MAX_YAML_BYTES:,}; it maps a few gear keys to values")
+    try:
+        text = f.read_text()
+        _plain_yaml(text)  # raises ValueError
+        # OmegaConf's YAML reads 4.9e4 as a number (PyYAML's YAML 1.1 reads a string)
+        overrides = OmegaConf.to_container(OmegaConf.create(text or "{}"))
     except (yaml.YAMLError, UnicodeDecodeError, OmegaConfBaseException) as err:
-        raise _fail(path, None, f"gear.yaml is not readable YAML ({err})") from None
+        text = " ".join(str(err).split())
+        raise _fail(path, None, f"gear.yaml is not readable YAML ({text})") from None
+    except ValueError as err:  # an anchor, alias or tag
+        raise _fail(path, None, str(err)) from None
     if not isinstance(overrides, dict):
         raise _fail(path, None, "gear.yaml must map gear keys (conf/physics/gear) to values")
     known = {f.name for f in dataclasses.fields(GearPair)}
@@ -149,6 +170,55 @@ def _read_gear(path: Path, gear: GearPair) -> dict:
     except ValueError as err:
         raise ValueError(f"bundle {path}: gear.yaml: {err}") from None
     return overrides
+
+
+def _plain_yaml(text: str) -> None:
+    """Refuse YAML anchors, aliases and tags (an alias bomb expands a few lines into billions
+    of nodes; a tag builds objects): scanned token by token, nothing is expanded."""
+    for token in yaml.scan(text, Loader=yaml.SafeLoader):
+        if isinstance(token, (yaml.AnchorToken, yaml.AliasToken, yaml.TagToken)):
+            kind = {yaml.AnchorToken: "anchors (&)", yaml.AliasToken: "aliases (*)",
+                    yaml.TagToken: "tags (!)"}[type(token)]
+            line = token.start_mark.line + 1
+            raise ValueError(f"gear.yaml line {line}: YAML {kind} are not accepted; write "
+                             "each value out")
+
+
+def _npy_header(f: Path) -> tuple[tuple[int, ...], np.dtype, int]:
+    """Shape, dtype and data offset of a .npy file, read from its header alone."""
+    fmt = np.lib.format
+    with f.open("rb") as fp:
+        version = fmt.read_magic(fp)
+        if version == (1, 0):
+            shape, _, dtype = fmt.read_array_header_1_0(fp)
+        elif version == (2, 0):
+            shape, _, dtype = fmt.read_array_header_2_0(fp)
+        else:
+            raise ValueError(f"npy format version {version} is not supported; save it with "
+                             "numpy.save")
+        return shape, dtype, fp.tell()
+
+
+def _signal_size(path: Path, rec: str) -> int:
+    """The samples of record ``rec`` by its header, checked against the file's size before
+    anything is loaded."""
+    f = path / "signals" / f"{rec}.npy"
+    if not f.is_file():
+        raise _fail(path, rec, f"signals/{rec}.npy is missing")
+    try:
+        shape, dtype, offset = _npy_header(f)
+    except (ValueError, OSError, EOFError) as err:
+        raise _fail(path, rec, f"signals/{rec}.npy is not a numpy .npy array of numbers "
+                               f"({err}); save it with numpy.save") from None
+    if dtype.kind not in "iuf":
+        raise _fail(path, rec, f"signals/{rec}.npy holds {dtype} values; numbers are needed")
+    count = int(np.prod(shape, dtype=object))
+    claimed, held = count * dtype.itemsize, f.stat().st_size - offset
+    if claimed != held:
+        raise _fail(path, rec, f"signals/{rec}.npy: its header claims shape {shape} of {dtype} "
+                               f"({claimed:,} bytes) but the file holds {held:,} bytes of data; "
+                               "it is damaged or truncated: save it again with numpy.save")
+    return count
 
 
 def _read_signal(path: Path, rec: str) -> np.ndarray:
@@ -204,10 +274,14 @@ def read_measurements(path: str | Path, base: Scenario) -> tuple[Bundle | pd.Dat
 
 def write_bundle(path: str | Path, manifest: pd.DataFrame, signals: dict[str, np.ndarray],
                  gear: dict | None = None) -> Path:
-    """Write a complete bundle at ``path`` (replacing one there) or nothing."""
+    """Write a complete bundle at ``path`` (replacing one there) or nothing. Its folders and
+    files get the usual permissions (0o755 / 0o644 under the usual umask), not the temporary
+    folder's 0o700: a bundle is shared with the group that reads it."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.", dir=path.parent))
+    umask = os.umask(0)
+    os.umask(umask)
     try:
         (tmp / "signals").mkdir()
         manifest.to_csv(tmp / "manifest.csv", index=False)
@@ -215,6 +289,8 @@ def write_bundle(path: str | Path, manifest: pd.DataFrame, signals: dict[str, np
             np.save(tmp / "signals" / f"{name}.npy", np.asarray(x, float))
         if gear:
             (tmp / "gear.yaml").write_text(yaml.safe_dump(gear))
+        for p in (tmp, *tmp.rglob("*")):
+            os.chmod(p, (0o777 if p.is_dir() else 0o666) & ~umask)
         if path.exists():
             shutil.rmtree(path)
         os.replace(tmp, path)
@@ -222,6 +298,15 @@ def write_bundle(path: str | Path, manifest: pd.DataFrame, signals: dict[str, np
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     return path
+
+
+def check_not_own_reference(data: str | Path, reference: str | Path) -> None:
+    """Refuse a bundle given as its own reference (``reference=`` the same folder as ``data=``,
+    after resolving links and relative paths): a reference is a sister gearbox's bundle."""
+    if Path(data).resolve() == Path(reference).resolve():
+        raise ValueError(f"reference={reference} is the bundle data={data} itself (same folder "
+                         f"{Path(data).resolve()}); a reference is another gearbox's bundle: "
+                         "give that one, or leave out reference=")
 
 
 def read_feature_table(path: str | Path) -> pd.DataFrame:
@@ -243,4 +328,11 @@ def read_feature_table(path: str | Path) -> pd.DataFrame:
             raise ValueError(f"feature table {path}: row {row + 1}, column {col!r}: "
                              f"{df[col].iloc[row]!r} is not a finite number")
         df[col] = values
+    wear = df["wear_mm"].to_numpy(float)
+    out = (wear < 0) | (wear > 10)
+    if out.any():
+        row = int(np.argmax(out))
+        raise ValueError(f"feature table {path}: row {row + 1}, column 'wear_mm' = "
+                         f"{wear[row]:g} lies outside [0, 10] mm, what a wear depth can be; give "
+                         "it in mm")
     return df

@@ -1,0 +1,104 @@
+"""Item 6: an output folder that cannot be written is refused in prepare, in one line, before
+any work (it gave a PermissionError traceback after the work)."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from physics.dataset.generation import plan_dataset, spec_from_config
+from physics.files import check_writable
+from physics.params import Scenario
+
+ROOT = Path(__file__).resolve().parents[2]
+SMALL = {"cases": [3], "wear_states": 3, "replicates": 2, "chunks": 1}
+
+
+def test_unwritable_and_file_outputs_are_refused(tmp_path):
+    with pytest.raises(ValueError, match=r"out_dir = '/proc/gearwear/data': cannot write in "
+                                         r"/proc"):
+        check_writable("/proc/gearwear/data", "out_dir")
+    (tmp_path / "f").write_text("mine")
+    with pytest.raises(ValueError, match=r"is a file, not a folder"):
+        check_writable(tmp_path / "f" / "sub", "out_dir")
+    check_writable(tmp_path / "new" / "deeper", "out_dir")
+    assert not (tmp_path / "new").exists() and (tmp_path / "f").read_text() == "mine"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["f"]
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root writes into a read-only folder")
+def test_a_read_only_folder_is_refused(tmp_path):
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o555)
+    try:
+        with pytest.raises(ValueError, match="cannot write in"):
+            plan_dataset(Scenario(), spec_from_config(SMALL), ro / "data")
+    finally:
+        ro.chmod(0o755)
+
+
+def test_dataset_plan_refuses_an_unwritable_out_dir():
+    with pytest.raises(ValueError, match=r"out_dir = '/proc/x': cannot write"):
+        plan_dataset(Scenario(), spec_from_config(SMALL), "/proc/x")
+
+
+@pytest.mark.parametrize("argv", [
+    ["-m", "physics.dataset", "out_dir=/proc/gearwear", "data.cases=[3]", "data.replicates=2",
+     "data.chunks=1"],
+    ["-m", "surrogate.predict", "ckpt=ANY", "input=ANY", "output=/proc/gearwear/w.csv"],
+])
+def test_acceptance_apps_refuse_an_unwritable_output_in_one_line(tmp_path, argv):
+    if "surrogate.predict" in argv:
+        pytest.importorskip("onnxruntime")
+        # a model and a table are needed to reach the output check: taken from item 4's test
+        sys.path.insert(0, str(Path(__file__).parent))
+        from test_safety_user_tables import table
+
+        table().to_csv(tmp_path / "in.csv", index=False)
+        ckpt = _tiny_model(tmp_path)
+        table().drop(columns="rig").to_csv(tmp_path / "features.csv", index=False)
+        argv = [a.replace("ckpt=ANY", f"ckpt={ckpt}")
+                .replace("input=ANY", f"input={tmp_path / 'features.csv'}") for a in argv]
+    run = subprocess.run([sys.executable, *argv, f"hydra.run.dir={tmp_path / 'h'}"],
+                         capture_output=True, text=True, timeout=300, cwd=ROOT)
+    assert run.returncode == 2, run.stderr[-2000:]
+    lines = [ln for ln in run.stderr.splitlines() if ln.startswith("error:")]
+    assert len(lines) == 1 and "cannot write in /proc" in lines[0]
+    assert "Traceback" not in run.stderr
+
+
+def _tiny_model(tmp: Path) -> Path:
+    from hydra import compose, initialize_config_module
+
+    from surrogate import settings
+    from surrogate.training import train
+
+    settings.register()
+    with initialize_config_module("gearwear_conf.train", version_base="1.3"):
+        cfg = compose("train", overrides=[
+            f"paths.root_dir={tmp}", f"paths.output_dir={tmp / 'run'}",
+            f"data.dataset={tmp / 'unused.parquet'}", f"data.table={tmp / 'in.csv'}",
+            "data.group=rig", "data.val_replicates=1", "data.test_replicates=1",
+            "trainer.enable_progress_bar=false", "trainer.max_epochs=1", "model.members=2",
+            "logger=csv"])
+    train(cfg)
+    return tmp / "run" / "wear_surrogate.pt"
+
+
+def test_check_inside_refuses_a_folder_that_escapes_its_root(tmp_path):
+    from physics.files import check_inside
+
+    check_inside(tmp_path / "logs" / "train" / "runs", tmp_path / "logs", "task_name")
+    with pytest.raises(ValueError, match=r"task_name puts .* outside .*logs; use a plain name"):
+        check_inside(tmp_path / "logs" / ".." / ".." / "x", tmp_path / "logs", "task_name")
+
+
+def test_an_existing_file_as_out_dir_is_refused_at_once(tmp_path):
+    (tmp_path / "out").write_text("mine")
+    with pytest.raises(ValueError, match=r"is a file, not a folder"):
+        check_writable(tmp_path / "out", "out_dir")
