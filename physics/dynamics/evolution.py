@@ -119,7 +119,8 @@ CANDIDATES = (
 )
 
 
-def _fit(model: EvolutionModel, n: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def fit_evolution_model(model: EvolutionModel, n: np.ndarray, h: np.ndarray
+                        ) -> tuple[np.ndarray, np.ndarray]:
     """Best ``(theta, coef)`` of ``model`` for data (n, h) in the fit's scaled units."""
     from scipy.optimize import least_squares
 
@@ -160,7 +161,7 @@ def fit_evolution_models(cycles: np.ndarray, wear: np.ndarray, fit_until: float 
     n, h = cycles / scale_n, wear / scale_h
     rows = []
     for model in CANDIDATES:
-        theta, coef = _fit(model, n[fit], h[fit])
+        theta, coef = fit_evolution_model(model, n[fit], h[fit])
         pred = model.basis(n, theta) @ coef * scale_h
         err = pred[test] - wear[test]
         ss_tot = float(np.sum((wear[test] - wear[test].mean()) ** 2))
