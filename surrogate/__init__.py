@@ -1,5 +1,5 @@
 """Torch/Lightning surrogate mapping vibration features to pinion wear depth, at the root (thesis
-4; issue 6) or the flank's mean (``data.target``).
+4) or the flank's mean (``data.target``).
 
 - :mod:`surrogate.schema`: the feature schema (names, units, scaling, training envelope) a model
   carries and checks its input against;

@@ -1,6 +1,16 @@
-"""The measured-data loop: declared model, effects, bundles, the bundle and feature-table loops,
-report type, synthetic and independent-simulator bundles; the app ``python -m physics.loop``.
-Imports every physics subpackage above it except the apps."""
+"""The measured-data loop: compare the declared model with measured records, find what it
+misses, add that effect, report the error before and after; the app ``python -m physics.loop``.
+
+Modules in the order of the data: ``bundle`` (the measured bundle's format), ``effects`` (the
+library of effects the declared model leaves out), ``config`` (the loop's settings),
+``declared`` (the declared model's nuisance and form parameters), ``worn_states`` (worn models
+per operating point), ``records`` (records, groups, split), ``simulation`` (the model's
+records), ``comparison`` (residuals and errors), ``fit`` (calibration and search),
+``discrepancy`` (the model discrepancy), ``wear_reading`` (the model-based wear estimate),
+``attribution`` (candidates, null test, second round), ``form_error`` (a sister gearbox's
+form reference), ``report``; ``bundle_loop.run_loop`` orchestrates them, ``table_loop`` runs
+the loop on a feature table. Imports every physics subpackage above it except the apps; the
+test rigs that make bundles to try it on are in :mod:`physics.testbeds`."""
 
 from __future__ import annotations
 

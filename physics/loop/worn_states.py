@@ -21,8 +21,8 @@ from physics.params import GearPair, Material, Scenario
 @functools.lru_cache(maxsize=8)
 def mesh_stiffness(gear: GearPair, material: Material) -> MeshStiffness:
     """The potential-energy mesh stiffness of a pair, built once per (frozen, hashable) gear
-    and material and shared by the loop's models of it (it holds no state that a model
-    changes)."""
+    and material and shared by the loop's models and wear simulations of it (it holds no
+    state that they change)."""
     return MeshStiffness(gear, material)
 
 
@@ -32,7 +32,8 @@ def worn_models(scn: Scenario, ms: MeshStiffness, cycles: list[float]
     grid = sorted({0.0, *[float(c) for c in cycles]})
     models, root = {0.0: build_model(scn, ms)}, {0.0: 0.0}
     if grid[-1] > 0:
-        res = simulate_dynamic_wear(scn, grid[-1], snapshots=grid[1:])
+        res = simulate_dynamic_wear(scn, grid[-1], snapshots=grid[1:],
+                                    stiffness=mesh_stiffness(scn.gear, scn.material))
         for c in grid[1:]:
             w1, w2 = res.snapshots[c]
             models[c] = build_model(scn, ms, res.s, w1, w2)
@@ -48,7 +49,8 @@ def wear_curve(scn: Scenario, span: float, points: int, power: float,
     the last grid, its wear and whether it was enough."""
     for _ in range(5):
         life = span * np.linspace(0.0, 1.0, points) ** power
-        root = root_wear_evolution(scn, life)[0]
+        root = root_wear_evolution(scn, life,
+                                   stiffness=mesh_stiffness(scn.gear, scn.material))[0]
         if enough(life, root):
             return life, root, True
         span *= 2

@@ -542,7 +542,7 @@ def test_backlash_growth_leaves_records_without_contact_loss_unchanged(tmp_path,
 
 # --- the loop --------------------------------------------------------------------------------
 
-# one candidate: no second round to stack on it (the loop used to fail there)
+# one candidate: no second round to stack on it (the loop must still report)
 FAST = ["loop.max_nfev=6", "loop.explore=8", "loop.refine=1", "loop.candidates=[transfer_path]",
         "progress=false"]
 
