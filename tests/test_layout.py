@@ -160,3 +160,10 @@ def test_the_product_does_not_import_the_test_rigs():
     users = {m for m, deps in graph().items() if not m.startswith("physics.testbeds")
              for i in deps if i.startswith("physics.testbeds")}
     assert users <= TESTBED_USERS, f"imports of physics.testbeds: {users - TESTBED_USERS}"
+
+
+def test_the_loops_orchestrator_is_imported_only_by_its_app():
+    """The loop's data flow one way: its modules feed ``run_loop`` (physics.loop.bundle_loop),
+    none imports it back."""
+    users = {m for m, deps in graph().items() if "physics.loop.bundle_loop" in deps}
+    assert users <= {"physics.loop.__main__"}, users
