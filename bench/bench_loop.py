@@ -8,10 +8,10 @@ For every effect of the library (acceleration bundles; ``sensor``, which only DT
 on DTE bundles) and for bundles without any effect (of both quantities: what a clean bundle of
 one sensor passes says nothing about the other's), a generator writes a bundle and
 :func:`physics.loop.run_loop` analyses it. ``own`` (default): this project's model,
-:func:`physics.synthetic.make_bundle` (case 3, nuisance parameters off their defaults, the
+:func:`physics.testbeds.synthetic.make_bundle` (case 3, nuisance parameters off their defaults, the
 effect at a seeded realistic size, 30 dB noise, ``--records`` records of 1 s). ``independent``:
 the independent spur-pair simulator of another model form,
-:func:`physics.loop.independent_simulator.make_independent_bundle` (2000 r/min / 300 N m and
+:func:`physics.testbeds.independent_simulator.make_independent_bundle` (2000 r/min / 300 N m and
 1800 r/min / 290 N m, six wear states each: 12 records of 0.5 s, the effect at its typical
 size, 30 dB noise, the gear set's error phases drawn from the seed; the loop is told the
 gearbox's bearing-support mode as estimated from its drawings); its true model is not ours,
@@ -19,20 +19,22 @@ so the floor column is empty there. Prints and writes ``loop_runs.csv`` (one row
 bundle: truth, choice, held-out error before/after and that of the data-generating model
 itself, wear-estimate error and skill and the model that reads it, seconds, the first
 round's best candidate with the null test's figures on it, and the clean floor with whether
-halving is attainable at all, :func:`attainable`) and ``loop_confusion.csv``
-(truth x choice counts), each bundle's ``report.json`` and ``report.md`` under
-``reports/<generator>_<effect>_<seed>_<quantity>/`` (every candidate's figures), the
-rates the issue asks for: right effect named, held-out error at least halved, nothing added on
+halving is attainable at all, :func:`physics.testbeds.loop_bench.attainable`) and
+``loop_confusion.csv`` (truth x choice counts), each bundle's ``report.json`` and ``report.md``
+under ``reports/<generator>_<effect>_<seed>_<quantity>/`` (every candidate's figures), the
+rates the loop is judged by: right effect named, held-out error at least halved, nothing added on
 clean bundles, and ``loop_visibility.csv``: for each bundle the entry family or mesh harmonic
-whose residual most exceeds that of the other clean bundles of its quantity (:func:`visibility`).
+whose residual most exceeds that of the other clean bundles of its quantity
+(:func:`physics.testbeds.loop_bench.visibility`).
 ``--both`` (independent generator): every bundle holds the DTE and the housing acceleration of
 each operating point and wear state, as a rig with shaft encoders and an accelerometer records
 them; what one sensor's records cannot tell apart (a DTE gain from the stiffness level, a
 transfer-path mode from the mesh) the other's may.
 ``--reference``: every bundle is read against a sister gearbox's clean records
-(:mod:`physics.loop.form_reference`): the same generator, another unit of the series
-(:data:`SISTER_UNIT`: other errors within their tolerance, another damping and mounting), at the
-bundle's operating points and quantities; its calibration is made once and timed apart.
+(:mod:`physics.loop.form_error`): the same generator, another unit of the series
+(:data:`physics.testbeds.SISTER_UNIT`: other errors within their tolerance, another damping and
+mounting), at the bundle's operating points and quantities; its calibration is made once and
+timed apart.
 Also times one bundle alone (:func:`solo_timing`); the per-bundle seconds of the table are
 those of ``--jobs`` bundles sharing the machine.
 """
@@ -40,10 +42,7 @@ those of ``--jobs`` bundles sharing the machine.
 from __future__ import annotations
 
 import argparse
-import json
-import math
 import multiprocessing
-import re
 import tempfile
 import time
 from concurrent.futures import ProcessPoolExecutor
@@ -52,68 +51,32 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from physics.loop.bundle import read_bundle
-from physics.loop.bundle_loop import (
+from physics.loop import (
+    EFFECTS,
     FormReference,
     LoopSettings,
-    entry_family,
     model_signals,
+    read_bundle,
     residuals,
     rms,
     run_loop,
+    write_report,
 )
-from physics.loop.effects import EFFECTS
-from physics.loop.form_reference import form_reference
-from physics.loop.independent_simulator import (
+from physics.testbeds import (
+    BOTH,
     EFFECT_NAMES,
-    SISTER_UNIT,
-    IndependentPair,
+    attainable,
+    base_scenario,
+    best_candidate,
+    make_bundle,
     make_independent_bundle,
+    report_label,
+    sister_reference,
+    visibility,
 )
-from physics.loop.report import write_report
-from physics.loop.synthetic import make_bundle
-from physics.params import scenario_from_config
 
 #: effect-to-noise power [dB] below which an effect has not changed the records (round-off)
 ABSENT_DB = -100.0
-
-
-def base_scenario(generator: str = "own"):
-    """Case 3; for the independent simulator's gearbox with its bearing-support mode declared
-    as a user would estimate it from the drawings: ``sqrt(k_b / m_b)`` of the shaft in bending
-    in series with the bearings' stated stiffness and the pinion body's mass (2.5 kHz; the
-    simulator's mode, coupled with the mesh, lies near 2.2 kHz), and the housing's mode on its
-    mounting as the mounts' data sheet and the housing's mass give it (150 Hz)."""
-    if generator == "own":
-        return scenario_from_config({"case": 3})
-    pair = IndependentPair()
-    support = math.sqrt(pair.bearing_stiffness / pair.body_mass) / (2 * math.pi)
-    return scenario_from_config({"case": 3, "dynamics": {
-        "support_hz": support, "mount_hz": pair.mount_frequency_hz}})
-
-
-#: the seed of the sister unit of ``--reference`` (the independent simulator's is
-#: :data:`SISTER_UNIT`; the own generator draws a unit's nuisance from its seed)
-SISTER_SEED = 300
-
-
-#: the quantities of a bundle with both sensors (``--both``), and its label
-BOTH = ("dte_m", "accel_m_s2")
-
-
-def sister_reference(generator: str, quantities: tuple[str, ...], records: int, tmp: Path
-                     ) -> FormReference:
-    """The declared model's form error on the sister unit's clean records of ``quantities``
-    (:data:`SISTER_UNIT`), calibrated as the loop calibrates."""
-    base = base_scenario(generator)
-    folder = tmp / f"sister_{'_'.join(quantities)}"
-    if generator == "independent":
-        path, _ = make_independent_bundle(folder, None, quantities=quantities, seed=SISTER_SEED,
-                                          pair=IndependentPair(**SISTER_UNIT))
-    else:
-        path, _ = make_bundle(folder, base, None, SISTER_SEED, quantity=quantities[0],
-                              records=records)
-    return form_reference(read_bundle(path), base, LoopSettings(seed=SISTER_SEED))
 
 
 def references(generator: str, both: bool, records: int, tmp: Path
@@ -162,85 +125,11 @@ def one(job: tuple[str, str | None, int, int, bool, str, tuple[str, ...], str,
             "seconds": seconds, **best_candidate(r)}
 
 
-def report_label(generator: str, name: str | None, seed: int, quantity: str) -> str:
-    """The folder of one bundle's report under ``<out>/reports``."""
-    return f"{generator}_{name or 'none'}_{seed}_{quantity}"
-
-
-def residual_cells(report: Path) -> dict[tuple[str, str], float]:
-    """A bundle's residual before any effect (measured minus calibrated declared model, the
-    mean over the held-out records, ``residual_before`` of report.json), RMS [dB] per group
-    and cell: each entry family (:func:`physics.loop.bundle_loop.entry_family`: one kind of
-    line at every mesh harmonic) and each mesh harmonic with its sidebands (every kind of line
-    at one harmonic: where a structural mode shows)."""
-    out = {}
-    for group, res in json.loads(report.read_text())["residual_before"].items():
-        cells: dict[str, list[float]] = {}
-        for name, value in res.items():
-            cells.setdefault(f"family {entry_family(name)}", []).append(value)
-            harmonic = re.match(r"line_mesh(\d+)", name)
-            if harmonic:
-                cells.setdefault(f"mesh harmonic {harmonic.group(1)}", []).append(value)
-        out |= {(group, c): float(np.sqrt(np.mean(np.square(v)))) for c, v in cells.items()}
-    return out
-
-
-def visibility(runs: pd.DataFrame, out: Path) -> pd.DataFrame:
-    """Where each bundle's residual stands out from the model-form error: per group and cell
-    (:func:`residual_cells`), its RMS residual less the largest of the other clean bundles of
-    its quantity; the cell with the largest excess and that excess [dB]. The clean bundles'
-    own rows give the chance level (one clean bundle against the others). An effect whose
-    bundle stands out no more than a clean one leaves its residual where the declared model's
-    form error already is: no rule on these residuals can name it and not name the form error
-    of a clean bundle too."""
-    cells = {i: residual_cells(out / "reports" / report_label(
-        r.generator, None if r.truth == "none" else r.truth, r.seed, r.quantity) / "report.json")
-        for i, r in runs.iterrows()}
-    clean = runs.truth == "none"
-    rows = []
-    for i, r in runs.iterrows():
-        others = [cells[j] for j in runs.index[clean & (runs.quantity == r.quantity)] if j != i]
-        if not others:
-            continue
-        ref = pd.DataFrame(others).max()
-        excess = (pd.Series(cells[i]) - ref).dropna()
-        group, cell = excess.idxmax()
-        rows.append({"truth": r.truth, "seed": r.seed, "quantity": r.quantity, "group": group,
-                     "cell": cell, "excess_db": round(float(excess.max()), 1)})
-    return pd.DataFrame(rows)
-
-
-def attainable(runs: pd.DataFrame) -> pd.DataFrame:
-    """Whether halving the held-out error is within reach on each bundle: ``clean_floor``, the
-    smallest held-out error of the clean bundles of its quantity (what the declared model
-    misses on records without any effect: the form error and noise a perfect fit of the effect
-    leaves, at best), and ``halving_attainable``, its error before at least twice that. Where
-    the effect adds less than the form error already is, no fit of it can halve the error."""
-    clean = runs[runs.truth == "none"].groupby("quantity").error_before.min()
-    floor = runs.quantity.map(clean)
-    return runs.assign(clean_floor=floor, halving_attainable=runs.error_before >= 2 * floor)
-
-
-def best_candidate(r) -> dict:
-    """The first round's judged candidate (the adopted one, else the best by held-out error)
-    and the null test's figures on it: why it was or was not adopted (own-entry error
-    before/after, the least sum of squares it explains per held-out record over the groups
-    against what the discrepancy allows, its BIC change, the share of its change the free
-    nuisance cannot mimic); the other candidates that pass as well (``;``-separated)."""
-    best = r["ranking"][r["verdicts"][0]["rank"]]
-    return {"best": best["effect"], "own_before": best["own_entries_error"][0],
-            "own_after": best["own_entries_error"][1],
-            "explained": min(best["explained"].values(), default=0.0),
-            "allowed": r["decision_rule"]["allowed"], "delta_bic": best["delta_bic"],
-            "separable": best["separable"],
-            "also_passing": ";".join(c["effect"] for c in r["verdicts"][0]["also_passing"])}
-
-
 def solo_timing(generator: str, model_form: bool, tmp: Path, both: bool = False,
                 reference: FormReference | None = None) -> None:
     """Time one bundle alone on the machine (the pool's bundles share its cores): the own
     generator's of 20 records of 1 s, the independent one's of 12 records of 0.5 s (the
-    issue's figure; 24 with ``both``), all with a tip relief, the loop only (a reference
+    target's size; 24 with ``both``), all with a tip relief, the loop only (a reference
     calibrated before)."""
     base = base_scenario(generator)
     if generator == "own":
@@ -271,7 +160,7 @@ def main() -> None:
                     help="independent generator: DTE and acceleration records in every bundle")
     ap.add_argument("--reference", action="store_true",
                     help="read every bundle against a sister unit's clean records "
-                         "(physics.loop.form_reference)")
+                         "(physics.loop.form_error)")
     ap.add_argument("--out", default="bench_loop_out",
                     help="folder for the CSV files and the reports")
     args = ap.parse_args()

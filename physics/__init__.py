@@ -6,6 +6,8 @@ Subpackages in the order of the data flow, each importing only from those before
 temperature, contact state, wear; 2.4-2.6), ``dynamics`` (torsional model, wear/dynamics
 coupling; 3.3-4.1), ``signals`` (features, order analysis, measurement chain; 4.2),
 ``estimators`` (empirical inverse; 4.4), ``dataset``, ``reproduce`` and ``loop`` (the apps and
-what they run). ``params`` (validated parameters), ``scope`` (the model's operating scope),
-``command`` and ``files`` serve them all.
+what they run), ``testbeds`` (the synthetic and independent bundle makers for trying the loop
+and the surrogate without measurements; not imported by the product). ``params`` (validated
+parameters), ``scope`` (the model's operating scope), ``command`` and ``files`` serve them all.
+Each subpackage names its public API in ``__all__``.
 """

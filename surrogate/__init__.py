@@ -1,5 +1,5 @@
 """Torch/Lightning surrogate mapping vibration features to pinion wear depth, at the root (thesis
-4; issue 6) or the flank's mean (``data.target``).
+4) or the flank's mean (``data.target``).
 
 - :mod:`surrogate.schema`: the feature schema (names, units, scaling, training envelope) a model
   carries and checks its input against;
@@ -9,3 +9,39 @@
 - :mod:`surrogate.inference`: export, safe loading, CPU prediction with intervals and flags;
 - :mod:`surrogate.predict`, :mod:`surrogate.summarise`, :mod:`surrogate.benchmark`: commands.
 """
+
+from __future__ import annotations
+
+import importlib
+
+#: the public names, by the module that defines each; a name is imported on first use, so that
+#: importing the package (or one of its modules) stays light and free of import cycles
+_SOURCES = {
+    "surrogate.schema": ("FeatureSchema", "baseline_changes"),
+    "surrogate.settings": ("DataConfig", "ModelConfig", "TrainerConfig"),
+    "surrogate.data": (
+        "WearDataModule", "DEFAULT_INPUTS", "BUILD_CHUNKS", "load_dataset", "input_columns",
+        "split_trajectories", "replicates_per_case", "validation_count", "stale_dataset"),
+    "surrogate.model": ("EnsembleMLP", "WearRegressor", "mixture"),
+    "surrogate.training": ("TrainJob", "train", "fit", "kept"),
+    "surrogate.inference": (
+        "Surrogate", "ScaledEnsemble", "export", "conformal_scale", "torch_predict"),
+    "surrogate.predict": ("predict_file", "gearbox_columns"),
+    "surrogate.benchmark": (
+        "Novelty", "DRY_LAW", "INDEPENDENT_WEAR_MM", "fit_estimator", "fit_fleet_estimator",
+        "independent_fleet", "referenced", "seed_summary", "typical_wear"),
+}
+_SOURCE = {name: module for module, names in _SOURCES.items() for name in names}
+__all__ = sorted(_SOURCE)
+
+
+def __getattr__(name: str):
+    if name in _SOURCE:
+        value = getattr(importlib.import_module(_SOURCE[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *__all__})

@@ -23,7 +23,7 @@ Every model and estimator is scored on its own target (root wear unless named). 
   nuisance ranges otherwise): the same dynamics, another wear profile (root about 5 times the
   mean depth where the lubricated law's is 9-23 times) and three times its mean depth;
 - ``independent_simulator``: features of records of the independent spur-pair simulator
-  (:mod:`physics.loop.independent_simulator`, another model form) at 2000/300 and 1800/290;
+  (:mod:`physics.testbeds.independent_simulator`, another model form) at 2000/300 and 1800/290;
 - ``independent_fleet``: the same for all ten gearboxes of a fleet of the independent simulator
   (:func:`independent_fleet`), none of which a physics-trained network saw;
 - ``independent_fleet_heldout``: gearboxes of a fleet of the independent simulator
@@ -72,8 +72,8 @@ from scipy import spatial
 from physics.dataset.generation import NuisanceRanges
 from physics.estimators.empirical_inverse import EmpiricalInverse, wear_errors
 from physics.files import atomic_write, pyplot
-from physics.loop.independent_simulator import IndependentPair, simulate_record, wear_depths
 from physics.signals.features import features
+from physics.testbeds import IndependentPair, simulate_record, wear_depths
 from surrogate import settings
 from surrogate.data import load_dataset
 from surrogate.inference import Surrogate

@@ -1,9 +1,12 @@
 """The house: import graph without cycles, layers in their order, apps imported by nothing,
-physics/ free of torch, and the installed package list in step with the tree."""
+physics/ free of torch, the installed package list in step with the tree, a public surface
+(``__all__``) for every subpackage, no private name imported across subpackages, and the test
+rigs (``physics.testbeds``) kept apart from the product."""
 
 from __future__ import annotations
 
 import ast
+import importlib
 import tomllib
 from graphlib import CycleError, TopologicalSorter
 from pathlib import Path
@@ -13,7 +16,12 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 #: physics layers, each importing only from those before it (README, Architecture)
 LAYERS = ["params", "files", "command", "gear", "scope", "tribology", "dynamics", "signals",
-          "estimators", "dataset", "reproduce", "loop"]
+          "estimators", "dataset", "reproduce", "loop", "testbeds"]
+#: the subpackages that name a public surface in ``__init__.py``
+SUBPACKAGES = sorted({".".join(p.parent.relative_to(ROOT).parts)
+                      for p in (ROOT / "physics").glob("*/__init__.py")} | {"surrogate"})
+#: product code that may import the test rigs (besides bench/ and tests/)
+TESTBED_USERS = {"surrogate.benchmark"}
 
 
 def modules() -> dict[str, Path]:
@@ -88,3 +96,74 @@ def test_installed_packages_are_the_tree():
              for p in (ROOT / "conf").rglob("__init__.py")}
     assert listed == tree
     assert cfg["package-dir"] == {"gearwear_conf": "conf"}
+
+
+def owner(path: Path) -> str:
+    """The subpackage (or top-level module, or ``bench``/``tests``) a source file belongs to."""
+    parts = path.relative_to(ROOT).with_suffix("").parts
+    if parts[0] == "physics" and len(parts) > 2:
+        return ".".join(parts[:2])
+    return ".".join(parts) if parts[0] == "physics" else parts[0]
+
+
+def module_owner(module: str) -> str:
+    """The subpackage (or top-level module) an imported module name belongs to."""
+    parts = module.split(".")
+    return ".".join(parts[:2]) if parts[0] == "physics" and len(parts) > 1 else parts[0]
+
+
+def top_level_names(path: Path) -> set[str]:
+    """Names a module defines or imports at its top level."""
+    names = set()
+    for node in ast.parse(path.read_text()).body:
+        if isinstance(node, ast.FunctionDef | ast.ClassDef):
+            names.add(node.name)
+        elif isinstance(node, ast.Assign | ast.AnnAssign):
+            for target in node.targets if isinstance(node, ast.Assign) else [node.target]:
+                names |= {n.id for n in ast.walk(target) if isinstance(n, ast.Name)}
+        elif isinstance(node, ast.Import | ast.ImportFrom):
+            names |= {(a.asname or a.name).split(".")[0] for a in node.names}
+    return names
+
+
+@pytest.mark.parametrize("package", SUBPACKAGES)
+def test_every_subpackage_names_its_public_surface(package):
+    """``__all__`` lists names its modules define (read without importing them: the package
+    imports its names on first use), none of them a submodule's name (which would hide it)."""
+    mod = importlib.import_module(package)
+    public = getattr(mod, "__all__", None)
+    assert public, f"{package}/__init__.py names no public API (__all__)"
+    folder = ROOT.joinpath(*package.split("."))
+    modules = {p.stem: p for p in folder.glob("*.py") if p.stem not in ("__init__", "__main__")}
+    defined = set().union(*(top_level_names(p) for p in modules.values()))
+    assert not set(public) - defined, f"{package}.__all__ names nothing: {set(public) - defined}"
+    assert not set(public) & set(modules), f"{package}.__all__ hides submodules"
+    assert not [n for n in public if n.startswith("_")]
+
+
+def test_no_private_name_is_imported_across_subpackages():
+    """A ``_name`` stays inside its subpackage: what siblings share is public (in ``__all__``).
+    Tests may reach into the module they test."""
+    wrong = []
+    for path in [*ROOT.glob("physics/**/*.py"), *ROOT.glob("surrogate/*.py"),
+                 *ROOT.glob("bench/*.py"), ROOT / "train.py"]:
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+                private = [a.name for a in node.names
+                           if a.name.startswith("_") and not a.name.startswith("__")]
+                if private and module_owner(node.module) != owner(path):
+                    wrong.append((str(path.relative_to(ROOT)), node.module, private))
+    assert not wrong, f"private names imported from another subpackage: {wrong}"
+
+
+def test_the_product_does_not_import_the_test_rigs():
+    users = {m for m, deps in graph().items() if not m.startswith("physics.testbeds")
+             for i in deps if i.startswith("physics.testbeds")}
+    assert users <= TESTBED_USERS, f"imports of physics.testbeds: {users - TESTBED_USERS}"
+
+
+def test_the_loops_orchestrator_is_imported_only_by_its_app():
+    """The loop's data flow one way: its modules feed ``run_loop`` (physics.loop.bundle_loop),
+    none imports it back."""
+    users = {m for m, deps in graph().items() if "physics.loop.bundle_loop" in deps}
+    assert users <= {"physics.loop.__main__"}, users

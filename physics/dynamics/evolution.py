@@ -75,19 +75,26 @@ def dynamic_mesh_force(scn: Scenario, stiffness: MeshStiffness | None = None) ->
     return force
 
 
-def simulate_dynamic_wear(scn: Scenario, cycles: float, snapshots=()) -> WearResult:
-    """Wear with the dynamic mesh force fed back at every profile update (thesis 3.5)."""
-    ms = MeshStiffness(scn.gear, scn.material)
+def simulate_dynamic_wear(scn: Scenario, cycles: float, snapshots=(),
+                          stiffness: MeshStiffness | None = None) -> WearResult:
+    """Wear with the dynamic mesh force fed back at every profile update (thesis 3.5);
+    ``stiffness``: the pair's mesh stiffness if already built (else built here)."""
+    ms = stiffness or MeshStiffness(scn.gear, scn.material)
     return simulate_wear(scn, cycles, force=dynamic_mesh_force(scn, ms),
                          stiffness=ms.pair_function, snapshots=snapshots)
 
 
-def root_wear_evolution(scn: Scenario, cycles: np.ndarray, dynamic: bool = True
+def root_wear_evolution(scn: Scenario, cycles: np.ndarray, dynamic: bool = True,
+                        stiffness: MeshStiffness | None = None
                         ) -> tuple[np.ndarray, WearResult]:
-    """Pinion root wear depth [m] at each of ``cycles`` (block ends land on them)."""
+    """Pinion root wear depth [m] at each of ``cycles`` (block ends land on them);
+    ``stiffness`` as in :func:`simulate_dynamic_wear` (the quasi-static run builds its own)."""
     cycles = np.asarray(cycles, dtype=float)
-    run = simulate_dynamic_wear if dynamic else simulate_wear
-    res = run(scn, float(cycles.max()), snapshots=list(cycles))
+    if dynamic:
+        res = simulate_dynamic_wear(scn, float(cycles.max()), snapshots=list(cycles),
+                                    stiffness=stiffness)
+    else:
+        res = simulate_wear(scn, float(cycles.max()), snapshots=list(cycles))
     return np.array([res.snapshots[float(c)][0][0] for c in cycles]), res
 
 
@@ -119,7 +126,8 @@ CANDIDATES = (
 )
 
 
-def _fit(model: EvolutionModel, n: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def fit_evolution_model(model: EvolutionModel, n: np.ndarray, h: np.ndarray
+                        ) -> tuple[np.ndarray, np.ndarray]:
     """Best ``(theta, coef)`` of ``model`` for data (n, h) in the fit's scaled units."""
     from scipy.optimize import least_squares
 
@@ -160,7 +168,7 @@ def fit_evolution_models(cycles: np.ndarray, wear: np.ndarray, fit_until: float 
     n, h = cycles / scale_n, wear / scale_h
     rows = []
     for model in CANDIDATES:
-        theta, coef = _fit(model, n[fit], h[fit])
+        theta, coef = fit_evolution_model(model, n[fit], h[fit])
         pred = model.basis(n, theta) @ coef * scale_h
         err = pred[test] - wear[test]
         ss_tot = float(np.sum((wear[test] - wear[test].mean()) ** 2))

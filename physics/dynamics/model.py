@@ -83,7 +83,7 @@ class PairModel:
     centre_runout: float = 0.0  # amplitude of the centre-distance change it causes [m]
     omega2: float = 0.0  # gear speed [rad/s]
     # the mesh stiffness times 1 + gear_modulation cos(omega2 t + gear_modulation_phase): the
-    # run-out's once-per-gear-revolution modulation (physics.loop.bundle_loop.with_modulation)
+    # run-out's once-per-gear-revolution modulation (physics.dynamics.model_form.with_modulation)
     gear_modulation: float = 0.0
     gear_modulation_phase: float = 0.0  # [rad]
     ripple_force: float = 0.0  # amplitude of the torque ripple as mesh force [N]

@@ -1,5 +1,7 @@
 """The torsional model's form uncertainty: the mesh's stiffness level, double/single ratio and
-resonance, and the backlash, as factors on a built :class:`~physics.dynamics.model.PairModel`.
+resonance, and the backlash, as factors on a built :class:`~physics.dynamics.model.PairModel`;
+and the once-per-revolution mesh modulation of the pinion's run-out (:func:`with_modulation`),
+an edit of the model's stiffness tables.
 
 Two reasonable models of one gear pair differ by more than measurement noise: the
 potential-energy stiffness of :mod:`physics.gear.stiffness` against ISO 6336-1 or a finite-element
@@ -7,7 +9,7 @@ model, the gear blanks' inertias against the shafts, hubs and couplings that tur
 factors below are that uncertainty, neutral at 1 (the declared model bit for bit). The
 scenario states them (``dynamics.stiffness_factor`` ... , :class:`physics.params.Dynamics`), so
 the wear evolution and the records of a dataset trajectory see the same model; the measured-data
-loop calibrates them (:mod:`physics.loop.bundle_loop`, ``loop.model_form``).
+loop calibrates them (:mod:`physics.loop.fit`, ``loop.model_form``).
 """
 
 from __future__ import annotations
@@ -70,3 +72,57 @@ def with_model_form(m, v: dict):
         m, k_a=k_a, k_b=k_b, mass=m.mass * s_m, inertias=(j1 * s_m, j2 * s_m),
         damping=m.damping * math.sqrt(stiffer * s_m),
         half_backlash=m.half_backlash if backlash is None else float(backlash) * 1e-6)
+
+
+def revolution_tables(m):
+    """``m`` with its per-cell tables (stiffness, gaps, friction factors) tiled over one pinion
+    revolution, ``z1`` mesh periods: the form a model needs for a feature that differs from
+    tooth to tooth. ``m`` itself if it spans a revolution already."""
+    z1 = round(m.omega_mesh / m.omega1)
+    if m.periods == z1:
+        return m
+    if m.periods != 1:
+        raise ValueError(f"tables of {m.periods} mesh periods: one period or one pinion "
+                         f"revolution ({z1} periods) expected")
+    names = [k for k in ("k_a", "k_b", "g_a", "g_b", "lam_a", "lam_b")
+             if getattr(m, k) is not None]
+    return dataclasses.replace(m, periods=z1, **{k: np.tile(getattr(m, k), z1) for k in names})
+
+
+def with_modulation(m, v: dict):
+    """A once-per-pinion-revolution modulation of the mesh stiffness, ``k_i(t) (1 + mu
+    cos(w1 t + phi))`` (``mesh_modulation`` ``mu``, ``modulation_phase_rad`` ``phi``; ``mu`` = 0
+    or missing: ``m`` itself).
+
+    Radial run-out of the pinion (ISO 1328-2:2020, ``F_r``) and its wobble change the centre
+    distance and the load distribution across the face once per revolution, and with them
+    the length of the contact lines that carry the load, so the mesh stiffness; the declared
+    model holds the run-out only as a line-of-action error (thesis 3.3), which is inert in
+    the torsional model. Lumped models of such errors modulate the mesh once per revolution
+    in amplitude (Inalpolat & Kahraman, J. Sound Vib. 329 (2010) 371; the sidebands ``k f_m
+    +- f_1`` of Randall, J. Mech. Des. 104 (1982) 259). The depth is not predictable from a
+    tolerance class (the face-load factor's variation is unknown), so it is calibrated. The
+    tables are tiled over one pinion revolution (``periods`` = ``z1``; a model that already
+    spans one, with a tooth defect, keeps its tables) and multiplied cell by cell, pairs A
+    and B by the same instantaneous factor.
+
+    A gear that runs out (the loop's effect ``gear_runout``: ``m.centre_runout``, its
+    eccentricity ``e2``) changes the centre distance in the same way once per gear revolution,
+    so it modulates the mesh by the same mechanism: depth ``mu e2 / e1`` (the depth per unit
+    eccentricity of the pinion's, ``e1`` = ``v["eccentricity1_um"]``) in the same phase
+    relation to its own centre-distance change (``k (1 + mu2 cos(w2 t + phi))``, a time term of
+    the kernel: the tables would have to span both revolutions). Without it a gear run-out would
+    make its sidebands by the kinematic error and the moving path of contact alone, while the
+    pinion's, declared, makes them by all three.
+    """
+    mu = float(v.get("mesh_modulation", 0.0))
+    if mu == 0.0:
+        return m
+    phase = float(v.get("modulation_phase_rad", 0.0))
+    rev = revolution_tables(m)
+    n = len(rev.k_a)
+    # table cell c is reached at the pinion angle 2 pi c / n (the tables start at t = 0)
+    factor = 1.0 + mu * np.cos(2 * np.pi * np.arange(n) / n + phase)
+    depth2 = mu * m.centre_runout / (v["eccentricity1_um"] * 1e-6) if m.centre_runout else 0.0
+    return dataclasses.replace(rev, k_a=rev.k_a * factor, k_b=rev.k_b * factor,
+                               gear_modulation=depth2, gear_modulation_phase=phase)

@@ -144,11 +144,11 @@ class EmpiricalInverse:
 
 def _fit_law(cycles: np.ndarray, wear: np.ndarray) -> np.ndarray:
     """The empirical two-exponential law of 4.1 fitted to all the given points."""
-    from physics.dynamics.evolution import CANDIDATES, _fit
+    from physics.dynamics.evolution import CANDIDATES, fit_evolution_model
 
     model = next(m for m in CANDIDATES if m.name == "empirical")
     scale_n, scale_h = 1e7, float(np.max(np.abs(wear))) or 1.0
-    theta, coef = _fit(model, cycles / scale_n, wear / scale_h)
+    theta, coef = fit_evolution_model(model, cycles / scale_n, wear / scale_h)
     return np.array([coef[0] * scale_h, theta[0] / scale_n, coef[1] * scale_h,
                      theta[1] / scale_n])
 

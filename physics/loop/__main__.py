@@ -1,6 +1,6 @@
 """``python -m physics.loop data=BUNDLE|TABLE.csv``: close the loop with measured data (schema
-:class:`LoopConfig`, choices ``conf/loop/loop.yaml``; method in :mod:`physics.loop.bundle_loop`
-and :mod:`physics.loop.table_loop`)."""
+:class:`~physics.loop.config.LoopConfig`, choices ``conf/loop/loop.yaml``; method in
+:mod:`physics.loop.bundle_loop` and :mod:`physics.loop.table_loop`)."""
 
 from __future__ import annotations
 
@@ -15,14 +15,10 @@ from omegaconf import DictConfig, OmegaConf
 
 from physics.command import register_schema, run_command
 from physics.loop.bundle import Bundle, read_measurements
-from physics.loop.bundle_loop import (
-    LoopConfig,
-    LoopSettings,
-    check_reference,
-    group_keys,
-    run_loop,
-)
-from physics.loop.form_reference import form_reference
+from physics.loop.bundle_loop import run_loop
+from physics.loop.config import LoopConfig, LoopSettings
+from physics.loop.form_error import check_reference, form_reference
+from physics.loop.records import group_keys
 from physics.loop.report import write_report
 from physics.loop.table_loop import run_feature_table
 from physics.params import (

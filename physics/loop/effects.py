@@ -14,7 +14,8 @@ gear_runout        dynamics   radial run-out of the gear (eccentricity = half of
                               error at ``f_2`` on the line of action, a centre-distance change
                               that shifts the start of contact once per gear revolution, and the
                               mesh stiffness modulated as the pinion's run-out modulates it (its
-                              calibrated depth per unit eccentricity, ``with_modulation``);
+                              calibrated depth per unit eccentricity,
+                              :func:`physics.dynamics.model_form.with_modulation`);
                               sidebands ``k f_m +- f_2``, strongest at the harmonics near the
                               mesh resonance (the pinion's run-out is declared and calibrated)
 friction           dynamics   Coulomb sliding friction ``mu`` reversing at the pitch point: a
@@ -55,6 +56,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from physics.dynamics.model import PairModel
+from physics.dynamics.model_form import revolution_tables
 from physics.signals.measurement import transfer_path
 
 
@@ -142,21 +144,6 @@ def _tip_relief(m: PairModel, v: dict) -> PairModel:
     on_b = m.k_b > 0
     return dataclasses.replace(m, g_a=m.g_a + relief(s_a),
                                g_b=np.where(on_b, m.g_b + relief(s_b), m.g_b))
-
-
-def revolution_tables(m: PairModel) -> PairModel:
-    """``m`` with its per-cell tables (stiffness, gaps, friction factors) tiled over one pinion
-    revolution, ``z1`` mesh periods: the form a model needs for a feature that differs from
-    tooth to tooth. ``m`` itself if it spans a revolution already."""
-    z1 = round(m.omega_mesh / m.omega1)
-    if m.periods == z1:
-        return m
-    if m.periods != 1:
-        raise ValueError(f"tables of {m.periods} mesh periods: one period or one pinion "
-                         f"revolution ({z1} periods) expected")
-    names = [k for k in ("k_a", "k_b", "g_a", "g_b", "lam_a", "lam_b")
-             if getattr(m, k) is not None]
-    return dataclasses.replace(m, periods=z1, **{k: np.tile(getattr(m, k), z1) for k in names})
 
 
 def _tooth_defect(m: PairModel, v: dict) -> PairModel:

@@ -2,14 +2,14 @@
 
 A feature table carries no signal, so the comparison is in the features themselves: for each
 row (a wear depth) the declared model is run at the worn state of that depth (the dynamically
-coupled wear evolution of the configured operating point, :mod:`physics.evolution`), its housing
-acceleration (or DTE) goes through the measurement chain with white noise, and the Table 13
-features of model and measurement are compared as log ratios.
+coupled wear evolution of the configured operating point, :mod:`physics.dynamics.evolution`),
+its housing acceleration (or DTE) goes through the measurement chain with white noise, and the
+Table 13 features of model and measurement are compared as log ratios.
 
 1. **Calibration**: damping ratio, pinion run-out, profile error, ``m_h`` (acceleration) and the
    noise level, by bounded least squares on the least-worn row: the declared model describes
    the healthy machine, and the change with wear is what the model must then explain.
-2. **Attribution**: every effect of :mod:`physics.effects` that can show in the quantity is
+2. **Attribution**: every effect of :mod:`physics.loop.effects` that can show in the quantity is
    added; effects marked ``grows_with_wear`` (a local defect, backlash growth) take their size
    in proportion to the row's wear depth (zero on the unworn row), the others a constant size.
    Each is judged by leave-one-row-out error (its parameters, ``m_h`` and noise refitted on the
@@ -32,20 +32,12 @@ import pandas as pd
 from scipy import optimize
 
 from physics.dynamics.model import PairModel, simulate
-from physics.gear.stiffness import MeshStiffness
-from physics.loop.bundle_loop import (
-    NUISANCE,
-    LoopSettings,
-    candidates_for,
-    cycles_for_wear,
-    declared_nuisance,
-    from_unit,
-    to_unit,
-    with_nuisance,
-    worn_models,
-)
+from physics.loop.attribution import candidates_for
+from physics.loop.config import LoopSettings
+from physics.loop.declared import NUISANCE, declared_nuisance, from_unit, to_unit, with_nuisance
 from physics.loop.effects import EFFECTS, Effect
 from physics.loop.report import LoopReport, holds, null_test
+from physics.loop.worn_states import cycles_for_wear, mesh_stiffness, worn_models
 from physics.params import Scenario
 from physics.signals.features import FEATURES, features
 from physics.signals.measurement import declared_chain, sensed
@@ -96,7 +88,7 @@ def prepare_table(df: pd.DataFrame, base: Scenario, settings: LoopSettings) -> T
         raise ValueError(f"feature table: {len(df)} rows; the leave-one-out judgement needs "
                          "at least 3 wear states")
     cycles = cycles_for_wear(base, wear)
-    ms = MeshStiffness(base.gear, base.material)
+    ms = mesh_stiffness(base.gear, base.material)
     by_cycles, _ = worn_models(base, ms, list(cycles))
     measured = np.column_stack([df[c].to_numpy(float) * s for c, (_, s) in cols.items()])
     return TableData(quantity, wear, measured, [f for f, _ in cols.values()],

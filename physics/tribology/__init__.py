@@ -1,3 +1,42 @@
 """Tribology of the tooth contact: Hertz contact, lubrication (regressions and the numerical
 mixed-EHL solver), flash temperature, contact state, wear. Imports numpy/scipy and
 physics.params/physics.gear only."""
+
+from __future__ import annotations
+
+import importlib
+
+#: the public names, by the module that defines each; a name is imported on first use, so that
+#: importing the package (or one of its modules) stays light and free of import cycles
+_SOURCES = {
+    "physics.tribology.asperity_table": (
+        "MixedEHLTable", "shipped_table", "lookup", "check_scenario"),
+    "physics.tribology.calibration": ("THESIS_WEAR_COEFF", "calibrate_wear_coeff", "mean_wear"),
+    "physics.tribology.contact_state": ("ContactState", "solve_contact_state"),
+    "physics.tribology.lubrication": (
+        "viscosity", "density", "roelands_exponents", "dimensionless_groups", "min_film_thickness",
+        "asperity_load_ratio_pct"),
+    "physics.tribology.mixed_ehl": (
+        "EHLSolution", "AsperityShareTable", "solve_line_contact", "asperity_share_table",
+        "greenwood_tripp_integral", "asperity_pressure", "pressure_flow_factor", "average_gap",
+        "pan_hamrock_film"),
+    "physics.tribology.thermal": (
+        "flash_temperature", "band_source_max_rise", "peclet", "heat_flux"),
+    "physics.tribology.wear": (
+        "MeshForce", "WearRate", "WearResult", "simulate_wear", "wear_rate", "film_deficiency",
+        "check_shakedown", "quasi_static_force"),
+}
+_SOURCE = {name: module for module, names in _SOURCES.items() for name in names}
+__all__ = sorted(_SOURCE)
+
+
+def __getattr__(name: str):
+    if name in _SOURCE:
+        value = getattr(importlib.import_module(_SOURCE[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *__all__})

@@ -24,7 +24,7 @@ import pandas as pd
 import pytest
 from readme import ROOT, commands, snippets
 
-from physics.loop.bundle_loop import LoopConfig
+from physics.loop import LoopConfig
 from physics.reproduce.thesis import ReproduceConfig
 
 #: run by .ci/run itself, exactly as the README writes them

@@ -1,24 +1,22 @@
-"""The loop bench's reading of where a bundle's residual stands out from the model-form error."""
+"""The loop bench's reading of where a bundle's residual stands out from the model-form error
+(:mod:`physics.testbeds.loop_bench`)."""
 
 from __future__ import annotations
 
-import importlib.util
 import json
 from pathlib import Path
 
 import pandas as pd
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
+from physics.testbeds import loop_bench
+
 GROUP = "2000rpm_300Nm_accel_m_s2_40960Hz"
 
 
 @pytest.fixture(scope="module")
 def bench():
-    spec = importlib.util.spec_from_file_location("bench_loop", ROOT / "bench" / "bench_loop.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return loop_bench
 
 
 def write(out: Path, label: str, residual: dict[str, float]) -> None:

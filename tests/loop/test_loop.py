@@ -17,9 +17,10 @@ from hypothesis import strategies as st
 from scipy import signal
 
 from physics.dynamics.model import build_model, simulate
-from physics.loop.bundle import read_bundle, read_feature_table, write_bundle
-from physics.loop.bundle_loop import (
+from physics.loop import (
     DYNAMIC_NUISANCE,
+    EFFECTS,
+    STABLE_KEYS,
     Candidate,
     LoopSettings,
     calibrate,
@@ -27,10 +28,14 @@ from physics.loop.bundle_loop import (
     completed,
     declared_modes,
     declared_nuisance,
+    effect,
     free_directions,
     identifiable,
     model_signals,
+    parse_columns,
     prepare,
+    read_bundle,
+    read_feature_table,
     residuals,
     residuals_db,
     responses,
@@ -43,11 +48,8 @@ from physics.loop.bundle_loop import (
     train_cost,
     wear_skill,
     with_level,
+    write_bundle,
 )
-from physics.loop.effects import EFFECTS, effect
-from physics.loop.report import STABLE_KEYS
-from physics.loop.synthetic import make_bundle
-from physics.loop.table_loop import parse_columns
 from physics.params import scenario_from_config
 from physics.signals.order_analysis import (
     line_amplitudes,
@@ -58,6 +60,7 @@ from physics.signals.order_analysis import (
     synchronous_average,
     white_noise_std,
 )
+from physics.testbeds import make_bundle
 
 ROOT = Path(__file__).resolve().parents[2]
 FS = 40960.0
@@ -539,7 +542,7 @@ def test_backlash_growth_leaves_records_without_contact_loss_unchanged(tmp_path,
 
 # --- the loop --------------------------------------------------------------------------------
 
-# one candidate: no second round to stack on it (the loop used to fail there)
+# one candidate: no second round to stack on it (the loop must still report)
 FAST = ["loop.max_nfev=6", "loop.explore=8", "loop.refine=1", "loop.candidates=[transfer_path]",
         "progress=false"]
 

@@ -12,12 +12,12 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from physics.dynamics.model import build_model, simulate
-from physics.dynamics.model_form import with_model_form
+from physics.dynamics.model_form import with_model_form, with_modulation
 from physics.gear.stiffness import MeshStiffness
-from physics.loop.bundle import read_bundle, write_bundle
-from physics.loop.bundle_loop import (
+from physics.loop import (
     BOUNDS,
     CHAIN,
+    EFFECTS,
     MODEL_FORM,
     NUISANCE,
     Group,
@@ -30,10 +30,15 @@ from physics.loop.bundle_loop import (
     discrepancy_allowance,
     discrepancy_sd,
     entry_family,
+    first_passing,
+    form_reference,
     group_errors,
+    holds,
     model_signals,
     noise_only,
+    null_test,
     prepare,
+    read_bundle,
     reads_wear,
     residuals,
     residuals_db,
@@ -43,28 +48,27 @@ from physics.loop.bundle_loop import (
     signature_gain,
     split_records,
     stacked,
+    verdict_line,
     wear_check,
     wear_estimates,
     wear_reference,
     wear_score,
     wear_skill,
     with_discrepancy,
-    with_modulation,
     with_nuisance,
     worn_models,
+    write_bundle,
+    write_report,
 )
-from physics.loop.effects import EFFECTS
-from physics.loop.form_reference import form_reference
-from physics.loop.independent_simulator import (
-    SISTER_UNIT,
-    IndependentPair,
-    make_independent_bundle,
-)
-from physics.loop.report import first_passing, holds, null_test, verdict_line, write_report
-from physics.loop.synthetic import make_bundle
 from physics.params import scenario_from_config
 from physics.signals.measurement import add_noise, declared_chain, sensed
 from physics.signals.order_analysis import line_amplitudes
+from physics.testbeds import (
+    SISTER_UNIT,
+    IndependentPair,
+    make_bundle,
+    make_independent_bundle,
+)
 
 OPERATING_POINTS = ((2000.0, 300.0), (1800.0, 290.0))
 FAST = {"seed": 1, "explore": 4, "max_nfev": 3, "refine": 1}
@@ -293,8 +297,8 @@ def test_what_every_record_of_a_group_shares_does_not_move_the_wear_estimate(mix
 
 
 def test_the_wear_reader_is_chosen_on_the_train_records_alone(mixed):
-    # item 6 without the held-out wear: each train record of known wear read against the
-    # others of its group; the held-out records are not among those scored
+    # the wear reading without the held-out wear: each train record of known wear read
+    # against the others of its group; the held-out records are not among those scored
     rec, nuisance = mixed
     wear = rec.bundle.manifest.wear_mm.to_numpy(float)
     loo = wear_score(rec, nuisance, None, {}, on_train=True)

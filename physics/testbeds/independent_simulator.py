@@ -1,7 +1,7 @@
 """An independent spur-pair vibration simulator: measured-like bundles from a second model form.
 
 The measured-data loop is otherwise judged on bundles that the project's own model made
-(:mod:`physics.loop.synthetic`), which hides any mismatch of model *form*. This module is a
+(:mod:`physics.testbeds.synthetic`), which hides any mismatch of model *form*. This module is a
 second simulator, written without the project's dynamics, stiffness, effect or measurement code
 (it uses numpy, scipy, pandas, numba and the bundle writer only), whose records the loop has to
 explain with a model that is not the one that made them. Each choice below is deliberately
@@ -144,7 +144,7 @@ _ALIASES = {"defect": "tooth_defect"}
 EFFECT_NAMES = tuple(_EFFECTS)
 
 #: another unit of the default pair's series (``IndependentPair(**SISTER_UNIT)``), the sister
-#: of the loop's form reference (:mod:`physics.loop.form_reference`): other manufacturing
+#: of the loop's form reference (:mod:`physics.loop.form_error`): other manufacturing
 #: errors (run-out and profile within one ISO 1328 grade), mesh damping, bearing and housing
 #: data of another installation (10-30 % off the defaults; a choice, no standard)
 SISTER_UNIT = {"mesh_damping_ratio": 0.065, "runout1_um": 9.0,

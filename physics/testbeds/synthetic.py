@@ -1,4 +1,5 @@
-"""Measured-like bundles with an undeclared effect, to test the loop (:mod:`physics.loop`).
+"""Measured-like bundles with an undeclared effect from the project's own model, to try the loop
+(:mod:`physics.loop`) without measurements.
 
 :func:`make_bundle` simulates records of the full model with one effect of the library switched
 on at a realistic size (its ``typical`` value times a seeded factor in [0.7, 1.4], within its
@@ -17,17 +18,11 @@ import numpy as np
 import pandas as pd
 
 from physics.dynamics.model import simulate
-from physics.gear.stiffness import MeshStiffness
 from physics.loop.bundle import write_bundle
-from physics.loop.bundle_loop import (
-    declared_modes,
-    declared_nuisance,
-    modes_of,
-    shaft_rates,
-    with_nuisance,
-    worn_models,
-)
+from physics.loop.declared import declared_modes, declared_nuisance, modes_of, with_nuisance
 from physics.loop.effects import effect
+from physics.loop.records import shaft_rates
+from physics.loop.worn_states import mesh_stiffness, worn_models
 from physics.params import Scenario
 from physics.signals.measurement import add_noise, declared_chain, sensed
 
@@ -50,7 +45,7 @@ def make_bundle(path: str | Path, base: Scenario, effect_name: str | None, seed:
         values = dict(option) | {p.name: float(np.clip(p.typical * rng.uniform(0.7, 1.4),
                                                        p.low, p.high)) for p in eff.params}
     cycles = np.linspace(0.0, cycles_max, records)
-    ms = MeshStiffness(base.gear, base.material)
+    ms = mesh_stiffness(base.gear, base.material)
     by_cycles, root = worn_models(base, ms, list(cycles))
     declared = [with_nuisance(by_cycles[float(c)], nuisance, dyn.damping_ratio) for c in cycles]
     models = declared

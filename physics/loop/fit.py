@@ -1,0 +1,257 @@
+"""The calibration and every candidate's fit: the search (:func:`search`) of the model's
+parameters on the train records.
+
+The declared nuisance (:mod:`physics.loop.declared`) is calibrated on the train records of all
+groups at once, before any effect is considered (:func:`calibrate`): the physical parameters
+are one value for the whole bundle, the measurement chain's belong to the acceleration records
+only, and the groups' standardised residuals are concatenated into one cost. A parameter that
+does not move the residuals is held at its declared value and reported as not identifiable
+(:func:`identifiable`). The search: a scrambled Sobol sample around the declared values
+(:func:`explore`), ``m_h`` levelled at each point (:func:`with_level`), the best refined by
+bounded least squares on the standardised signature residuals (:func:`least_squares`). A
+candidate effect is screened at a grid of sizes (:func:`screen_effect`) and then gets the same
+search, its parameters jointly with the identifiable nuisance. Fits weigh the residuals by the
+noise alone (the discrepancy is for the judgement, :mod:`physics.loop.discrepancy`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import optimize
+from scipy.stats import qmc
+
+from physics.loop.comparison import residuals, residuals_db, rms
+from physics.loop.config import LoopSettings
+from physics.loop.declared import (
+    BOUNDS,
+    DYNAMIC_NUISANCE,
+    EXPLORED,
+    MODEL_FORM,
+    NUISANCE,
+    RUNOUT_MODULATION,
+    SCENARIO_DYNAMIC,
+    SUPPORT,
+    completed,
+    declared_modes,
+    declared_nuisance,
+    from_unit,
+    to_unit,
+)
+from physics.loop.effects import Effect
+from physics.loop.records import Records
+from physics.loop.simulation import accel_in, is_accel, model_signals
+
+#: signature entries that do not scale with the record's gain
+SCALE_FREE = ("kurtosis", "crest", "tsa_kurtosis")
+#: RMS change of the standardised train residuals below which a parameter is not identifiable
+MIN_SENSITIVITY = 0.02
+#: half-width of the nuisance's search around its declared values (unit coordinates: a factor
+#: of 2.3 in damping ratio, of 4 in profile error)
+EXPLORE_SPAN = 0.25
+#: the calibration explores this many times ``loop.explore`` points (its model form over the
+#: whole range: the resonance's residual surface has a basin per mesh harmonic it can sit on)
+CALIBRATION_EXPLORE = 4
+#: ... and refines this many of its best points by least squares, keeping the best fit: from
+#: one start the fit ends in the basin of whichever point the exploration ranks first, which the
+#: last digits of the signatures decide (one independent bundle, a rounding change: train
+#: chi-square 43,394 -> 47,860, stiffness factor 0.83 -> 0.64)
+CALIBRATION_STARTS = 3
+#: least-squares evaluations that polish a screened candidate's best grid point
+SCREEN_NFEV = 6
+
+
+def with_level(rec: Records, nuisance: dict, eff: Effect | None, values: dict) -> dict:
+    """``m_h`` moved so that the model's level matches the train acceleration records'.
+
+    ``m_h`` divides every amplitude, so in dB it is an offset of the entries that scale with the
+    record (all but kurtosis and crest factors): one step of their mean residual, weighted by the
+    inverse variance of each entry (:attr:`~physics.loop.records.Group.sd`). The noise does not
+    scale with it, so this is a starting value, not the fit. DTE records do not see ``m_h``.
+    """
+    acc = is_accel(rec, rec.train)
+    if not acc.any():
+        return nuisance
+    res = residuals_db(rec, rec.train, model_signals(rec, rec.train, nuisance, eff, values))
+    num = den = 0.0
+    for r, i, a in zip(res, rec.train, acc, strict=True):
+        if a:
+            g = rec.group(i)
+            w = np.where([n not in SCALE_FREE for n in g.names], g.sd**-2.0, 0.0)
+            num, den = num + float(np.sum(r * w)), den + float(np.sum(w))
+    lo, hi, _ = NUISANCE["housing_mass_kg"]
+    return nuisance | {"housing_mass_kg": float(np.clip(
+        nuisance["housing_mass_kg"] * 10 ** (-num / den / 20), lo, hi))}
+
+
+def train_cost(rec: Records, nuisance: dict, eff: Effect | None, values: dict) -> float:
+    return float(np.sum(residuals(rec, rec.train, model_signals(rec, rec.train, nuisance, eff,
+                                                                values)) ** 2))
+
+
+def identifiable(rec: Records, nuisance: dict, names: tuple[str, ...]) -> list[str]:
+    """Those of ``names`` that change the train residuals: each is moved by a tenth of its
+    (log) range; one that moves the standardised residuals by less than ``MIN_SENSITIVITY``
+    RMS is not identifiable from these records and stays at its declared value."""
+    nuisance = completed(nuisance, rec.scenarios[0])
+    r0 = residuals(rec, rec.train, model_signals(rec, rec.train, nuisance, None, {}))
+    out = []
+    for n in names:
+        u = to_unit(nuisance[n], *BOUNDS[n])
+        moved = nuisance | {n: from_unit(u + (0.1 if u < 0.5 else -0.1), *BOUNDS[n])}
+        r1 = residuals(rec, rec.train, model_signals(rec, rec.train, moved, None, {}))
+        if rms(r1 - r0) >= MIN_SENSITIVITY:
+            out.append(n)
+    return out
+
+
+def split_fitted(fitted: dict) -> tuple[dict, dict]:
+    """(effect values with option, nuisance) of a fitted parameter set."""
+    return ({k: v for k, v in fitted.items() if k not in BOUNDS},
+            {n: fitted[n] for n in BOUNDS if n in fitted})
+
+
+def least_squares(rec: Records, eff: Effect | None, fixed: dict, start: dict,
+                  free: list[tuple[str, float, float, bool]], max_nfev: int) -> tuple[dict,
+                                                                                      float]:
+    """Bounded least squares of the train residuals over ``free`` parameters (name, bounds,
+    log), in unit-scaled coordinates; ``fixed | start`` holds all values, the nuisance's and
+    the effect's. Returns the fitted values and the train chi-square."""
+    def values(u):
+        return fixed | start | {n: from_unit(float(x), lo, hi, lg)
+                                for (n, lo, hi, lg), x in zip(free, u, strict=True)}
+
+    def fun(u):
+        vals, nui = split_fitted(values(u))
+        return residuals(rec, rec.train, model_signals(rec, rec.train, nui, eff, vals))
+
+    if not free:
+        return fixed | start, float(np.sum(fun(np.empty(0)) ** 2))
+    u0 = np.array([np.clip(to_unit(start[n], lo, hi, lg), 0.001, 0.999)
+                   for n, lo, hi, lg in free])
+    sol = optimize.least_squares(fun, u0, bounds=(0, 1), diff_step=0.01, max_nfev=max_nfev)
+    return values(sol.x), float(np.sum(sol.fun**2))
+
+
+@dataclass
+class Candidate:
+    name: str
+    option: dict
+    values: dict  # the effect's parameters (with its option)
+    nuisance: dict  # refitted with the effect
+    train_rss: float
+    n_params: int
+    refined: bool = False
+    heldout: float = math.nan
+    bic: float = 0.0
+    # per group: see :func:`~physics.loop.attribution.signature_gain`
+    explained: dict = field(default_factory=dict)
+    own_before: float = math.nan  # held-out error in its own entries, declared model ...
+    own_after: float = math.nan  # ... and with the candidate
+    separable: float = math.nan  # share of its change no free parameter mimics (separable_share)
+
+
+def screen_effect(rec: Records, eff: Effect, option: dict, nuisance: dict) -> Candidate:
+    """The effect at a grid of sizes over its parameters' ranges (nuisance at the calibration,
+    ``m_h`` levelled at each), the best grid point polished by a short least squares of the
+    effect's parameters and ``m_h`` (a grid step is a seventh of the range, a factor of 1.4
+    even for a sensor gain, too coarse for a signature as sharp as a gain on the DTE mean)."""
+    per = 7 if len(eff.params) == 1 else 5
+    best = None
+    for u in itertools.product(*[np.linspace(0.05, 0.95, per)] * len(eff.params)):
+        vals = option | {p.name: from_unit(x, p.low, p.high, p.log)
+                         for p, x in zip(eff.params, u, strict=True)}
+        nui = with_level(rec, nuisance, eff, vals)
+        cost = train_cost(rec, nui, eff, vals)
+        if best is None or cost < best.train_rss:
+            best = Candidate(eff.name, option, vals, nui, cost, len(eff.params))
+    free = eff.bounds()
+    free += [("housing_mass_kg", *NUISANCE["housing_mass_kg"])] if accel_in(rec) else []
+    fitted, rss = least_squares(rec, eff, option, best.values | best.nuisance, free, SCREEN_NFEV)
+    vals, nui = split_fitted(fitted)
+    return dataclasses.replace(best, values=vals, nuisance=nui, train_rss=rss)
+
+
+def wide(rec: Records, eff: Effect | None) -> bool:
+    """Whether a search is the calibration with the model form over its whole range."""
+    return eff is None and rec.settings.model_form
+
+
+def explore(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[str]
+            ) -> list[Candidate]:
+    """``c`` and a scrambled Sobol sample (``settings.explore`` points) over the effect's whole
+    range and the dynamic nuisance within ``EXPLORE_SPAN`` (unit coordinates) of its declared
+    values (the model form: of ``c``'s; in the calibration with ``loop.model_form``,
+    :func:`wide`, ``CALIBRATION_EXPLORE`` times as many points and the model form over its
+    whole range; the default loop's run-out modulation around its declared value, none),
+    ``m_h`` levelled at each; best first. A missing effect drags the calibration
+    (to the bounds, at worst), and least squares from a single start stays in its basin; the
+    declared values are the prior that does not depend on the fit."""
+    params = eff.params if eff is not None else ()
+    dyn = [n for n in free_nuisance if n in EXPLORED]
+    # the scenario's nuisance (and support mode) around its declared values; the model form
+    # over its whole range in the model-form calibration (its neutral value is no prior worth
+    # holding to), around the calibration with an effect
+    scn = rec.scenarios[0]
+    prior = completed(c.nuisance, scn) | declared_nuisance(scn) | declared_modes(scn)
+    span = {n: (0.5 if wide(rec, eff) and n in MODEL_FORM else EXPLORE_SPAN) for n in dyn}
+    centres = {n: (0.5 if span[n] == 0.5 else to_unit(prior[n], *BOUNDS[n])) for n in dyn}
+    dim = len(params) + len(dyn)
+    n_points = rec.settings.explore * (CALIBRATION_EXPLORE if wide(rec, eff) else 1)
+    pts = (qmc.Sobol(dim, seed=rec.settings.seed).random(n_points) if dim and n_points
+           else np.empty((0, 0)))
+    found = [c]
+    for u in pts:
+        vals = c.option | {p.name: from_unit(float(x), p.low, p.high, p.log)
+                           for p, x in zip(params, u, strict=False)}
+        nui = dict(c.nuisance)
+        for n, x in zip(dyn, u[len(params):], strict=True):
+            nui[n] = from_unit(float(np.clip(centres[n] + span[n] * (2 * x - 1), 0, 1)),
+                               *BOUNDS[n])
+        nui = with_level(rec, nui, eff, vals)
+        found.append(dataclasses.replace(c, values=vals, nuisance=nui,
+                                         train_rss=train_cost(rec, nui, eff, vals)))
+    return sorted(found, key=lambda x: x.train_rss)  # stable: the first of equals leads
+
+
+def search(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[str]
+           ) -> Candidate:
+    """The model's (the declared one's, ``eff`` None, or with an effect) parameters fitted on
+    the train records: the best explored start refined by least squares (the calibration with
+    the model form: the best ``CALIBRATION_STARTS``, the lowest fit kept), the effect's
+    parameters jointly with the identifiable nuisance. The declared model and every refined
+    candidate get the same search."""
+    starts = explore(rec, eff, c, free_nuisance)[:CALIBRATION_STARTS if wide(rec, eff) else 1]
+    free = eff.bounds() if eff is not None else []
+    free += [(n, *BOUNDS[n]) for n in free_nuisance]
+    fits = [least_squares(rec, eff, s.option, s.values | s.nuisance, free,
+                          rec.settings.max_nfev) for s in starts]
+    k = min(range(len(fits)), key=lambda i: fits[i][1])
+    vals, nui = split_fitted(fits[k][0])
+    return dataclasses.replace(starts[k], values=vals, nuisance=nui, train_rss=fits[k][1],
+                               refined=True)
+
+
+def screened(settings: LoopSettings) -> tuple[str, ...]:
+    """The dynamic parameters the calibration may free: the scenario's nuisance and the mesh
+    modulation of the pinion's run-out (:data:`~physics.loop.declared.RUNOUT_MODULATION`); the rest
+    of the model form with ``loop.model_form`` only."""
+    return DYNAMIC_NUISANCE if settings.model_form else (*SCENARIO_DYNAMIC, *RUNOUT_MODULATION)
+
+
+def calibrate(rec: Records, start: dict) -> tuple[dict, list[str]]:
+    """Fit the declared nuisance parameters on the train records (from their declared
+    values); returns the calibrated nuisance and the names of the free ones. ``m_h`` (and a
+    declared support mode) scales and shapes every acceleration amplitude and is always free
+    for acceleration records; a dynamic parameter that is not identifiable stays at its
+    declared value."""
+    start = with_level(rec, completed(start, rec.scenarios[0]), None, {})
+    free = identifiable(rec, start, screened(rec.settings))
+    if accel_in(rec):
+        free += ["housing_mass_kg", *[n for n in SUPPORT if n in start]]
+    c = Candidate("declared", {}, {}, start, train_cost(rec, start, None, {}), 0)
+    return search(rec, None, c, free).nuisance, free

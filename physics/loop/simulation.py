@@ -1,0 +1,91 @@
+"""The model's records: the declared model (with the calibrated nuisance, an effect, the
+run-out's mesh modulation) simulated for records of the bundle, one analysis segment each,
+through the measurement chain with each record's noise level (read off its spectral floor,
+:func:`physics.signals.order_analysis.white_noise_std`; seeded per record)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from physics.dynamics.model import PairModel, simulate
+from physics.dynamics.model_form import with_modulation
+from physics.loop.declared import DYNAMIC_NUISANCE, modes_of, with_nuisance
+from physics.loop.effects import Effect
+from physics.loop.records import Records
+from physics.signals.measurement import declared_chain, sensed
+
+#: simulations kept by :func:`responses`
+CACHE_SIZE = 256
+
+
+def responses(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | None,
+              values: dict, models: list[PairModel] | None = None) -> list[np.ndarray]:
+    """Simulated DTE or mesh force (by each record's quantity) of records ``idx``, one analysis
+    segment each.
+
+    Memoised on the parameters the dynamics see (``rec.cache``): a change of the measurement
+    chain's parameters (``m_h``, a transfer path, a sensor) reuses the simulation.
+    """
+    dynamic = eff is not None and eff.model is not None
+    key = None
+    if models is None:
+        key = (tuple(int(i) for i in idx), tuple(nuisance.get(n) for n in DYNAMIC_NUISANCE),
+               (eff.name, tuple(sorted(values.items()))) if dynamic else None)
+        if key in rec.cache:
+            return rec.cache[key]
+    man = rec.bundle.manifest
+    base_ratio = rec.scenarios[0].dynamics.damping_ratio
+    ms = [with_nuisance(m, nuisance, base_ratio)
+          for m in (models if models is not None else [rec.models[i] for i in idx])]
+    if dynamic:
+        ms = [eff.model(m, values) for m in ms]
+    ms = [with_modulation(m, nuisance) for m in ms]
+    out: list[np.ndarray] = [np.empty(0)] * len(idx)
+    fs_all = man.fs_hz.to_numpy(float)[idx]
+    for fs in np.unique(fs_all):
+        sel = np.flatnonzero(fs_all == fs)
+        dyn = dataclasses.replace(rec.scenarios[0].dynamics, sample_rate_hz=float(fs),
+                                  duration_s=rec.settings.segment_s,
+                                  transient_s=rec.settings.transient_s, phase_bins=16,
+                                  step_factor=rec.settings.step_factor)
+        resp = simulate([ms[k] for k in sel], dyn)
+        for j, k in enumerate(sel):
+            out[k] = sensed(resp, man.quantity.iloc[idx[k]])[j]
+    if key is not None:
+        for x in out:
+            x.flags.writeable = False  # shared by every later call with this key
+        if len(rec.cache) >= CACHE_SIZE:
+            rec.cache.pop(next(iter(rec.cache)))  # the oldest entry
+        rec.cache[key] = out
+    return out
+
+
+def model_signals(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | None,
+                  values: dict, models: list[PairModel] | None = None) -> list[np.ndarray]:
+    """Simulated records (one analysis segment each) of records ``idx`` through the chain:
+    rigid-housing acceleration (or DTE), the effect's measurement stage on the quantities it
+    acts on, the record's noise."""
+    man = rec.bundle.manifest
+    raw = responses(rec, idx, nuisance, eff, values, models)
+    out = []
+    for k, i in enumerate(idx):
+        quantity = man.quantity.iloc[i]
+        fs = float(man.fs_hz.iloc[i])
+        x = declared_chain(raw[k], quantity, nuisance["housing_mass_kg"], fs=fs,
+                           **modes_of(nuisance))
+        if eff is not None and eff.record is not None and quantity in eff.quantities:
+            x = eff.record(x, fs, values)
+        rng = np.random.default_rng([rec.settings.seed, int(i)])  # common numbers per record
+        out.append(x + rec.noise_std[i] * rng.standard_normal(x.size))
+    return out
+
+
+def is_accel(rec: Records, idx: np.ndarray) -> np.ndarray:
+    """Which of records ``idx`` are housing acceleration (the quantity ``m_h`` acts on)."""
+    return rec.bundle.manifest.quantity.to_numpy()[idx] == "accel_m_s2"
+
+
+def accel_in(rec: Records) -> bool:
+    return bool(is_accel(rec, np.arange(len(rec.models))).any())
