@@ -14,7 +14,7 @@ from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, OmegaConf
 
 from physics.command import register_schema, run_command
-from physics.loop.bundle import Bundle, read_measurements
+from physics.loop.bundle import Bundle, check_not_own_reference, read_measurements
 from physics.loop.bundle_loop import run_loop
 from physics.loop.config import LoopConfig, LoopSettings
 from physics.loop.form_error import check_reference, form_reference
@@ -49,6 +49,7 @@ def prepare(cfg: DictConfig) -> LoopJob:
     data, scn = read_measurements(cfg.data, base)
     reference = None
     if cfg.reference is not None:
+        check_not_own_reference(cfg.data, cfg.reference)
         if not isinstance(data, Bundle):
             raise ValueError(f"reference={cfg.reference}: a reference serves bundles of "
                              f"records; data={cfg.data} is a feature table; leave out "

@@ -44,7 +44,7 @@ from physics.dynamics.evolution import (
 )
 from physics.dynamics.model import build_model, simulate
 from physics.estimators.empirical_inverse import EmpiricalInverse, accuracy
-from physics.files import write_csv
+from physics.files import check_writable, write_csv
 from physics.gear.contact import reduced_modulus
 from physics.gear.geometry import MeshGeometry
 from physics.gear.load_sharing import pair_loads
@@ -472,13 +472,27 @@ def _positive(name: str, values: list[float], whole: bool = False) -> None:
                              + (" and whole" if whole else ""))
 
 
+#: the most pinion cycles a table may ask for: 1e11 is 95 years at 2000 r/min
+MAX_CYCLES = 1e11
+
+
+def _cycles(name: str, values: list[float]) -> None:
+    _positive(name, values)
+    for v in values:
+        if v > MAX_CYCLES:
+            raise ValueError(f"{name} = {v!r} pinion cycles is beyond any gear's life (at most "
+                             f"{MAX_CYCLES:g}, 95 years at 2000 r/min); give fewer cycles")
+
+
 def prepare(cfg: DictConfig) -> ReproducePlan:
-    """Check the whole reproduction before any work: every scenario it will run is built and
-    checked against the model's scope (:func:`physics.scope.check_scope`)."""
+    """Check the whole reproduction before any work: the output folder takes files, and every
+    scenario it will run is built and checked against the model's scope
+    (:func:`physics.scope.check_scope`)."""
+    check_writable(cfg.out_dir, "out_dir")
     scn = check_record(scenario_from_config(cfg))
     lubs = {lub.name: lub for lub in map(_lubricant_from_group, cfg.lubricants)}
     st, ev = cfg.stiffness, cfg.evolution
-    _positive("cycles", [cfg.cycles])
+    _cycles("cycles", [cfg.cycles])
     for name in ("speeds_rpm", "torques_Nm", "roughness_um"):
         if not cfg[name]:
             raise ValueError(f"{name} is empty; give at least one value")
@@ -494,9 +508,10 @@ def prepare(cfg: DictConfig) -> ReproducePlan:
     for off in cfg.center_distance_offsets_pct:
         a = scn.gear.standard_center_distance_mm * (1 + off / 100)
         check_scenario(_with(scn, "gear", center_distance_mm=a))
-    _positive("stiffness.wear_cycles", list(st.wear_cycles))
-    _positive("evolution.table9_cycles", list(ev.table9_cycles))
-    _positive("evolution.table14_cycles", list(ev.table14_cycles))
+    _cycles("stiffness.wear_cycles", list(st.wear_cycles))
+    _cycles("evolution.table9_cycles", list(ev.table9_cycles))
+    _cycles("evolution.table14_cycles", list(ev.table14_cycles))
+    _cycles("evolution.cycles_max", [ev.cycles_max])
     if not ev.table9_cycles or not ev.table14_cycles:
         raise ValueError("evolution.table9_cycles and evolution.table14_cycles need at least "
                          "one value each")
