@@ -1,7 +1,7 @@
 """Dynamics benchmark: ``python bench/bench_dynamics.py``.
 
 Prints:
-- the compiled RK4 integrator's simulated seconds per wall second on one core (issue target:
+- the compiled RK4 integrator's simulated seconds per wall second on one core (target:
   >= 10), and on all cores for a batch, beside a ``scipy.integrate.solve_ivp`` (DOP853)
   integration of the same equations in their two-inertia form, measured in the same run;
 - one case's dynamically coupled wear evolution to 1.5e7 cycles (target: <= 20 s) and all five

@@ -1,7 +1,7 @@
 """Mesh-stiffness benchmark: ``python bench/bench_stiffness.py``.
 
 Prints, best of several runs:
-- the 200-position mesh stiffness of a worn pair (issue target: <= 5 ms), healthy and worn;
+- the 200-position mesh stiffness of a worn pair (target: <= 5 ms), healthy and worn;
 - the reference: the same energy integrals by ``scipy.integrate.quad`` point by point (the way
   ROSS's gear element does it), measured in the same run, its agreement and the speed-up;
 - the FE verification of Table 7 at the converged mesh (target: <= 60 s).

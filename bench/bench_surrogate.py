@@ -6,7 +6,7 @@ on 1e6 rows through ``Surrogate.predict_array`` (ONNX Runtime) on two threads an
 single-row latency, the same for the public ``Surrogate.predict`` (with the schema checks);
 as references measured in the same run, the same computation in torch
 (:func:`surrogate.inference.torch_predict`) and the analytic empirical-inverse estimator
-(issue target: >= 1e6 rows/s and >= 100 times the estimator). Timing does not depend on the
+(target: >= 1e6 rows/s and >= 100 times the estimator). Timing does not depend on the
 weights' values, so the network is built with its initial weights; the schema is fitted to
 random rows in the training ranges.
 """

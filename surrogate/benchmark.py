@@ -244,7 +244,7 @@ MODELS = {
 DRY_LAW = {"seed": 2, "replicates": 8, "nuisance": {"boundary_share": [0.99, 0.99]}}
 #: models trained once per seed of ``--seeds``; the others train with seed 0
 SEEDED = ("case3", "case3_mean", "case3_baseline", "all_baseline")
-#: the independent simulator's operating points and wear states (loop issue)
+#: the independent simulator's operating points and wear states
 INDEPENDENT_POINTS = ((2000.0, 300.0), (1800.0, 290.0))
 INDEPENDENT_WEAR_MM = (0.0, 0.003, 0.006, 0.009, 0.012, 0.015)
 #: the fleet of independent gearboxes: these fields of ``IndependentPair`` times U(1 -+ spread)

@@ -20,7 +20,7 @@ class LoopSettings:
     # RK4 step of the model's records (``dynamics.step_factor`` for the loop's simulations
     # only; the wear and the datasets keep theirs): 0.5 moves the signature by 0.12-0.23
     # noise sd RMS against 0.25, a sixteenth of what starting the record 0.1 ms later moves
-    # it (2.6-3.8), and halves the integration (docs/measured-data.md, the loop's time)
+    # it (2.6-3.8), and halves the integration (docs/loop.md, the loop's time)
     step_factor: float = bounded(0.5, 0.0, 2.78, "omega_max dt of the model's records; above "
                                  "2.78 fourth-order Runge-Kutta is unstable")
     test_fraction: float = bounded(0.3, 0.0, 1.0, "share of the records held out")
@@ -57,7 +57,7 @@ class LoopSettings:
     # (:data:`~physics.loop.declared.MODEL_FORM`: the run-out modulation is calibrated either way)
     # with the nuisance; off by default: better on the independent simulator's bundles, but on the
     # project's own it absorbs a friction, leaves a tooth defect's error above half and lets the
-    # greedy second round stack a spurious effect (docs/measured-data.md)
+    # greedy second round stack a spurious effect (docs/loop.md)
     model_form: bool = False
 
     def __post_init__(self):

@@ -66,7 +66,7 @@ def wear_estimates(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | 
     signature tracks the gearbox's weighed most: what the model misses in all of them (its
     form error, an undeclared effect) does not move the estimate. ``leave_one_out``: each
     record read against the others (for train records of known wear). Measured on the
-    independent simulator's bundles: docs/measured-data.md."""
+    independent simulator's bundles: docs/loop.md."""
     train = train_wear_residuals(rec, nuisance, eff, values)
     out = []
     for i in idx:

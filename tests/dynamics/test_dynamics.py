@@ -211,7 +211,7 @@ def test_lengths_scale_out_of_the_equation_of_motion(ms):
     force is the same and the DTE ``g`` times larger, here through contact loss and a worn
     flank. So a DTE gain is not identifiable against an uncertain stiffness level with the
     error amplitudes, from DTE and force (housing acceleration) records alike
-    (docs/measured-data.md, the sensor gain)."""
+    (docs/loop.md, the sensor gain)."""
     j1, j2 = build_model(Scenario(), ms).inertias
     dyn = dataclasses.replace(Dynamics(), inertia1_kg_m2=100 * j1, inertia2_kg_m2=100 * j2,
                               damping_ratio=0.02)

@@ -322,7 +322,7 @@ def test_the_wear_reader_is_chosen_on_the_train_records_alone(mixed):
 
 
 def test_wear_skill_by_hand():
-    # the independent simulator's tooth-defect bundle, model form free (docs/measured-data.md):
+    # the independent simulator's tooth-defect bundle, model form free (docs/loop.md):
     # held-out wear 9, 12, 3, 15 um read as 12.63, 13.56, 4.61, 0 um; train wear mean 6.375 um
     true, est = np.array([9.0, 12.0, 3.0, 15.0]), np.array([12.63, 13.56, 4.61, 0.0])
     train = np.array([0.0, 3.0, 6.0, 15.0, 0.0, 6.0, 9.0, 12.0])
@@ -403,7 +403,7 @@ def test_own_model_bundle_has_little_discrepancy(tmp_path, scn):
 def test_clean_mixed_independent_bundle_gets_no_effect(tmp_path, mixed, scn):
     # torque_ripple is left out: at shaft order 1 it reproduces the independent pinion's
     # run-out modulation, a form error of the declared model that the rule cannot tell from
-    # an effect (docs/measured-data.md, Limits)
+    # an effect (docs/loop.md, Limits)
     rec, _ = mixed
     settings = LoopSettings(**FAST, candidates=("friction", "tip_relief", "transfer_path",
                                                 "sensor"))

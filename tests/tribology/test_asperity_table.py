@@ -158,7 +158,7 @@ def test_asperity_load_rises_with_load(p):
     exceeds 1e-5: below it the interpolation's relative error grows, to tens of per cent at 1e-8 and
     below, and such shares do not matter to the wear; at shares of 1.2-2.1e-6 the interpolated
     load fell by 3.0 % per step from W = 1.5e-4 to 2.1e-4 at U = 1.8e-9, sigma_bar = 2.3e-4,
-    G = 6630, a case hypothesis found on 2026-11-24). The share itself, a fraction of a larger
+    G = 6630, a case hypothesis found). The share itself, a fraction of a larger
     load, need not: it falls with the load below a film ratio of about 1.8 (the Hertz band
     widens as sqrt(w) while the film thins only as w^-0.1) and mostly rises above 2
     (``docs/reproduction.md``, Table 3). At light loads and film ratios near 3 the asperity load
