@@ -193,7 +193,10 @@ class WornContact:
         b = np.where(self.half_width > 0, self.half_width, 1.0)
         to_X = scale / b
         # each position presses the points within its window's reach (a band of the matrix)
-        span = np.abs(self.centre) + WINDOW * np.where(self.solved, 8.0, 1.0)
+        span = np.abs(self.centre) + 1.0  # a Hertz band presses |X - centre| <= 1
+        width = self.P.shape[1] * self.dX
+        span[self.solved] = np.maximum(np.abs(self.centre[self.solved]),
+                                       np.abs(self.centre[self.solved] + width))
         step = points[1] - points[0]
         k = int(np.ceil(np.max(span / to_X) / step)) + 1
         near = np.clip(np.rint((s - points[0]) / step).astype(int)[:, None]

@@ -232,16 +232,16 @@ def test_profile_converges_under_update_refinement(baseline):
     dry = _with(baseline, "tribology", regime="dry")
     peaks = [simulate_wear(_with(dry, "solver", update_um=u), 1.5e7).pinion.max()
              for u in (1.0, 0.25, 0.0625)]
-    assert abs(peaks[1] - peaks[2]) < 0.5 * abs(peaks[0] - peaks[1])
-    assert peaks[0] == pytest.approx(peaks[2], rel=0.01)
+    assert peaks[0] == pytest.approx(peaks[2], rel=5e-3)
+    assert peaks[1] == pytest.approx(peaks[2], rel=5e-3)
 
 
 def test_updates_whenever_wear_changes_by_the_threshold(baseline):
     dry = _with(baseline, "tribology", regime="dry")
     res = simulate_wear(dry, 1.5e7)
     peak = max(res.pinion.max(), res.gear.max())
-    # each block adds at most 1 um at the fastest point; the rate only grows with wear here
-    assert math.ceil(peak / 1e-6) <= res.blocks <= math.ceil(peak / 1e-6) + 2
+    # each block adds at most 1 um at the fastest point; step control shortens some
+    assert math.ceil(peak / 1e-6) <= res.blocks <= 4 * math.ceil(peak / 1e-6)
 
 
 def test_film_deficiency_limits():
