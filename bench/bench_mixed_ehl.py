@@ -5,9 +5,8 @@ Prints:
   m/s, sigma = 0.5 um; target < 1 s, typically 0.1 s) for n = 256, 512 and 1024, with the
   Newton iterations, films, film ratio and asperity share, beside the Masjedi-Khonsari
   regression's share;
-- the build time of a 6 x 6 x 4 asperity-share table (W 1e-4..6e-4, U 1e-11..1e-9,
-  sigma/R 3e-5..3e-4) on one and on two processes (target: a few tens of seconds), and the
-  time of 10 000 look-ups in it.
+- the time of 10 000 look-ups in the shipped solver table that the wear model reads
+  (:mod:`physics.tribology.asperity_table`), and its share at the pitch point.
 """
 
 from __future__ import annotations
@@ -17,8 +16,8 @@ import time
 
 import numpy as np
 
-from physics.tribology import lubrication
-from physics.tribology.mixed_ehl import AsperityShareTable, solve_line_contact
+from physics.tribology import asperity_table, lubrication
+from physics.tribology.mixed_ehl import solve_line_contact
 
 E_PRIME = 206e9 / (1 - 0.3**2)
 LUB = {"eta0": 0.35, "alpha": 2.5e-8, "beta0": 0.03, "rho0": 870.0, "t0": 315.0}
@@ -61,21 +60,16 @@ def main() -> None:
     print(f"  smooth, n = 512: {dt * 1e3:.1f} ms, h_min = {sol.h_min * 1e6:.4f} um, "
           f"h_c = {sol.h_central * 1e6:.4f} um")
 
-    grids = (np.geomspace(1e-4, 6e-4, 6), np.geomspace(1e-11, 1e-9, 6),
-             np.geomspace(3e-5, 3e-4, 4))
-    kw = {"e_prime": E_PRIME, "eta0": LUB["eta0"], "beta0": LUB["beta0"], "rho0": LUB["rho0"],
-          "t0": LUB["t0"]}
-    for workers in (1, 2):
-        t = time.perf_counter()
-        table = AsperityShareTable.build(grids[0], grids[1], float(g["G"]), grids[2],
-                                         workers=workers, **kw)
-        print(f"6 x 6 x 4 table, {workers} process(es): {time.perf_counter() - t:.1f} s")
+    table = asperity_table.shipped_table()
     rng = np.random.default_rng(0)
     W = rng.uniform(1e-4, 6e-4, 10_000)
     U = np.exp(rng.uniform(math.log(1e-11), math.log(1e-9), 10_000))
-    dt, _ = best_of(lambda: table(W, U, float(g["sigma_bar"])))
-    print(f"10 000 look-ups: {dt * 1e3:.2f} ms; at the pitch point the table gives "
-          f"{100 * float(table(g['W'], g['U'], g['sigma_bar'])):.5f} %")
+    sb = np.full_like(W, g["sigma_bar"])
+    dt, _ = best_of(lambda: asperity_table.lookup(W, U, sb, LUB["alpha"], LUB["eta0"], E_PRIME))
+    at = asperity_table.lookup(np.array([g["W"]]), np.array([g["U"]]),
+                               np.array([g["sigma_bar"]]), LUB["alpha"], LUB["eta0"], E_PRIME)
+    print(f"10 000 look-ups in the shipped table ({table.share.size} nodes): {dt * 1e3:.2f} ms; "
+          f"at the pitch point it gives {100 * float(at.share[0]):.5f} %")
 
 
 if __name__ == "__main__":

@@ -58,7 +58,7 @@ from physics.dynamics.evolution import simulate_dynamic_wear
 from physics.dynamics.model import build_model, simulate
 from physics.dynamics.model_form import FACTORS
 from physics.files import atomic_write, check_writable, read_lock, release_lock, sha256_file
-from physics.gear.stiffness import MeshStiffness, SainsotRangeWarning
+from physics.gear.stiffness import MeshStiffness, SainsotRangeWarning, mesh_stiffness
 from physics.params import (
     OutOfScope,
     PhysicsConfig,
@@ -250,7 +250,7 @@ def run_unit(base: Scenario, spec: DatasetSpec, case: int, replicate: int,
     """
     scn = unit_scenario(base, spec, case, replicate)
     cycles = spec.cycles()
-    ms = MeshStiffness(scn.gear, scn.material)
+    ms = mesh_stiffness(scn.gear, scn.material)
     res = simulate_dynamic_wear(scn, float(cycles[-1]), snapshots=list(cycles))
     models, wear = [], []
     for n in cycles:

@@ -23,7 +23,7 @@ from physics.dynamics.model import (
     simulate,
     time_step,
 )
-from physics.gear.stiffness import MeshStiffness
+from physics.gear.stiffness import MeshStiffness, mesh_stiffness
 from physics.params import Dynamics, Scenario
 from physics.tribology.wear import MeshForce, WearResult, simulate_wear
 
@@ -64,7 +64,7 @@ def feedback_dynamics(scn: Scenario, model: PairModel) -> Dynamics:
 def dynamic_mesh_force(scn: Scenario, stiffness: MeshStiffness | None = None) -> MeshForce:
     """A :data:`physics.wear.MeshForce` that runs the dynamic model for the current wear, over
     whole pinion revolutions (:func:`feedback_dynamics`)."""
-    ms = stiffness or MeshStiffness(scn.gear, scn.material)
+    ms = stiffness or mesh_stiffness(scn.gear, scn.material)
 
     def force(s: np.ndarray, wear1: np.ndarray, wear2: np.ndarray) -> np.ndarray:
         worn = np.any(wear1 > 0) or np.any(wear2 > 0)
@@ -79,7 +79,7 @@ def simulate_dynamic_wear(scn: Scenario, cycles: float, snapshots=(),
                           stiffness: MeshStiffness | None = None) -> WearResult:
     """Wear with the dynamic mesh force fed back at every profile update (thesis 3.5);
     ``stiffness``: the pair's mesh stiffness if already built (else built here)."""
-    ms = stiffness or MeshStiffness(scn.gear, scn.material)
+    ms = stiffness or mesh_stiffness(scn.gear, scn.material)
     return simulate_wear(scn, cycles, force=dynamic_mesh_force(scn, ms),
                          stiffness=ms.pair_function, snapshots=snapshots)
 

@@ -51,7 +51,7 @@ from scipy import signal
 
 from physics.dynamics.model_form import FACTORS, with_model_form
 from physics.gear.geometry import MeshGeometry
-from physics.gear.stiffness import MeshStiffness
+from physics.gear.stiffness import MeshStiffness, mesh_stiffness
 from physics.params import Dynamics, Scenario
 from physics.scope import check_scope
 
@@ -133,7 +133,7 @@ def build_model(scn: Scenario, stiffness: MeshStiffness | None = None,
     """The reduced model of ``scn`` for the teeth worn by ``wear1, wear2`` on ``s_grid``, with
     the scenario's form factors (:mod:`physics.dynamics.model_form`; neutral by default)."""
     dyn, g, op = check_scope(scn).dynamics, scn.gear, scn.operating
-    ms = stiffness or MeshStiffness(g, scn.material)
+    ms = stiffness or mesh_stiffness(g, scn.material)
     geom = ms.geometry
     w0 = op.torque_Nm / geom.rb2
     s_a, s_b, on_b = geom.mesh_period(n_phase)

@@ -18,7 +18,7 @@ _SOURCES = {
     "physics.gear.load_sharing": ("PairStiffness", "pair_loads"),
     "physics.gear.stiffness": (
         "MeshStiffness", "SainsotRangeWarning", "ToothCompliances", "sainsot_coefficients",
-        "iso6336_single_pair_stiffness"),
+        "iso6336_single_pair_stiffness", "mesh_stiffness"),
     "physics.gear.tooth": ("ToothForm", "generate_tooth"),
     "physics.gear.tooth_fem": ("FEResult", "fe_pair_stiffness"),
 }

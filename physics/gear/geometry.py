@@ -17,6 +17,7 @@ thinned enough to keep backlash; the model does not check the coast flanks.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -121,6 +122,7 @@ def working_pressure_angle(gear: GearPair) -> float:
     return math.acos(a0 * math.cos(gear.alpha) / gear.center_distance)
 
 
+@functools.lru_cache(maxsize=64)
 def mesh_geometry(gear: GearPair) -> MeshGeometry:
     """Geometry of the pair, validated against the scope of the wear model.
 

@@ -32,6 +32,7 @@ wear, so a whole mesh cycle costs a few interpolations (no quadrature per mesh p
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
 from dataclasses import dataclass
@@ -267,3 +268,11 @@ class MeshStiffness:
         k1 = k(roll)
         k2 = np.where(in_contact, k(ahead), 0.0)
         return {"roll": roll, "k_pair1": k1, "k_pair2": k2, "k_total": k1 + k2}
+
+
+@functools.lru_cache(maxsize=16)
+def mesh_stiffness(gear: GearPair, material: Material) -> MeshStiffness:
+    """The potential-energy mesh stiffness of a pair, built once per (frozen, hashable) gear
+    pair and material and shared by every wear run, dynamic model and table of it (it holds no
+    state that they change)."""
+    return MeshStiffness(gear, material)

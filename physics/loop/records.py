@@ -16,10 +16,10 @@ import numpy as np
 import pandas as pd
 
 from physics.dynamics.model import PairModel
+from physics.gear.stiffness import mesh_stiffness
 from physics.loop.bundle import Bundle, record_scenario
 from physics.loop.config import LoopSettings
 from physics.loop.worn_states import (
-    mesh_stiffness,
     records_cycles,
     wear_grid_cycles,
     worn_models,

@@ -32,12 +32,13 @@ import pandas as pd
 from scipy import optimize
 
 from physics.dynamics.model import PairModel, simulate
+from physics.gear.stiffness import mesh_stiffness
 from physics.loop.attribution import candidates_for
 from physics.loop.config import LoopSettings
 from physics.loop.declared import NUISANCE, declared_nuisance, from_unit, to_unit, with_nuisance
 from physics.loop.effects import EFFECTS, Effect
 from physics.loop.report import LoopReport, holds, null_test
-from physics.loop.worn_states import cycles_for_wear, mesh_stiffness, worn_models
+from physics.loop.worn_states import cycles_for_wear, worn_models
 from physics.params import Scenario
 from physics.signals.features import FEATURES, features
 from physics.signals.measurement import declared_chain, sensed

@@ -6,7 +6,6 @@ and the grid of wear states the model-based wear estimate reads a record by
 
 from __future__ import annotations
 
-import functools
 from collections.abc import Callable
 
 import numpy as np
@@ -14,16 +13,8 @@ import pandas as pd
 
 from physics.dynamics.evolution import root_wear_evolution, simulate_dynamic_wear
 from physics.dynamics.model import PairModel, build_model
-from physics.gear.stiffness import MeshStiffness
-from physics.params import GearPair, Material, Scenario
-
-
-@functools.lru_cache(maxsize=8)
-def mesh_stiffness(gear: GearPair, material: Material) -> MeshStiffness:
-    """The potential-energy mesh stiffness of a pair, built once per (frozen, hashable) gear
-    and material and shared by the loop's models and wear simulations of it (it holds no
-    state that they change)."""
-    return MeshStiffness(gear, material)
+from physics.gear.stiffness import MeshStiffness, mesh_stiffness
+from physics.params import Scenario
 
 
 def worn_models(scn: Scenario, ms: MeshStiffness, cycles: list[float]

@@ -48,7 +48,7 @@ from physics.files import check_writable, write_csv
 from physics.gear.contact import reduced_modulus
 from physics.gear.geometry import MeshGeometry
 from physics.gear.load_sharing import pair_loads
-from physics.gear.stiffness import MeshStiffness
+from physics.gear.stiffness import MeshStiffness, mesh_stiffness
 from physics.gear.tooth_fem import FEResult, fe_pair_stiffness
 from physics.params import (
     Lubricant,
@@ -168,7 +168,7 @@ def table07_positions(geom: MeshGeometry) -> dict[str, np.ndarray]:
 
 
 def _fem_at_positions(scn: Scenario, plane: str, refine: float) -> tuple[dict, FEResult]:
-    ms = MeshStiffness(scn.gear, scn.material)
+    ms = mesh_stiffness(scn.gear, scn.material)
     positions = table07_positions(ms.geometry)
     s = np.concatenate(list(positions.values()))
     force = quasi_static_force(scn, ms.geometry)
@@ -210,7 +210,7 @@ def table_fem_convergence(scn: Scenario, refines: list[float]) -> pd.DataFrame:
 def table_wear_stiffness(scn: Scenario, cycles: list[float], n_positions: int
                          ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Table 8 and ``tvms.csv``: worn profiles from the wear model and their mesh stiffness."""
-    ms = MeshStiffness(scn.gear, scn.material)
+    ms = mesh_stiffness(scn.gear, scn.material)
     res = simulate_wear(scn, max(cycles), snapshots=cycles)
     single = table07_positions(ms.geometry)["single-tooth zone"]
     rows, curves = [], []
@@ -231,7 +231,7 @@ def table_wear_stiffness(scn: Scenario, cycles: list[float], n_positions: int
 
 def dynamic_states(scn: Scenario, cycles: list[float]) -> tuple[WearResult, dict]:
     """Dynamically coupled wear of ``scn`` and the response of each listed wear state."""
-    ms = MeshStiffness(scn.gear, scn.material)
+    ms = mesh_stiffness(scn.gear, scn.material)
     res = simulate_dynamic_wear(scn, max(cycles), snapshots=cycles)
     states = {}
     for n in cycles:

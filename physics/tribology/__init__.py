@@ -11,20 +11,24 @@ import importlib
 _SOURCES = {
     "physics.tribology.asperity_table": (
         "MixedEHLTable", "shipped_table", "lookup", "check_scenario"),
-    "physics.tribology.calibration": ("THESIS_WEAR_COEFF", "calibrate_wear_coeff", "mean_wear"),
+    "physics.tribology.calibration": (
+        "THESIS_WEAR_COEFF", "calibrate_wear_coeff", "root_wear", "total_load_coefficient"),
     "physics.tribology.contact_state": ("ContactState", "solve_contact_state"),
     "physics.tribology.lubrication": (
         "viscosity", "density", "roelands_exponents", "dimensionless_groups", "min_film_thickness",
         "asperity_load_ratio_pct"),
     "physics.tribology.mixed_ehl": (
-        "EHLSolution", "AsperityShareTable", "solve_line_contact", "asperity_share_table",
+        "EHLSolution", "solve_line_contact", "log_gt_integral",
         "greenwood_tripp_integral", "asperity_pressure", "pressure_flow_factor", "average_gap",
         "pan_hamrock_film"),
     "physics.tribology.thermal": (
         "flash_temperature", "band_source_max_rise", "peclet", "heat_flux"),
     "physics.tribology.wear": (
         "MeshForce", "WearRate", "WearResult", "simulate_wear", "wear_rate", "film_deficiency",
-        "check_shakedown", "quasi_static_force"),
+        "wear_coefficient", "flank_grid", "check_shakedown", "quasi_static_force"),
+    "physics.tribology.worn_contact": (
+        "WornContact", "solve_worn_contact", "solve_gap_contact", "hertz_cumulative",
+        "worn_gap", "flank_profile", "band_reach"),
 }
 _SOURCE = {name: module for module, names in _SOURCES.items() for name in names}
 __all__ = sorted(_SOURCE)

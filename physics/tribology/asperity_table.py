@@ -4,9 +4,8 @@ The wear loop needs the contact state at every grid point of the path of contact
 default) at every profile update; one solve of the numerical line-contact problem
 (:func:`physics.tribology.mixed_ehl.solve_line_contact`) takes about 0.1 s. The solver's results
 are therefore computed once on a grid of the dimensionless groups, shipped with the package as
-``mixed_ehl_table.npz`` beside this module, and interpolated (:class:`MixedEHLTable`; the method
-of :class:`physics.tribology.mixed_ehl.AsperityShareTable`, extended to the material and
-viscosity axes and to the film fields).
+``mixed_ehl_table.npz`` beside this module, and interpolated (:class:`MixedEHLTable`, over the
+load, speed, roughness, material and viscosity axes, for the share and the film fields).
 
 Axes
 ----
@@ -38,7 +37,7 @@ softplus of width :data:`SOFT_WIDTH` that equals the ratio above 0.3 and stays p
 where the nominal film is not), ``ln r`` with ``share = r F_{5/2}(lambda_m)``, and
 ``ln(peak)``. ``F_{5/2}`` is Greenwood & Tripp's integral and ``lambda_m = (h_min + h_c) /
 (2 sigma)``: it carries the orders of magnitude by which the share falls between nodes, so
-that ``r`` varies slowly (with ``h_min`` alone, as in ``AsperityShareTable``, or ``h_c`` alone
+that ``r`` varies slowly (with ``h_min`` alone, or ``h_c`` alone
 the interpolation error of the share is twice as large: the asperity load comes from both the
 Hertz plateau and the outlet constriction). Where ``lambda_m`` exceeds :data:`LAMBDA_R_MAX`
 the share is below 1e-30 and ``r`` is held at its value on the thinner side of the U axis.

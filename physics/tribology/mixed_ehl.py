@@ -146,15 +146,12 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
 
 import numpy as np
-from joblib import Parallel, delayed
 from scipy import fft as sfft
 from scipy import linalg, special
-from scipy.interpolate import RegularGridInterpolator
 from threadpoolctl import threadpool_limits
 
 from physics.tribology import lubrication
@@ -762,75 +759,8 @@ def _to_solution(out: dict, pb: _Problem, b: float, p_hertz: float, R: float, si
 
 
 # ------------------------------------------------------------------------------------------------
-# Asperity-share tables for the wear loop
+# The Greenwood-Tripp integral in log form, for the wear loop's table
 # ------------------------------------------------------------------------------------------------
-_TABLE_R = 0.01  # m: any radius; the dimensionless problem depends on W, U, G, sigma_bar only
-
-
-def _grid(name: str, values: Sequence[float]) -> np.ndarray:
-    g = np.asarray(values, dtype=float)
-    if g.ndim != 1 or g.size < 2 or not np.all(np.isfinite(g)) or np.any(g <= 0):
-        raise ValueError(f"{name} = {values!r} must be a 1-D sequence of at least 2 positive, "
-                         "finite values (a log-spaced grid, e.g. np.geomspace(lo, hi, 6))")
-    if np.any(np.diff(g) <= 0):
-        raise ValueError(f"{name} = {values!r} must be strictly increasing; sort it")
-    return g
-
-
-def _share_row(args: tuple) -> list[tuple[float, float]]:
-    """(asperity share, h_min/sigma) along the U axis for one (W, sigma_bar): one task."""
-    W, U_grid, G, sigma_bar, phys, kw = args
-    e_prime, eta0 = phys["e_prime"], phys["eta0"]
-    out = []
-    for U in U_grid:
-        sol = solve_line_contact(
-            W * e_prime * _TABLE_R, _TABLE_R, U * e_prime * _TABLE_R / eta0, e_prime, eta0,
-            G / e_prime, phys["beta0"], phys["rho0"], phys["t0"], sigma_bar * _TABLE_R,
-            temperature=phys["temperature"], **kw)
-        out.append((sol.asperity_load_share, sol.film_ratio_min) if sol.converged
-                   else (math.nan, math.nan))
-    return out
-
-
-def asperity_share_table(
-    W_grid: Sequence[float], U_grid: Sequence[float], G: float,
-    sigma_bar_grid: Sequence[float], *, e_prime: float, eta0: float, beta0: float, rho0: float,
-    t0: float, temperature: float | None = None, n: int = DEFAULT_N, workers: int = 1,
-    return_film_ratio: bool = False, **solver_kw,
-) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
-    """Asperity load share (0-1) on the grid ``W x U x sigma_bar``, shape (nW, nU, nS).
-
-    ``W = w/(E'R)``, ``U = eta0 u_e/(E'R)``, ``G = alpha E'`` and ``sigma_bar = sigma/R`` fix
-    the dimensionless problem together with the lubricant's absolute data (Roelands and
-    Dowson-Higginson are not functions of G alone), which are keyword arguments: ``e_prime``
-    [Pa], ``eta0`` [Pa s], ``beta0`` [1/K], ``rho0`` [kg/m^3], ``t0`` and ``temperature`` [K].
-    Points whose solve does not converge are NaN (with a RuntimeWarning). ``workers > 1`` runs
-    rows of the table in that many (spawned) processes; call it under
-    ``if __name__ == "__main__":`` in scripts. ``return_film_ratio`` also returns the film ratio
-    ``lambda = h_min/sigma`` on the grid. Further keywords go to :func:`solve_line_contact`
-    (e.g. ``flow_factors``, ``eta_beta_sigma``).
-    """
-    Wg, Ug, Sg = (_grid("W_grid", W_grid), _grid("U_grid", U_grid),
-                  _grid("sigma_bar_grid", sigma_bar_grid))
-    G = _check("G", G, 0.0, 1e5, "G = alpha E' (about 5000 for mineral oil on steel)")
-    if not isinstance(workers, int) or isinstance(workers, bool) or workers < 1:
-        raise ValueError(f"workers = {workers!r} must be a whole number >= 1")
-    phys = {"e_prime": e_prime, "eta0": eta0, "beta0": beta0, "rho0": rho0, "t0": t0,
-            "temperature": temperature}
-    kw = dict(solver_kw, n=n)
-    tasks = [(W, tuple(Ug), G, sb, phys, kw) for W in Wg for sb in Sg]
-    # joblib's loky workers keep their BLAS to their share of the cores; n_jobs 1 runs here
-    rows = Parallel(n_jobs=workers)(delayed(_share_row)(t) for t in tasks)
-    both = np.array(rows, dtype=float).reshape(Wg.size, Sg.size, Ug.size, 2).transpose(0, 2, 1, 3)
-    shares, ratio = both[..., 0], both[..., 1]
-    if np.any(np.isnan(shares)):
-        import warnings
-
-        warnings.warn(f"{int(np.isnan(shares).sum())} of {shares.size} mixed-EHL solves did not "
-                      "converge; their shares are NaN", RuntimeWarning, stacklevel=2)
-    return (shares, ratio) if return_film_ratio else shares
-
-
 _LAM_T = np.linspace(-5.0, 30.0, 7001)  # film ratios for the table interpolation
 
 
@@ -849,129 +779,3 @@ def log_gt_integral(t: np.ndarray, order: float = 2.5) -> np.ndarray:
     ``F`` below 1e-5); ``t`` outside is held at the ends (``ln F = -745`` at the top, where
     ``F`` underflows)."""
     return np.interp(np.asarray(t, dtype=float), _GT_T, _gt_log_table(order))
-
-
-class AsperityShareTable:
-    """Fast look-up of the asperity load share (0-1) by interpolation in log space.
-
-    Plain form (``film_ratio`` None): ``ln(share)`` is interpolated multilinearly over
-    ``(ln W, ln U, ln sigma_bar)`` (:class:`scipy.interpolate.RegularGridInterpolator`).
-
-    Film-ratio form (``film_ratio`` = ``lambda = h_min/sigma`` on the grid, what :meth:`build`
-    uses): the share falls by orders of magnitude between grid nodes where the film ratio
-    passes 1-3, which log-linear interpolation of the share follows poorly on a coarse grid.
-    The share is instead written ``share = r F_{5/2}(lambda)`` (Greenwood-Tripp, module
-    docstring) and two smooth fields are interpolated: ``ln(h_T/sigma)`` at ``h_min`` (nearly
-    linear in ``ln U`` and ``ln sigma_bar``, since ``h_min ~ U^0.7``; the average gap ``h_T``
-    stays positive when ``h_min`` is not) and ``ln r`` (which varies slowly: about as
-    ``W^-1/2``, falling as the asperity load concentrates in the outlet constriction at larger
-    lambda). Both forms reproduce the grid values exactly.
-
-    Shares below ``floor`` are held at ``floor``. ``out_of_range``: ``"clip"`` (default) holds
-    the value at the grid edge, ``"extrapolate"`` extrapolates linearly in log space, ``"raise"``
-    raises ValueError. A table is valid for one ``G``, lubricant and temperature, those it was
-    built with (``info``). Call with arrays: ``table(W, U, sigma_bar)`` broadcasts its arguments
-    and evaluates thousands of points in about a millisecond.
-    """
-
-    def __init__(self, W_grid: Sequence[float], U_grid: Sequence[float],
-                 sigma_bar_grid: Sequence[float], shares: np.ndarray, *,
-                 film_ratio: np.ndarray | None = None, floor: float = 1e-12,
-                 out_of_range: str = "clip", info: dict | None = None) -> None:
-        self.W_grid = _grid("W_grid", W_grid)
-        self.U_grid = _grid("U_grid", U_grid)
-        self.sigma_bar_grid = _grid("sigma_bar_grid", sigma_bar_grid)
-        shares = np.asarray(shares, dtype=float)
-        shape = (self.W_grid.size, self.U_grid.size, self.sigma_bar_grid.size)
-        if shares.shape != shape:
-            raise ValueError(f"shares has shape {shares.shape}; the grids need {shape} "
-                             "(W, U, sigma_bar)")
-        if not np.all(np.isfinite(shares)) or np.any(shares < 0) or np.any(shares > 1):
-            raise ValueError("shares must be finite fractions in [0, 1]; rebuild the NaN points "
-                             "(non-converged solves) with a finer n or a narrower grid")
-        if out_of_range not in ("clip", "extrapolate", "raise"):
-            raise ValueError(f"out_of_range = {out_of_range!r} must be 'clip', 'extrapolate' or "
-                             "'raise'")
-        _check("floor", floor, 0.0, 1.0, "the smallest share resolved, e.g. 1e-12")
-        self.shares = shares
-        self.floor = float(floor)
-        self.out_of_range = out_of_range
-        self.info = dict(info or {})
-        self._axes = tuple(np.log(g) for g in (self.W_grid, self.U_grid, self.sigma_bar_grid))
-        if film_ratio is None:
-            self.film_ratio = None
-            fields = np.log(np.maximum(shares, self.floor))[..., None]
-        else:
-            lam = np.asarray(film_ratio, dtype=float)
-            if lam.shape != shape or not np.all(np.isfinite(lam)):
-                raise ValueError(f"film_ratio must be finite with shape {shape}")
-            self.film_ratio = lam
-            lam = np.clip(lam, _LAM_T[0], _LAM_T[-1])
-            log_gap = np.interp(lam, _LAM_T, _log_gap_table())
-            log_r = (np.log(np.maximum(shares, 1e-300))
-                     - np.interp(lam, _GT_T, _gt_log_table(2.5)))
-            fields = np.stack([log_gap, log_r], axis=-1)
-        self._interp = RegularGridInterpolator(self._axes, fields, method="linear",
-                                               bounds_error=False, fill_value=None)
-
-    @classmethod
-    def build(cls, W_grid: Sequence[float], U_grid: Sequence[float], G: float,
-              sigma_bar_grid: Sequence[float], *, e_prime: float, eta0: float, beta0: float,
-              rho0: float, t0: float, temperature: float | None = None, n: int = DEFAULT_N,
-              workers: int = 1, out_of_range: str = "clip", **solver_kw) -> AsperityShareTable:
-        """Solve :func:`asperity_share_table` on the grid and wrap it (film-ratio form)."""
-        shares, ratio = asperity_share_table(
-            W_grid, U_grid, G, sigma_bar_grid, e_prime=e_prime, eta0=eta0, beta0=beta0,
-            rho0=rho0, t0=t0, temperature=temperature, n=n, workers=workers,
-            return_film_ratio=True, **solver_kw)
-        info = {"G": G, "e_prime": e_prime, "eta0": eta0, "beta0": beta0, "rho0": rho0,
-                "t0": t0, "temperature": t0 if temperature is None else temperature, "n": n}
-        return cls(W_grid, U_grid, sigma_bar_grid, shares, film_ratio=ratio,
-                   out_of_range=out_of_range, info=info)
-
-    def __call__(self, W: np.ndarray, U: np.ndarray, sigma_bar: np.ndarray) -> np.ndarray:
-        W, U, sb = np.broadcast_arrays(np.asarray(W, dtype=float), np.asarray(U, dtype=float),
-                                       np.asarray(sigma_bar, dtype=float))
-        if np.any(W <= 0) or np.any(U <= 0) or np.any(sb <= 0):
-            raise ValueError("W, U and sigma_bar must be positive")
-        pts = np.stack([np.log(W), np.log(U), np.log(sb)], axis=-1).reshape(-1, 3)
-        lo = np.array([a[0] for a in self._axes])
-        hi = np.array([a[-1] for a in self._axes])
-        if self.out_of_range == "clip":
-            pts = np.clip(pts, lo, hi)
-        elif self.out_of_range == "raise":
-            bad = np.any((pts < lo - 1e-12) | (pts > hi + 1e-12), axis=-1)
-            if np.any(bad):
-                raise ValueError(f"{int(bad.sum())} point(s) lie outside the table "
-                                 f"(W {self.W_grid[0]:.3g}-{self.W_grid[-1]:.3g}, U "
-                                 f"{self.U_grid[0]:.3g}-{self.U_grid[-1]:.3g}, sigma_bar "
-                                 f"{self.sigma_bar_grid[0]:.3g}-{self.sigma_bar_grid[-1]:.3g}); "
-                                 "widen the grid or use out_of_range='clip'")
-        f = self._interp(pts)
-        if self.film_ratio is None:
-            log_share = f[:, 0]
-        else:
-            lg = _log_gap_table()
-            lam = np.interp(f[:, 0], lg, _LAM_T)
-            log_share = f[:, 1] + np.interp(lam, _GT_T, _gt_log_table(2.5))
-        out = np.exp(np.maximum(log_share, math.log(self.floor)))
-        return np.minimum(out, 1.0).reshape(W.shape)
-
-    def save(self, path: str) -> None:
-        """Write the grids, shares, film ratios and build info to an ``.npz`` file."""
-        extra = {} if self.film_ratio is None else {"film_ratio": self.film_ratio}
-        np.savez(path, W_grid=self.W_grid, U_grid=self.U_grid,
-                 sigma_bar_grid=self.sigma_bar_grid, shares=self.shares, floor=self.floor,
-                 info_keys=np.array(list(self.info), dtype=str),
-                 info_values=np.array([float(v) for v in self.info.values()], dtype=float),
-                 **extra)
-
-    @classmethod
-    def load(cls, path: str, out_of_range: str = "clip") -> AsperityShareTable:
-        """Read a table written by :meth:`save`."""
-        with np.load(path) as d:
-            info = dict(zip(d["info_keys"].tolist(), d["info_values"].tolist(), strict=True))
-            ratio = d["film_ratio"] if "film_ratio" in d.files else None
-            return cls(d["W_grid"], d["U_grid"], d["sigma_bar_grid"], d["shares"],
-                       film_ratio=ratio, floor=float(d["floor"]), out_of_range=out_of_range,
-                       info=info)

@@ -45,7 +45,7 @@ import numpy as np
 from physics.gear import contact, kinematics
 from physics.gear.geometry import MeshGeometry, mesh_geometry
 from physics.gear.load_sharing import PairStiffness, pair_loads
-from physics.gear.stiffness import MeshStiffness
+from physics.gear.stiffness import mesh_stiffness
 from physics.params import R_GAS, Lubricant, OutOfScope, Scenario, Tribology
 from physics.scope import check_scope, shakedown_pressure
 from physics.tribology.asperity_table import check_scenario
@@ -271,7 +271,7 @@ def simulate_wear(
             return np.full_like(s, f_static)
 
     if stiffness is None:
-        stiffness = MeshStiffness(scn.gear, scn.material).pair_function
+        stiffness = mesh_stiffness(scn.gear, scn.material).pair_function
 
     step = scn.solver.update_um * 1e-6
     limit = shakedown_pressure(scn.material.hardness)

@@ -572,9 +572,10 @@ def test_loop_app_finds_an_undeclared_transfer_path(tmp_path, scn):
     assert reading["reads_with"] == report["wear_read_by"] == "the model with transfer_path"
     assert reading["value"] >= reading["before"] - report["decision_rule"]["max_wear_loss"]
     # read against the train records of its group, the held-out wear estimate is not taken
-    # away by the undeclared effect (the same in every record) and stays with the adopted one
-    # (measured: skill 0.91 -> 0.92; the nearest signature alone read -0.25 -> 0.98)
-    assert min(report["wear_skill_before"], report["wear_skill_after"]) > 0.8
+    # away by the undeclared effect (the same in every record) and the adopted one reads it at
+    # least as well (measured: skill 0.72 -> 0.83)
+    assert report["wear_skill_after"] > 0.8
+    assert report["wear_skill_after"] >= report["wear_skill_before"]
     assert report["error_after"] < 0.5 * report["error_before"]
     # the run-out on the line of action is dynamically inert, and no amplitude of the signature
     # sees the phase of its mesh modulation without another once-per-revolution feature
