@@ -22,7 +22,6 @@ import numpy as np
 import pandas as pd
 import pytest
 from hydra import compose, initialize_config_module
-from hydra.core.config_store import ConfigStore
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, open_dict, read_write
 
@@ -219,40 +218,19 @@ def _composed(app: App, overrides: list[str], out: Path) -> DictConfig:
     return cfg
 
 
-#: the config groups train.py registers (``surrogate.settings.register``); in the other apps'
-#: processes they do not exist (``data=`` is a plain key of the loop), so not in their tests
-TRAIN_GROUPS = ("data", "model", "trainer")
-
-
-@pytest.fixture
-def store_of():
-    """``store_of(app)``: Hydra's config store as in that app's own process, for one test."""
-    repo = ConfigStore.instance().repo
-    saved = {g: repo[g] for g in TRAIN_GROUPS if g in repo}
-
-    def only(app: str) -> None:
-        if app != "train":
-            for group in TRAIN_GROUPS:
-                repo.pop(group, None)
-
-    yield only
-    repo.update(saved)
-
-
 def _id(row) -> str:
     return f"{row[0]} " + " ".join(row[1])[:50]
 
 
 @pytest.mark.parametrize(("app", "overrides", "make", "message"), CASES,
                          ids=[_id(c) for c in CASES])
-def test_bad_input_is_refused_before_work(tmp_path, monkeypatch, store_of, app, overrides, make,
-                                          message):
+def test_bad_input_is_refused_before_work(tmp_path, monkeypatch, config_store, app, overrides,
+                                          make, message):
     made, work = _folders(tmp_path, make)
     monkeypatch.chdir(work)
     overrides = [o.replace("{input}", made or "") for o in overrides]
     spec = APPS[app]
-    prepare = spec.prepare()
-    store_of(app)
+    prepare = spec.prepare()  # registers the app's config schema, as its process does
     with pytest.raises(Exception) as refused:  # Hydra's refusal or the app's ValueError
         prepare(_composed(spec, overrides, work / "logs" / "run"))
     text = _chain(refused.value)
