@@ -79,15 +79,16 @@ BY_CI = {
     'python3.11 -m venv .venv && . .venv/bin/activate && pip install -e ".[dev]"': "the install",
     "pytest": "the test run (this suite)",
 }
-#: a dataset of 4 replicates per case in 2 chunks, one trajectory each to validate and test
+#: a dataset of 4 replicates per case and 3 wear states in 2 chunks, one trajectory each to validate and test
 SMALL_SPLIT = ("data.val_replicates=1", "data.test_replicates=1")
-TINY_DATA = ("+data.generate.replicates=4", "+data.generate.wear_states=4",
+TINY_DATA = ("+data.generate.replicates=4", "+data.generate.wear_states=3",
              "+data.generate.chunks=2", *SMALL_SPLIT)
 FAST_TRAIN = ("trainer.max_epochs=3", "trainer.min_epochs=1", "model.members=2")
 FAST_REPRO = ("solver.n_points=101", "stiffness.fem_refine=1", "stiffness.fem_refines=[1]",
               "stiffness.positions=40", "evolution.cases=[3]", "evolution.points=9",
               "evolution.table14_cycles=[0,1.5e7]")
-SMALL_DATASET = ("data.replicates=2", "data.wear_states=3")
+#: the dataset app's: two cases, two replicates, two wear states
+SMALL_DATASET = ("data.cases=[2,3]", "data.replicates=2", "data.wear_states=2")
 #: fewer fit evaluations, search points and candidate effects (two, one of them the bundle's)
 SMALL_LOOP = ("loop.max_nfev=4", "loop.explore=4", "loop.candidates=[friction,tip_relief]")
 SMALL_BUNDLE = {"records=10, duration_s=1.0": "records=6, duration_s=0.5",
@@ -241,8 +242,9 @@ DOCS: dict[str, Case] = {
     "python train.py hparams_search=optuna": Case(
         (*TINY_DATA, "hydra.sweeper.n_trials=2", *FAST_TRAIN), start=TRAIN_CASE3,
         only=("data",), check=files("optuna_case3.db")),
-    "python train.py experiment=all_cases": Case(TINY_DATA + FAST_TRAIN,
-                                                 check=files("logs/train/runs/caseall_*")),
+    "python train.py experiment=all_cases": Case(
+        ("+data.generate.replicates=3", "+data.generate.wear_states=2", *TINY_DATA[2:],
+         *FAST_TRAIN), check=files("logs/train/runs/caseall_*")),
     "python train.py experiment=model_form": Case(TINY_DATA + FAST_TRAIN, check=files(
         "data/dataset_case3_model_form.parquet", "logs/train/runs/case3_*/wear_surrogate.pt")),
     TRAIN_BASELINE: Case(TINY_DATA + FAST_TRAIN, start=TRAIN_CASE3, only=("data",),
@@ -257,14 +259,15 @@ DOCS: dict[str, Case] = {
                                  start=USER_TABLE, check=another_run),
     "python train.py --help": Case(),
     "python -m physics.dataset out_dir=noisy data.replicates=4 data.nuisance.snr_db=[15,25] "
-    "store_signals=true": Case(("data.wear_states=3",), check=files(
+    "store_signals=true": Case(("data.cases=[3]", "data.wear_states=2"), check=files(
         "noisy/dataset_signals.npy")),
     "python -m physics.dataset -m chunk=0,1,2,3,4 hydra/launcher=joblib": Case(
-        SMALL_DATASET, check=files("data/dataset_chunks/chunk_004.parquet")),
+        ("data.cases=[3]", "data.replicates=5", "data.wear_states=2"),
+        check=files("data/dataset_chunks/chunk_004.parquet")),
     "python -m physics.loop data=independent_bundle reference=sister_bundle": Case(
         SMALL_LOOP, start=DEMO, check=referenced),
     "python -m physics.loop data=../shared/reference/thesis_tables/"
-    "table15_measured_acceleration_features.csv": Case(("loop.max_nfev=4",),
+    "table15_measured_acceleration_features.csv": Case(SMALL_LOOP,
                                                         needs_shared=True, check=report),
     "python -m physics.loop --help": Case(),
     "python -m surrogate.benchmark": Case(("--max-epochs", "3"), slow=True),
