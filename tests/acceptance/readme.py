@@ -79,7 +79,8 @@ BY_CI = {
     'python3.11 -m venv .venv && . .venv/bin/activate && pip install -e ".[dev]"': "the install",
     "pytest": "the test run (this suite)",
 }
-#: a dataset of 4 replicates per case and 3 wear states in 2 chunks, one trajectory each to validate and test
+#: train.py's dataset: 4 replicates per case, 3 wear states, 2 chunks; one trajectory each to
+#: validate and test
 SMALL_SPLIT = ("data.val_replicates=1", "data.test_replicates=1")
 TINY_DATA = ("+data.generate.replicates=4", "+data.generate.wear_states=3",
              "+data.generate.chunks=2", *SMALL_SPLIT)
@@ -87,8 +88,8 @@ FAST_TRAIN = ("trainer.max_epochs=3", "trainer.min_epochs=1", "model.members=2")
 FAST_REPRO = ("solver.n_points=101", "stiffness.fem_refine=1", "stiffness.fem_refines=[1]",
               "stiffness.positions=40", "evolution.cases=[3]", "evolution.points=9",
               "evolution.table14_cycles=[0,1.5e7]")
-#: the dataset app's: two cases, two replicates, two wear states
-SMALL_DATASET = ("data.cases=[2,3]", "data.replicates=2", "data.wear_states=2")
+#: the dataset app's: two cases, two replicates, two wear states, in two chunks
+SMALL_DATASET = ("data.cases=[2,3]", "data.replicates=2", "data.wear_states=2", "data.chunks=2")
 #: fewer fit evaluations, search points and candidate effects (two, one of them the bundle's)
 SMALL_LOOP = ("loop.max_nfev=4", "loop.explore=4", "loop.candidates=[friction,tip_relief]")
 SMALL_BUNDLE = {"records=10, duration_s=1.0": "records=6, duration_s=0.5",
@@ -259,7 +260,8 @@ DOCS: dict[str, Case] = {
                                  start=USER_TABLE, check=another_run),
     "python train.py --help": Case(),
     "python -m physics.dataset out_dir=noisy data.replicates=4 data.nuisance.snr_db=[15,25] "
-    "store_signals=true": Case(("data.cases=[3]", "data.wear_states=2"), check=files(
+    "store_signals=true": Case(("data.cases=[3]", "data.wear_states=2", "data.chunks=2"),
+                               check=files(
         "noisy/dataset_signals.npy")),
     "python -m physics.dataset -m chunk=0,1,2,3,4 hydra/launcher=joblib": Case(
         ("data.cases=[3]", "data.replicates=5", "data.wear_states=2"),
