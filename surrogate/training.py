@@ -28,6 +28,31 @@ log = logging.getLogger(__name__)
 warnings.filterwarnings("ignore", message=r".*LeafSpec.*is deprecated")
 
 
+class _NoAdvert(logging.Filter):
+    """Drops the tip Lightning logs on every Trainer to advertise its cloud logger."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return "litlogger" not in record.getMessage()
+
+
+def quiet_lightning() -> None:
+    """Each Lightning log line once, and no advertisement.
+
+    ``import lightning`` gives the ``lightning`` logger a console handler of its own, and its
+    records also reach the root logger's handlers (Hydra's console and log file): every line
+    printed twice. Where the root logger has handlers (an app run by Hydra), Lightning's own is
+    removed so that the root's print each line once, in the app's format; elsewhere (a script
+    without logging set up) it stays. Called when a run is prepared, after Hydra set up logging.
+    """
+    rank_zero = logging.getLogger("lightning.pytorch.utilities.rank_zero")
+    if not any(isinstance(f, _NoAdvert) for f in rank_zero.filters):
+        rank_zero.addFilter(_NoAdvert())
+    if logging.getLogger().handlers:
+        own = logging.getLogger("lightning")
+        for handler in list(own.handlers):
+            own.removeHandler(handler)
+
+
 @dataclass(frozen=True)
 class TrainJob:
     """A checked training run: everything instantiated that needs no data."""
@@ -49,6 +74,7 @@ def _instantiate(node: DictConfig, what: str, **kwargs):
 def prepare(cfg: DictConfig) -> TrainJob:
     """Check the whole run before any work: case, model settings, trainer, callbacks, loggers
     and the data module (whose dataset, if missing, is planned and checked but not built)."""
+    quiet_lightning()
     for key in ("seed",):
         if isinstance(cfg[key], bool) or not isinstance(cfg[key], int) or cfg[key] < 0:
             raise ValueError(f"{key} = {cfg[key]!r} must be a whole number >= 0")

@@ -1,8 +1,16 @@
-"""Shared fixtures: the thesis baseline scenario and its geometry."""
+"""Shared fixtures: the thesis baseline scenario and its geometry, and the expensive setup that
+many tests share, made once per test session: the README's commands that others start from
+(one trained case-3 run with its small dataset, one baseline run, one sweep, one set of demo
+bundles, one user table)."""
 
 from __future__ import annotations
 
+import subprocess
+from collections.abc import Callable
+from pathlib import Path
+
 import pytest
+from hydra.core.config_store import ConfigStore
 
 from physics.gear.geometry import mesh_geometry
 from physics.params import GearPair, Scenario
@@ -16,3 +24,49 @@ def baseline() -> Scenario:
 @pytest.fixture(scope="session")
 def geom():
     return mesh_geometry(GearPair())
+
+
+@pytest.fixture(scope="session")
+def readme_folder(tmp_path_factory) -> Callable[[str], tuple[Path, subprocess.CompletedProcess]]:
+    """``readme_folder(key)``: the folder in which the README's (or a docs page's) command or
+    snippet ``key`` ran, after its own start, and its process; each runs once per session.
+    Tests read this folder; a test that writes starts from a copy (``readme.copy_start``)."""
+    from tests.acceptance.readme import ALL, copy_start, run_step
+
+    made: dict[str, tuple[Path, subprocess.CompletedProcess] | BaseException] = {}
+
+    def get(key: str) -> tuple[Path, subprocess.CompletedProcess]:
+        if key not in made:
+            case = ALL[key]
+            try:
+                folder = tmp_path_factory.mktemp("readme")
+                if case.start is not None:
+                    copy_start(get(case.start)[0], folder, case.only)
+                made[key] = (folder, run_step(key, folder))
+            except BaseException as err:  # later tests that need it fail at once, alike
+                made[key] = err
+                raise
+        result = made[key]
+        if isinstance(result, BaseException):
+            pytest.fail(f"the setup {key!r} failed before: {result}", pytrace=False)
+        return result
+
+    return get
+
+
+#: the config groups train.py registers (``surrogate.settings.register``)
+TRAIN_GROUPS = ("data", "model", "trainer")
+
+
+@pytest.fixture
+def config_store() -> ConfigStore:
+    """Hydra's config store as a fresh app process finds it: without the groups train.py
+    registers (where ``data=`` is a plain key, as in the loop, a ``data`` group would make it a
+    group choice). A test that composes a train config registers them itself; after the test
+    they are as they were."""
+    repo = ConfigStore.instance().repo
+    saved = {group: repo.pop(group) for group in TRAIN_GROUPS if group in repo}
+    yield ConfigStore.instance()
+    for group in TRAIN_GROUPS:
+        repo.pop(group, None)
+    repo.update(saved)

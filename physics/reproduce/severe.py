@@ -32,8 +32,8 @@ def runs() -> list[tuple[str, Scenario, float, Callable[..., WearResult]]]:
     dry = _with(base, "tribology", regime="dry")
     module3 = _with(dry, "gear", module_mm=3.0)
     return [
-        ("thesis pair, dry, quasi-static", dry, 1e9, simulate_wear),
-        ("module 3, dry, quasi-static", module3, 1.5e9, simulate_wear),
+        ("thesis pair, dry, quasi-static", dry, 6e8, simulate_wear),
+        ("module 3, dry, quasi-static", module3, 6e8, simulate_wear),
         ("thesis pair, dry, dynamic", dry, 3e8, simulate_dynamic_wear),
         ("thesis pair, half viscosity, dynamic", _with(base, "lubricant", eta0_Pa_s=0.175),
          1.5e7, simulate_dynamic_wear),

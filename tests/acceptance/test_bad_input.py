@@ -1,20 +1,33 @@
-"""Bad input on every entry point, typed as a user would: refused before any work, with one
-message naming the value (and the record or column), no traceback, no file left behind."""
+"""Bad input on every entry point: refused before any work, with one message naming the value
+(and the record or column), no traceback, no file left behind.
+
+The table is checked in-process, each row through its app's first phase as the app runs it
+(``physics.command.run_command``): Hydra composes the app's config with the row's overrides
+(a wrong type is refused there) and the app's ``prepare`` checks the rest (a ValueError). Then
+one subprocess per app, typed as a user would, checks the exit path itself: exit code 2, the
+one-line message, no traceback and nothing left in the folder.
+"""
 
 from __future__ import annotations
 
+import importlib
 import os
 import subprocess
 import sys
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
+from hydra import compose, initialize_config_module
+from hydra.core.hydra_config import HydraConfig
+from omegaconf import DictConfig, open_dict, read_write
 
 from physics.loop.bundle import write_bundle
 
+ROOT = Path(__file__).resolve().parents[2]
 FS = 40960.0
 
 
@@ -31,7 +44,7 @@ def bundle(folder: Path, change: Callable[[pd.DataFrame, dict], None] | None = N
     return write_bundle(folder / "b", man, sig)
 
 
-def _set(col: str, row: int, value) -> Callable:
+def _set(col: str, row, value) -> Callable:
     def change(man: pd.DataFrame, sig: dict) -> None:
         man[col] = man[col].astype(object)
         man.loc[row, col] = value
@@ -69,85 +82,190 @@ def _reference_elsewhere(folder: Path) -> Path:
     return bundle(folder)
 
 
-REPRODUCE = ["-m", "physics.reproduce"]
-DATASET = ["-m", "physics.dataset"]
-LOOP = ["-m", "physics.loop"]
-TRAIN = ["train.py"]
-#: (arguments, input to make first or None, text the message must hold)
+def _torque(value) -> Callable[[Path], Path]:
+    return lambda f: bundle(f, _set("torque_Nm", 2, value))
+
+
+@dataclass(frozen=True)
+class App:
+    argv: tuple[str, ...]  # how a user starts it
+    config: str  # its config module (``gearwear_conf.<config>``) and primary config
+    prepare: Callable[[], Callable[[DictConfig], object]]  # its first phase
+
+
+def _main_prepare(package: str) -> Callable[[], Callable]:
+    """The ``prepare`` of ``python -m <package>``, as ``runpy`` would find it (the import also
+    registers the app's config schema)."""
+    return lambda: importlib.import_module(f"{package}.__main__").prepare
+
+
+def _train_prepare() -> Callable:
+    from surrogate import settings
+    from surrogate.training import prepare
+
+    settings.register()  # as train.py does
+    return prepare
+
+
+def _predict_prepare() -> Callable:
+    from surrogate.predict import prepare
+
+    return prepare
+
+
+APPS = {
+    "reproduce": App(("-m", "physics.reproduce"), "reproduce",
+                     _main_prepare("physics.reproduce")),
+    "dataset": App(("-m", "physics.dataset"), "dataset", _main_prepare("physics.dataset")),
+    "loop": App(("-m", "physics.loop"), "loop", _main_prepare("physics.loop")),
+    "train": App((str(ROOT / "train.py"),), "train", _train_prepare),
+    "predict": App(("-m", "surrogate.predict"), "predict", _predict_prepare),
+}
+
+#: (app, overrides, input to make first or None, text the message must hold)
 CASES = [
-    ([*REPRODUCE, "cycles=abc"], None, "'abc'"),
-    ([*REPRODUCE, "cycles=-1"], None, "cycles = -1"),
-    ([*REPRODUCE, "gear.z1=abc"], None, "'abc'"),
-    ([*REPRODUCE, "gear.z1=3"], None, "gear.z1 = 3"),
-    ([*REPRODUCE, "case=9"], None, "case = 9"),
-    ([*REPRODUCE, "operating.torque_Nm=900000"], None, "operating.torque_Nm = 900000"),
-    ([*REPRODUCE, "operating.n1_rpm=99999"], None, "operating.n1_rpm = 99999"),
-    ([*REPRODUCE, "lubricants=[foo]"], None, "'foo'"),
-    ([*REPRODUCE, "thesis_tables=/nonexistent"], None, "/nonexistent"),
-    ([*REPRODUCE, "gear.center_distance_mm=60"], None, "center_distance_mm = 60"),
-    ([*REPRODUCE, "dynamics.duration_s=0.001"], None, "dynamics.duration_s = 0.001"),
-    ([*DATASET, "jobs=abc"], None, "'abc'"),
-    ([*DATASET, "jobs=0"], None, "jobs = 0"),
-    ([*DATASET, "data.nuisance.snr_db=[.inf,30]"], None, "'.inf'"),
-    ([*DATASET, "data.nuisance.snr_db=[nan,30]"], None, "snr_db = [nan, 30.0]"),
-    ([*DATASET, "data.nuisance.damping_ratio=[0.2,0.1]"], None, "damping_ratio = [0.2, 0.1]"),
-    ([*DATASET, "name=../../escape"], None, "'../../escape'"),
-    ([*DATASET, "chunk=7"], None, "chunk = 7"),
-    ([*DATASET, "data.cases=[9]"], None, "case = 9"),
-    ([*DATASET, "data.cycles_max=inf"], None, "cycles_max = inf"),
-    ([*DATASET, "data.replicates=0"], None, "replicates = 0"),
-    ([*TRAIN, "case=9"], None, "case = '9'"),
-    ([*TRAIN, "model.lr=abc"], None, "'abc'"),
-    ([*TRAIN, "model.lr=-1"], None, "model.lr = -1"),
-    ([*TRAIN, "model.width=0"], None, "model.width = 0"),
-    ([*TRAIN, "data.batch_size=0"], None, "batch_size = 0"),
-    ([*TRAIN, "trainer.max_epochs=abc"], None, "abc"),
-    ([*TRAIN, "+data.generate.replicates=0"], None, "replicates = 0"),
-    ([*TRAIN, "data.gearboxes=0"], None, "data.gearboxes = 0"),
-    ([*TRAIN, "data.val_replicates=0"], None, "data.val_replicates = 0"),
-    (["-m", "surrogate.predict", "ckpt=missing.pt", "input=x.csv"], None, "missing.pt"),
-    (["-m", "surrogate.benchmark", "--seeds", "0"], None, "--seeds 0: give at least 1"),
-    ([*LOOP, "data=missing"], None, "'missing'"),
-    ([*LOOP, "data={input}"], _empty_manifest, "manifest.csv"),
-    ([*LOOP, "data={input}"], _garbage_npy, "record 'r01': signals/r01.npy"),
-    ([*LOOP, "data={input}"], _bad_gear, "gear.z1 = 'abc'"),
-    ([*LOOP, "data={input}"], lambda f: bundle(f, _set("torque_Nm", 2, "abc")),
-     "record 'r02': torque_Nm = 'abc'"),
-    ([*LOOP, "data={input}"], lambda f: bundle(f, _set("torque_Nm", 2, 9e5)),
-     "record 'r02': operating.torque_Nm = 900000"),
-    ([*LOOP, "data={input}"], lambda f: bundle(f, _set("n1_rpm", 1, 20000.0)),
+    ("reproduce", ["cycles=abc"], None, "'abc'"),
+    ("reproduce", ["cycles=-1"], None, "cycles = -1"),
+    ("reproduce", ["gear.z1=abc"], None, "'abc'"),
+    ("reproduce", ["gear.z1=3"], None, "gear.z1 = 3"),
+    ("reproduce", ["case=9"], None, "case = 9"),
+    ("reproduce", ["operating.torque_Nm=900000"], None, "operating.torque_Nm = 900000"),
+    ("reproduce", ["operating.n1_rpm=99999"], None, "operating.n1_rpm = 99999"),
+    ("reproduce", ["lubricants=[foo]"], None, "'foo'"),
+    ("reproduce", ["thesis_tables=/nonexistent"], None, "/nonexistent"),
+    ("reproduce", ["gear.center_distance_mm=60"], None, "center_distance_mm = 60"),
+    ("reproduce", ["dynamics.duration_s=0.001"], None, "dynamics.duration_s = 0.001"),
+    ("dataset", ["jobs=abc"], None, "'abc'"),
+    ("dataset", ["jobs=0"], None, "jobs = 0"),
+    ("dataset", ["data.nuisance.snr_db=[.inf,30]"], None, "'.inf'"),
+    ("dataset", ["data.nuisance.snr_db=[nan,30]"], None, "snr_db = [nan, 30.0]"),
+    ("dataset", ["data.nuisance.damping_ratio=[0.2,0.1]"], None, "damping_ratio = [0.2, 0.1]"),
+    ("dataset", ["name=../../escape"], None, "'../../escape'"),
+    ("dataset", ["chunk=7"], None, "chunk = 7"),
+    ("dataset", ["data.cases=[9]"], None, "case = 9"),
+    ("dataset", ["data.cycles_max=inf"], None, "cycles_max = inf"),
+    ("dataset", ["data.replicates=0"], None, "replicates = 0"),
+    ("train", ["case=9"], None, "case = '9'"),
+    ("train", ["model.lr=abc"], None, "'abc'"),
+    ("train", ["model.lr=-1"], None, "model.lr = -1"),
+    ("train", ["model.width=0"], None, "model.width = 0"),
+    ("train", ["data.batch_size=0"], None, "batch_size = 0"),
+    ("train", ["trainer.max_epochs=abc"], None, "abc"),
+    ("train", ["+data.generate.replicates=0"], None, "replicates = 0"),
+    ("train", ["data.gearboxes=0"], None, "data.gearboxes = 0"),
+    ("train", ["data.val_replicates=0"], None, "data.val_replicates = 0"),
+    ("predict", ["ckpt=missing.pt", "input=x.csv"], None, "missing.pt"),
+    ("loop", ["data=missing"], None, "'missing'"),
+    ("loop", ["data={input}"], _empty_manifest, "manifest.csv"),
+    ("loop", ["data={input}"], _garbage_npy, "record 'r01': signals/r01.npy"),
+    ("loop", ["data={input}"], _bad_gear, "gear.z1 = 'abc'"),
+    ("loop", ["data={input}"], _torque("abc"), "record 'r02': torque_Nm = 'abc'"),
+    ("loop", ["data={input}"], _torque(9e5), "record 'r02': operating.torque_Nm = 900000"),
+    ("loop", ["data={input}"], lambda f: bundle(f, _set("n1_rpm", 1, 20000.0)),
      "record 'r01': fs_hz"),
-    ([*LOOP, "data={input}"], _empty_csv, "features.csv"),
-    ([*LOOP, "data={input}", "loop.test_fraction=1.5"], bundle, "loop.test_fraction = 1.5"),
-    ([*LOOP, "data={input}", "loop.segment_s=0"], bundle, "loop.segment_s = 0"),
-    ([*LOOP, "data={input}", "loop.candidates=[rust]"], bundle, "rust"),
-    ([*LOOP, "data={input}", "loop.explore=3"], bundle, "loop.explore = 3"),
-    ([*LOOP, "data={input}", "reference=missing"], bundle, "'missing'"),
-    ([*LOOP, "data={input}", "reference={input}/../ref/b"], _reference_elsewhere,
+    ("loop", ["data={input}"], _empty_csv, "features.csv"),
+    ("loop", ["data={input}", "loop.test_fraction=1.5"], bundle, "loop.test_fraction = 1.5"),
+    ("loop", ["data={input}", "loop.segment_s=0"], bundle, "loop.segment_s = 0"),
+    ("loop", ["data={input}", "loop.candidates=[rust]"], bundle, "rust"),
+    ("loop", ["data={input}", "loop.explore=3"], bundle, "loop.explore = 3"),
+    ("loop", ["data={input}", "reference=missing"], bundle, "'missing'"),
+    ("loop", ["data={input}", "reference={input}/../ref/b"], _reference_elsewhere,
      "reference: no records at ['2000rpm_300Nm_dte_m_40960Hz']"),
 ]
+#: one row per app whose whole exit path runs as a subprocess: the first of its ValueErrors
+#: (exit code 2), and a wrong type refused by Hydra itself while it composes
+EXIT_PATH = [("reproduce", ["cycles=abc"], None, "'abc'"),
+             ("reproduce", ["gear.z1=3"], None, "gear.z1 = 3"),
+             ("dataset", ["jobs=0"], None, "jobs = 0"),
+             ("train", ["model.lr=-1"], None, "model.lr = -1"),
+             ("predict", ["ckpt=missing.pt", "input=x.csv"], None, "missing.pt"),
+             ("loop", ["data={input}"], _torque(9e5),
+              "record 'r02': operating.torque_Nm = 900000")]
+
+
+def _chain(err: BaseException) -> str:
+    """The text of an exception and of every exception it came from."""
+    parts = []
+    while err is not None:
+        parts.append(str(err))
+        err = err.__cause__ or err.__context__
+    return "\n".join(parts)
 
 
 def _tree(folder: Path) -> set[Path]:
     return {p.relative_to(folder) for p in folder.rglob("*")}
 
 
-@pytest.mark.parametrize(("args", "make", "message"), CASES,
-                         ids=[" ".join(a[1:])[:50] for a, _, _ in CASES])
-def test_bad_input_is_refused_before_work(tmp_path, args, make, message):
-    inputs = tmp_path / "in"
+def _folders(tmp_path: Path, make) -> tuple[str | None, Path]:
+    """The row's input, made in ``tmp_path/in``, and an empty working folder."""
+    inputs, work = tmp_path / "in", tmp_path / "work"
     inputs.mkdir()
-    made = make(inputs) if make is not None else None
-    work = tmp_path / "work"
     work.mkdir()
-    argv = [a.replace("{input}", str(made)) for a in args]
-    if argv[0] == "train.py":
-        argv[0] = str(Path(__file__).resolve().parents[2] / "train.py")
+    made = make(inputs) if make is not None else None
+    return (str(made) if made is not None else None), work
+
+
+def _composed(app: App, overrides: list[str], out: Path) -> DictConfig:
+    """The app's config as Hydra gives it to the app's main, with ``out`` as the run folder
+    (not made: ``prepare`` writes nothing)."""
+    with initialize_config_module(f"gearwear_conf.{app.config}", version_base="1.3"):
+        cfg = compose(app.config, overrides=overrides, return_hydra_config=True)
+    with read_write(cfg.hydra.runtime), open_dict(cfg.hydra.runtime):
+        cfg.hydra.runtime.output_dir = str(out)
+    HydraConfig.instance().set_config(cfg)
+    with read_write(cfg), open_dict(cfg):
+        del cfg["hydra"]
+    return cfg
+
+
+def _id(row) -> str:
+    return f"{row[0]} " + " ".join(row[1])[:50]
+
+
+@pytest.mark.parametrize(("app", "overrides", "make", "message"), CASES,
+                         ids=[_id(c) for c in CASES])
+def test_bad_input_is_refused_before_work(tmp_path, monkeypatch, config_store, app, overrides,
+                                          make, message):
+    made, work = _folders(tmp_path, make)
+    monkeypatch.chdir(work)
+    overrides = [o.replace("{input}", made or "") for o in overrides]
+    spec = APPS[app]
+    prepare = spec.prepare()  # registers the app's config schema, as its process does
+    with pytest.raises(Exception) as refused:  # Hydra's refusal or the app's ValueError
+        prepare(_composed(spec, overrides, work / "logs" / "run"))
+    text = _chain(refused.value)
+    assert message in text, text
+    if not isinstance(refused.value, ValueError):  # then Hydra refused it while composing
+        assert "compos" in type(refused.value).__name__.lower() or "Validation" in type(
+            refused.value).__name__, repr(refused.value)
+    assert not _tree(work), f"left behind: {sorted(map(str, _tree(work)))}"
+
+
+@pytest.mark.parametrize(("app", "overrides", "make", "message"), EXIT_PATH,
+                         ids=[_id(c) for c in EXIT_PATH])
+def test_a_refused_command_ends_with_one_line_and_leaves_nothing(tmp_path, app, overrides, make,
+                                                                 message):
+    made, work = _folders(tmp_path, make)
+    argv = [*APPS[app].argv, *(o.replace("{input}", made or "") for o in overrides)]
     env = {k: v for k, v in os.environ.items() if not k.startswith("HYDRA_")}
     proc = subprocess.run([sys.executable, *argv], cwd=work, capture_output=True, text=True,
                           timeout=300, env=env)
     out = proc.stdout + proc.stderr
-    assert proc.returncode != 0, out
+    assert proc.returncode == (1 if "abc" in message else 2), out  # Hydra's own refusal: 1
     assert message in out, out
     assert "Traceback" not in out, out
+    if proc.returncode == 2:  # the app's refusal: one line
+        lines = [line for line in proc.stderr.splitlines() if line.startswith("error: ")]
+        assert len(lines) == 1 and message in lines[0], out
     assert not _tree(work), f"left behind: {sorted(map(str, _tree(work)))}"
+
+
+def test_the_benchmark_refuses_a_bad_count(tmp_path, monkeypatch, capsys):
+    from surrogate.benchmark import main
+
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as refused:
+        main(["--seeds", "0"])
+    assert refused.value.code == 2
+    assert "--seeds 0: give at least 1" in capsys.readouterr().err
+    assert not _tree(tmp_path)

@@ -3,13 +3,17 @@ a chunked generation runs through submitit's local executor, then merges as on o
 
 from __future__ import annotations
 
+import importlib
 import subprocess
 import sys
 from pathlib import Path
 
 import pandas as pd
+from hydra import compose, initialize_config_module
+from omegaconf import DictConfig
 
-ROOT = Path(__file__).resolve().parents[2]
+from surrogate import settings
+
 SMALL = ["data.replicates=1", "data.cases=[3,4]", "data.chunks=2", "data.wear_states=3"]
 
 
@@ -29,7 +33,17 @@ def test_chunks_run_as_submitit_jobs_and_merge(tmp_path):
     assert sorted(df.case.unique()) == [3, 4] and len(df) == 2 * 3
 
 
-def test_cluster_launcher_configs_compose(tmp_path):
-    for app in (["-m", "physics.dataset"], [str(ROOT / "train.py")]):
-        out = _run([*app, "hydra/launcher=cluster", "--cfg", "hydra"], tmp_path).stdout
-        assert "SlurmLauncher" in out and "cpus_per_task: 2" in out
+def _launcher(config: str) -> DictConfig:
+    """The launcher of app ``config`` (``gearwear_conf.<config>``) under
+    ``hydra/launcher=cluster``, as ``--cfg hydra`` prints it."""
+    with initialize_config_module(f"gearwear_conf.{config}", version_base="1.3"):
+        return compose(config, overrides=["hydra/launcher=cluster"],
+                       return_hydra_config=True).hydra.launcher
+
+
+def test_cluster_launcher_configs_compose(config_store):
+    importlib.import_module("physics.dataset.__main__")  # registers the dataset's schema
+    settings.register()  # as train.py does
+    for config in ("dataset", "train"):
+        launcher = _launcher(config)
+        assert "SlurmLauncher" in launcher._target_ and launcher.cpus_per_task == 2

@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import dataclasses
-import subprocess
-import sys
 from pathlib import Path
 
 import hypothesis
@@ -25,7 +23,7 @@ from physics.dataset.generation import (
 )
 from physics.dynamics.model_form import FACTORS
 from physics.params import Dynamics, Scenario, WearSolver
-from surrogate import settings
+from surrogate import predict, settings
 from surrogate.data import (
     BUILD_CHUNKS,
     DEFAULT_INPUTS,
@@ -45,7 +43,6 @@ from surrogate.inference import (
 from surrogate.model import EnsembleMLP, WearRegressor, mixture
 from surrogate.predict import gearbox_columns, predict_file
 from surrogate.schema import FeatureSchema, baseline_changes
-from surrogate.summarise import summarise
 from surrogate.training import train
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -282,16 +279,6 @@ def test_predict_round_trip_from_the_saved_checkpoint(trained, dataset, tmp_path
     assert bool(s.predict(far).out_of_range.iloc[0])
 
 
-def test_predict_cli(trained, dataset, tmp_path):
-    src = tmp_path / "f.parquet"
-    pd.read_parquet(dataset).head(5).to_parquet(src)
-    subprocess.run([sys.executable, "-m", "surrogate.predict",
-                    f"ckpt={trained / 'wear_surrogate.pt'}", f"input={src}",
-                    f"output={tmp_path / 'w.csv'}", f"hydra.run.dir={tmp_path / 'h'}"],
-                   check=True, cwd=ROOT, capture_output=True)
-    assert len(pd.read_csv(tmp_path / "w.csv")) == 5
-
-
 @pytest.mark.parametrize(("change", "message"), [
     (lambda d: d.drop(columns="dte_kurtosis"), r"lacks column.*dte_kurtosis"),
     (lambda d: d.assign(oil_temp=1.0), r"oil_temp.*not trained on"),
@@ -390,18 +377,6 @@ def test_export_is_atomic_and_loadable_without_pickle(trained, tmp_path):
     path = export(s.model, tmp_path / "copy.pt", s.interval_scale)
     torch.load(path, weights_only=True)
     assert not list(tmp_path.glob("*.tmp"))
-
-
-def test_two_job_joblib_multirun_and_its_summary(tmp_path, dataset):
-    sweep = tmp_path / "sweep"
-    subprocess.run([sys.executable, "train.py", "-m", "case=3,4", f"data.dataset={dataset}",
-                    "data.val_replicates=1", "data.test_replicates=1", "trainer.max_epochs=3",
-                    "logger=csv", "model.members=2", "trainer.enable_progress_bar=false",
-                    f"hydra.sweep.dir={sweep}"], check=True, cwd=ROOT, capture_output=True)
-    table = summarise(sweep)
-    assert len(table) == 2 and set(table.status) == {"ok"}
-    assert {"overrides", "val/mre_pct"} <= set(table.columns)
-    assert (sweep / "multirun.yaml").is_file()
 
 
 def test_the_benchmarks_fleet_is_labelled_gearboxes_that_differ():
@@ -631,13 +606,14 @@ def test_a_baseline_network_reads_changes_and_needs_the_gearbox(dataset, tmp_pat
     mean, _ = s.predict_array(zero[cols].to_numpy(float))
     base = (df.cycles == 0).to_numpy()
     np.testing.assert_allclose(wear[base], np.maximum(mean[base], 0), rtol=1e-5, atol=1e-9)
-    # the command line keeps the gearbox columns it was given
+    # the predict app keeps the gearbox columns it was given
     src = tmp_path / "f.csv"
     df.assign(rig=df.replicate)[[*cols, "rig"]].to_csv(src, index=False)
-    subprocess.run([sys.executable, "-m", "surrogate.predict",
-                    f"ckpt={tmp_path / 'run' / 'wear_surrogate.pt'}", f"input={src}",
-                    "gearbox=rig", f"output={tmp_path / 'w.csv'}",
-                    f"hydra.run.dir={tmp_path / 'h'}"], check=True, cwd=ROOT, capture_output=True)
+    with initialize_config_module("gearwear_conf.predict", version_base="1.3"):
+        predict_cfg = compose("predict", overrides=[
+            f"ckpt={tmp_path / 'run' / 'wear_surrogate.pt'}", f"input={src}", "gearbox=rig",
+            f"output={tmp_path / 'w.csv'}"])
+    predict.execute(predict.prepare(predict_cfg))
     out = pd.read_csv(tmp_path / "w.csv")
     np.testing.assert_allclose(out.mean_wear_mm_pred, wear, rtol=1e-5, atol=1e-9)
     assert (out.rig == df.replicate).all()
