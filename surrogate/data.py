@@ -183,8 +183,9 @@ def check_user_table(df: pd.DataFrame, path: Path | str, needed: list[str], grou
       units of our column names): a DTE in m of 1e-2 is a unit error;
     - one unit per column: a dimensional feature whose per-group median differs more than
       :data:`MIXED_UNITS_RATIO` times between two groups mixes units;
-    - wear (``target``) not negative and, where an :data:`ORDER_COLUMNS` column is given, not
-      falling within a group in its order.
+    - wear (``target``) not negative and, where an :data:`ORDER_COLUMNS` column is given (with
+      a value in every row; a column left wholly empty counts as not given), not falling within
+      a group in its order.
     """
     keys = df[group]
     empty = keys.isna() | (keys.astype(str).str.strip() == "")
@@ -232,7 +233,10 @@ def check_user_table(df: pd.DataFrame, path: Path | str, needed: list[str], grou
     if target is None or target not in needed or unit_of.get(target) != "mm":
         return  # the order rule is wear's
     wear = values[:, needed.index(target)]
-    order = next((c for c in ORDER_COLUMNS if c in df.columns), None)
+    # an order column without a single value is not given (the bundle spec lets cycles be
+    # unknown); one with some values must have them all
+    order = next((c for c in ORDER_COLUMNS if c in df.columns
+                  and pd.to_numeric(df[c], errors="coerce").notna().any()), None)
     if order is None:
         return
     t = pd.to_numeric(df[order], errors="coerce").to_numpy(float)

@@ -36,9 +36,9 @@ def wear_curve(scn: Scenario, span: float, points: int, power: float,
                enough: Callable[[np.ndarray, np.ndarray], bool]
                ) -> tuple[np.ndarray, np.ndarray, bool]:
     """The model's pinion root wear [m] on the life grid ``span * u**power`` (``points`` values
-    of u from 0 to 1), the span doubled up to four times until ``enough(life, root)``; returns
-    the last grid, its wear and whether it was enough."""
-    for _ in range(5):
+    of u from 0 to 1), the span doubled up to seven times (128 times the first span) until
+    ``enough(life, root)``; returns the last grid, its wear and whether it was enough."""
+    for _ in range(8):
         life = span * np.linspace(0.0, 1.0, points) ** power
         root = root_wear_evolution(scn, life,
                                    stiffness=mesh_stiffness(scn.gear, scn.material))[0]
