@@ -33,30 +33,44 @@ def worn_models(scn: Scenario, ms: MeshStiffness, cycles: list[float]
 
 
 def wear_curve(scn: Scenario, span: float, points: int, power: float,
-               enough: Callable[[np.ndarray, np.ndarray], bool]
+               enough: Callable[[np.ndarray, np.ndarray], bool],
+               grow: Callable[[np.ndarray, np.ndarray], float] | None = None
                ) -> tuple[np.ndarray, np.ndarray, bool]:
     """The model's pinion root wear [m] on the life grid ``span * u**power`` (``points`` values
-    of u from 0 to 1), the span doubled up to seven times (128 times the first span) until
-    ``enough(life, root)``; returns the last grid, its wear and whether it was enough."""
+    of u from 0 to 1), the span grown (by ``grow(life, root)``, at least doubled; doubled by
+    default) up to seven times until ``enough(life, root)``; returns the last grid, its wear and
+    whether it was enough."""
     for _ in range(8):
         life = span * np.linspace(0.0, 1.0, points) ** power
         root = root_wear_evolution(scn, life,
                                    stiffness=mesh_stiffness(scn.gear, scn.material))[0]
         if enough(life, root):
             return life, root, True
-        span *= 2
+        span *= max(2.0, grow(life, root) if grow is not None else 2.0)
     return life, root, False
 
 
 def cycles_for_wear(scn: Scenario, wear_mm: np.ndarray, cycles_max: float = 1.5e7
                     ) -> np.ndarray:
-    """Cycle counts at which the model's pinion root wear reaches ``wear_mm``."""
+    """Cycle counts at which the model's pinion root wear reaches ``wear_mm``. Where a span
+    falls short the next is extrapolated from the wear it reached, by the power law of its
+    second half (``root ~ N^p``: the span times ``(target / reached)^(1/p)``, a fifth to
+    spare), so that one more span usually suffices."""
+    target = float(np.max(wear_mm))
+
+    def grow(life: np.ndarray, root: np.ndarray) -> float:
+        mid = len(life) // 2
+        if root[-1] <= 0 or root[mid] <= 0:
+            return 2.0
+        p = np.log(root[-1] / root[mid]) / np.log(life[-1] / life[mid])
+        return float(min(8.0, 1.2 * (target / (root[-1] * 1e3)) ** (1 / max(p, 0.2))))
+
     life, root_m, ok = wear_curve(scn, cycles_max, 16, 1,
-                                  lambda _, root: root[-1] * 1e3 >= np.max(wear_mm))
+                                  lambda _, root: root[-1] * 1e3 >= target, grow)
     root = root_m * 1e3
     if not ok:
         raise ValueError(f"the model's root wear reaches only {root[-1]:.4g} mm in "
-                         f"{life[-1]:.3g} cycles, below {np.max(wear_mm):g} mm: check the "
+                         f"{life[-1]:.3g} cycles, below {target:g} mm: check the "
                          "operating point and tribology.regime")
     return np.interp(wear_mm, root, life)
 
