@@ -20,8 +20,8 @@ from omegaconf import OmegaConf
 from physics.gear import contact
 from physics.params import Scenario
 from physics.reproduce.thesis import ReproduceConfig, reproduce
-from physics.tribology.wear import flank_grid, simulate_wear
-from physics.tribology.worn_contact import solve_worn_contact
+from physics.tribology.wear import flank_grid, quasi_static_force, simulate_wear
+from physics.tribology.worn_contact import levelling_length, solve_worn_contact
 
 
 def best_of(fn, repeat: int) -> float:
@@ -37,10 +37,12 @@ def worn_contact_inputs(scn: Scenario) -> dict:
     f1, f2 = np.zeros_like(grid), np.zeros_like(grid)
     f1[path], f2[path] = res.pinion, res.gear
     R1, R2 = geom.curvature_radii(s)
+    e_star = contact.reduced_modulus(scn.material, scn.material)
+    level = levelling_length(0.5 * quasi_static_force(scn, geom) / scn.gear.face_width,
+                             contact.equivalent_radius(R1, R2), e_star)
     return {"s": s, "load_per_width": res.last_rate.load / scn.gear.face_width, "R1": R1,
             "R2": R2, "rb1": geom.rb1, "rb2": geom.rb2,
-            "e_star": contact.reduced_modulus(scn.material, scn.material), "flank": grid,
-            "wear1": f1, "wear2": f2}
+            "e_star": e_star, "flank": grid, "wear1": f1, "wear2": f2, "level": level}
 
 
 def one_by_one(args: dict) -> np.ndarray:
@@ -63,7 +65,10 @@ def main() -> None:
     batched = solve_worn_contact(**args)
     t_batch = best_of(lambda: solve_worn_contact(**args), 5)
     t_ref = best_of(lambda: one_by_one(args), 1)
-    diff = np.max(np.abs(one_by_one(args) - batched.p_max) / batched.p_max.max())
+    # the batch keeps a Hertz band for its lightly loaded pairs (a share of the batch's largest
+    # load, worn_contact.LIGHT), which a call of one position never has: compare the others
+    heavy = batched.solved
+    diff = np.max(np.abs(one_by_one(args) - batched.p_max)[heavy] / batched.p_max.max())
     print(f"grid points                          : {scn.solver.n_points}")
     print(f"baseline 1e6-cycle wear run          : {t_run * 1e3:8.1f} ms   ({blocks[0]} blocks; "
           "target <= 190 ms)")
@@ -73,7 +78,8 @@ def main() -> None:
           f"({int(batched.solved.sum())} of {batched.solved.size} solved numerically)")
     print(f"worn contact, one position per call  : {t_ref * 1e3:8.1f} ms   (reference)")
     print(f"speed-up of the batched solve        : {t_ref / t_batch:8.1f} x")
-    print(f"largest difference of the peaks      : {diff:.1e} of the largest peak")
+    print(f"largest difference of the peaks      : {diff:.1e} of the largest peak "
+          "(numerically solved positions)")
 
 
 if __name__ == "__main__":

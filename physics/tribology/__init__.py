@@ -28,7 +28,7 @@ _SOURCES = {
         "wear_coefficient", "flank_grid", "check_shakedown", "quasi_static_force"),
     "physics.tribology.worn_contact": (
         "WornContact", "solve_worn_contact", "solve_gap_contact", "hertz_cumulative",
-        "worn_gap", "flank_profile", "band_reach"),
+        "worn_gap", "flank_profile", "band_reach", "levelling_length"),
 }
 _SOURCE = {name: module for module, names in _SOURCES.items() for name in names}
 __all__ = sorted(_SOURCE)

@@ -50,7 +50,12 @@ from physics.params import R_GAS, Lubricant, OutOfScope, Scenario, Tribology
 from physics.scope import check_scope, shakedown_pressure
 from physics.tribology.asperity_table import check_scenario
 from physics.tribology.contact_state import ContactState, solve_contact_state
-from physics.tribology.worn_contact import WornContact, band_reach, solve_worn_contact
+from physics.tribology.worn_contact import (
+    WornContact,
+    band_reach,
+    levelling_length,
+    solve_worn_contact,
+)
 
 #: ``force(s, wear1, wear2) -> F [N]`` on the grid s: the total normal mesh force per mesh
 #: position for the current worn profiles (the dynamic model supplies one; default quasi-static).
@@ -150,7 +155,12 @@ def wear_rate(
     load = pair_loads(geom, s, force, gap, stiffness)
     w = load / scn.gear.face_width
     e_star = contact.reduced_modulus(scn.material, scn.material)
-    band = solve_worn_contact(s, w, R1, R2, geom.rb1, geom.rb2, e_star, grid, wear1, wear2)
+    # ripples levelled over half the smallest band of a pair carrying half the static load
+    # (the double-contact zones), a constant of the scenario
+    level = levelling_length(0.5 * quasi_static_force(scn, geom) / scn.gear.face_width,
+                             contact.equivalent_radius(R1, R2), e_star)
+    band = solve_worn_contact(s, w, R1, R2, geom.rb1, geom.rb2, e_star, grid, wear1, wear2,
+                              level)
     # the film forms in the inlet, whose geometry the involutes' curvature sets: the film, the
     # asperity share and the flash temperature are those of the band at the pair's load
     state = solve_contact_state(scn, load, contact.equivalent_radius(R1, R2), v1, v2)

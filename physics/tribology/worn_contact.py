@@ -51,8 +51,8 @@ CELLS = 64
 #: a position whose gap correction (tilt removed) stays below this share of b^2/R keeps Hertz
 #: (the pressure moves by about that share of p_max)
 GAP_TOL = 2e-3
-#: wear ripples shorter than this share of the smallest Hertz half-width are levelled
-#: (:func:`flank_profile`)
+#: wear ripples shorter than this share of the pair's smallest Hertz half-width are levelled
+#: (:func:`flank_profile`, :func:`levelling_length`)
 LEVEL = 0.5
 #: positions carrying less than this share of the path's largest load keep a Hertz band
 LIGHT = 0.02
@@ -253,11 +253,12 @@ def flank_profile(s: np.ndarray, wear: np.ndarray, arc: np.ndarray, level: float
 def solve_worn_contact(s: np.ndarray, load_per_width: np.ndarray, R1: np.ndarray,
                        R2: np.ndarray, rb1: float, rb2: float, e_star: float,
                        flank: np.ndarray, wear1: np.ndarray, wear2: np.ndarray,
-                       cells: int = CELLS) -> WornContact:
+                       level: float, cells: int = CELLS) -> WornContact:
     """Pressure across the band at each roll coordinate ``s`` for loads ``w`` [N/m] on unworn
     involutes of radii ``R1, R2`` [m] worn by ``wear1, wear2`` [m], given on the flank grid
     ``flank`` (roll coordinates that reach beyond the path by the band's sweep; module text),
-    on ``cells`` cells across the window."""
+    levelled over ``level`` [m] of arc (:func:`flank_profile`, :func:`levelling_length`), on
+    ``cells`` cells across the window."""
     w = np.asarray(load_per_width, dtype=float)
     loaded = w > 0
     R = R1 * R2 / (R1 + R2)
@@ -266,7 +267,6 @@ def solve_worn_contact(s: np.ndarray, load_per_width: np.ndarray, R1: np.ndarray
     scale1, scale2 = rb1 / R1, rb2 / R2
     bb = np.where(loaded, b, 1.0)
     # the flanks' arc lengths on the flank grid (R grows with s on the pinion, falls on the gear)
-    level = LEVEL * np.min(b[loaded]) if loaded.any() else 0.0
     h1 = flank_profile(flank, wear1, (R1[0] + flank - s[0])**2 / (2 * rb1), level)
     h2 = flank_profile(flank, wear2, (R2[0] - flank + s[0])**2 / (2 * rb2), level)
     # a coarse look at the gap correction: its tilt only shifts the band
@@ -329,3 +329,11 @@ def band_reach(half_width: np.ndarray, R1: np.ndarray, R2: np.ndarray, rb1: floa
     of arc to roll distance holds only where the curvature changes little over it."""
     reach = WINDOW * half_width * np.maximum(rb1 / R1, rb2 / R2)
     return float(min(reach[0], 0.5 * R1[0])), float(min(reach[-1], 0.5 * R2[-1]))
+
+
+def levelling_length(load_per_width: float, R: np.ndarray, e_star: float) -> float:
+    """Arc length [m] over which wear ripples are levelled (:func:`flank_profile`):
+    ``LEVEL`` times the smallest Hertz half-width along the path at the load per width
+    ``load_per_width`` [N/m]; a property of the pair and its load, whatever positions a call
+    solves."""
+    return float(LEVEL * np.sqrt(4 * load_per_width * np.min(R) / (math.pi * e_star)))

@@ -97,7 +97,7 @@ def _band(wear_scale: float, n: int = 201):
 
 def test_an_unworn_path_keeps_the_closed_form_hertz():
     geom, s, R1, R2, grid, depth, w = _band(0.0)
-    c = wc.solve_worn_contact(s, w, R1, R2, geom.rb1, geom.rb2, E_STAR, grid, depth, depth)
+    c = wc.solve_worn_contact(s, w, R1, R2, geom.rb1, geom.rb2, E_STAR, grid, depth, depth, 20e-6)
     assert not c.solved.any()
     assert np.allclose(c.p_max, np.sqrt(w * E_STAR / (math.pi * R1 * R2 / (R1 + R2))))
 
@@ -106,12 +106,13 @@ def test_a_flank_worn_300um_has_a_finite_converged_pressure():
     """Severe wear: 300 um at the pinion root and gear tip. Every position is solved to a
     finite pressure carrying its load, and doubling the cells moves the peaks by < 2 %."""
     geom, s, R1, R2, grid, depth, w = _band(300e-6)
-    c = wc.solve_worn_contact(s, w, R1, R2, geom.rb1, geom.rb2, E_STAR, grid, depth, 0 * depth)
+    c = wc.solve_worn_contact(s, w, R1, R2, geom.rb1, geom.rb2, E_STAR, grid, depth, 0 * depth,
+                              20e-6)
     assert c.solved[s < -1e-3].all()
     assert np.all(np.isfinite(c.p_max)) and c.p_max.max() < 10e9
     assert np.allclose(c.P.sum(axis=1) * c.dX, math.pi / 2)
     fine = wc.solve_worn_contact(s, w, R1, R2, geom.rb1, geom.rb2, E_STAR, grid, depth,
-                                 0 * depth, cells=2 * wc.CELLS)
+                                 0 * depth, 20e-6, cells=2 * wc.CELLS)
     np.testing.assert_allclose(fine.p_max, c.p_max, rtol=0.02)
 
 
@@ -121,7 +122,7 @@ def test_sweep_keeps_the_worn_volume(scale):
     """Integrated along the flank, the swept per-pass wear is the point model's: the band moves
     wear between flank points but neither makes nor loses any (Hertz or worn bands)."""
     geom, s, R1, R2, grid, depth, w = _band(scale)
-    c = wc.solve_worn_contact(s, w, R1, R2, geom.rb1, geom.rb2, E_STAR, grid, depth, depth)
+    c = wc.solve_worn_contact(s, w, R1, R2, geom.rb1, geom.rb2, E_STAR, grid, depth, depth, 20e-6)
     weight = 1e-3 + np.abs(s)
     swept = c.sweep(s, grid, R1 / geom.rb1, weight)
     edges = np.concatenate([[s[0]], 0.5 * (s[1:] + s[:-1]), [s[-1]]])
