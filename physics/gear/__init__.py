@@ -4,10 +4,9 @@ finite-element check, and double-tooth load sharing. Imports numpy/scipy and ``p
 
 from __future__ import annotations
 
-import importlib
+from physics.exports import lazy_exports
 
-#: the public names, by the module that defines each; a name is imported on first use, so that
-#: importing the package (or one of its modules) stays light and free of import cycles
+#: the public names, by the module that defines each (imported on first use: physics.exports)
 _SOURCES = {
     "physics.gear.contact": (
         "reduced_modulus", "equivalent_radius", "hertz_half_width", "hertz_max_pressure",
@@ -22,17 +21,4 @@ _SOURCES = {
     "physics.gear.tooth": ("ToothForm", "generate_tooth"),
     "physics.gear.tooth_fem": ("FEResult", "fe_pair_stiffness"),
 }
-_SOURCE = {name: module for module, names in _SOURCES.items() for name in names}
-__all__ = sorted(_SOURCE)
-
-
-def __getattr__(name: str):
-    if name in _SOURCE:
-        value = getattr(importlib.import_module(_SOURCE[name]), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted({*globals(), *__all__})
+__all__, __getattr__, __dir__ = lazy_exports(__name__, _SOURCES)

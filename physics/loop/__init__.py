@@ -14,10 +14,9 @@ test rigs that make bundles to try it on are in :mod:`physics.testbeds`."""
 
 from __future__ import annotations
 
-import importlib
+from physics.exports import lazy_exports
 
-#: the public names, by the module that defines each; a name is imported on first use, so that
-#: importing the package (or one of its modules) stays light and free of import cycles
+#: the public names, by the module that defines each (imported on first use: physics.exports)
 _SOURCES = {
     "physics.loop.bundle": (
         "Bundle", "read_bundle", "write_bundle", "read_feature_table", "read_measurements",
@@ -56,17 +55,4 @@ _SOURCES = {
     "physics.loop.bundle_loop": ("run_loop",),
     "physics.loop.table_loop": ("run_feature_table", "parse_columns"),
 }
-_SOURCE = {name: module for module, names in _SOURCES.items() for name in names}
-__all__ = sorted(_SOURCE)
-
-
-def __getattr__(name: str):
-    if name in _SOURCE:
-        value = getattr(importlib.import_module(_SOURCE[name]), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted({*globals(), *__all__})
+__all__, __getattr__, __dir__ = lazy_exports(__name__, _SOURCES)
