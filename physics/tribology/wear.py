@@ -228,7 +228,7 @@ def quasi_static_force(scn: Scenario, geom: MeshGeometry) -> float:
 
 #: largest rise of any position's peak pressure over its Hertz pressure in one block before
 #: the block is redone with half the wear step
-PRESSURE_STEP = 0.1
+PRESSURE_STEP = 0.25
 #: shortest step, as a share of ``solver.update_um``, that step control may reach
 MIN_UPDATE = 1 / 64
 
