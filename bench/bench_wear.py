@@ -20,8 +20,8 @@ from omegaconf import OmegaConf
 from physics.gear import contact
 from physics.params import Scenario
 from physics.reproduce.thesis import ReproduceConfig, reproduce
-from physics.tribology.wear import flank_grid, quasi_static_force, simulate_wear
-from physics.tribology.worn_contact import levelling_length, solve_worn_contact
+from physics.tribology.wear import flank_grid, simulate_wear
+from physics.tribology.worn_contact import solve_worn_contact
 
 
 def best_of(fn, repeat: int) -> float:
@@ -33,16 +33,14 @@ def worn_contact_inputs(scn: Scenario) -> dict:
     """The solve's inputs on the flanks worn by 1.5e7 quasi-static cycles (Table 8)."""
     res = simulate_wear(scn, 1.5e7)
     geom, s = res.geometry, res.s
-    grid, path = flank_grid(scn, geom, s)
-    f1, f2 = np.zeros_like(grid), np.zeros_like(grid)
-    f1[path], f2[path] = res.pinion, res.gear
+    flank = flank_grid(scn, geom, s)
+    f1, f2 = np.zeros_like(flank.grid), np.zeros_like(flank.grid)
+    f1[flank.path], f2[flank.path] = res.pinion, res.gear
     R1, R2 = geom.curvature_radii(s)
-    e_star = contact.reduced_modulus(scn.material, scn.material)
-    level = levelling_length(0.5 * quasi_static_force(scn, geom) / scn.gear.face_width,
-                             contact.equivalent_radius(R1, R2), e_star)
     return {"s": s, "load_per_width": res.last_rate.load / scn.gear.face_width, "R1": R1,
             "R2": R2, "rb1": geom.rb1, "rb2": geom.rb2,
-            "e_star": e_star, "flank": grid, "wear1": f1, "wear2": f2, "level": level}
+            "e_star": contact.reduced_modulus(scn.material, scn.material), "flank": flank.grid,
+            "wear1": f1, "wear2": f2, "level": flank.level}
 
 
 def one_by_one(args: dict) -> np.ndarray:

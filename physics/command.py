@@ -21,6 +21,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any, TypeVar
 
+from hydra.experimental.callback import Callback
 from omegaconf import DictConfig, OmegaConf
 
 Plan = TypeVar("Plan")
@@ -71,15 +72,7 @@ def _record_before(folder: Path) -> None:
             break
 
 
-def _hydra_callback_base() -> type:
-    try:
-        from hydra.experimental.callback import Callback
-    except ImportError:  # pragma: no cover - hydra is a dependency
-        return object
-    return Callback
-
-
-class RunRecord(_hydra_callback_base()):
+class RunRecord(Callback):
     """Hydra callback (``hydra.callbacks.run_record`` of every app): records, before Hydra makes
     the run folder, what already exists there, so that a refused run removes only what it made."""
 

@@ -24,7 +24,7 @@ _SOURCES = {
         "flash_temperature", "band_source_max_rise", "peclet", "heat_flux"),
     "physics.tribology.wear": (
         "MeshForce", "WearRate", "WearResult", "simulate_wear", "wear_rate", "film_deficiency",
-        "wear_coefficient", "flank_grid", "check_shakedown", "quasi_static_force"),
+        "wear_coefficient", "Flank", "flank_grid", "check_shakedown", "quasi_static_force"),
     "physics.tribology.worn_contact": (
         "WornContact", "solve_worn_contact", "solve_gap_contact", "hertz_cumulative",
         "worn_gap", "flank_profile", "band_reach", "levelling_length"),

@@ -119,61 +119,67 @@ def wear_coefficient(tri: Tribology, asperity_ratio: np.ndarray, psi: np.ndarray
     return (1 - b) * mixed + b * tri.dry_wear_coeff
 
 
-def flank_grid(scn: Scenario, geom: MeshGeometry, s: np.ndarray) -> tuple[np.ndarray, slice]:
-    """The grid the wear is tracked on: the path's grid ``s`` extended at both ends, at its
-    spacing, by the roll distance a band of twice the static load presses beyond them, within
-    the involutes (:func:`physics.tribology.worn_contact.band_reach`); and the slice of the path
-    in it."""
+@dataclass(frozen=True)
+class Flank:
+    """Where the wear is tracked: ``grid``, the path's grid extended at both ends (``path`` picks
+    the path's points), and ``level`` [m], the arc over which wear ripples are levelled
+    (:func:`physics.tribology.worn_contact.levelling_length`); constants of the scenario."""
+
+    grid: np.ndarray
+    path: slice
+    level: float
+
+
+def flank_grid(scn: Scenario, geom: MeshGeometry, s: np.ndarray) -> Flank:
+    """The flank of the scenario on the path's grid ``s``: extended, at its spacing, by the roll
+    distance a band of twice the static load presses beyond the path's ends, within the
+    involutes (:func:`physics.tribology.worn_contact.band_reach`); ripples levelled over half
+    the smallest band of a pair carrying half the static load (the double-contact zones)."""
     R1, R2 = geom.curvature_radii(s)
-    w = 2 * quasi_static_force(scn, geom) / scn.gear.face_width
-    b = contact.hertz_half_width(w, contact.equivalent_radius(R1, R2),
-                                 contact.reduced_modulus(scn.material, scn.material))
+    R = contact.equivalent_radius(R1, R2)
+    e_star = contact.reduced_modulus(scn.material, scn.material)
+    w = quasi_static_force(scn, geom) / scn.gear.face_width
+    b = contact.hertz_half_width(2 * w, R, e_star)
     ds = s[1] - s[0]
     before, after = band_reach(b, R1, R2, geom.rb1, geom.rb2)
     n0, n1 = int(before // ds), int(after // ds)
     grid = np.concatenate([s[0] - np.arange(n0, 0, -1) * ds, s, s[-1] + np.arange(1, n1 + 1) * ds])
-    return grid, slice(n0, n0 + s.size)
+    return Flank(grid, slice(n0, n0 + s.size), levelling_length(0.5 * w, R, e_star))
 
 
 def wear_rate(
     scn: Scenario, geom: MeshGeometry, s: np.ndarray, wear1: np.ndarray, wear2: np.ndarray,
-    force: np.ndarray, stiffness: PairStiffness, flank: tuple[np.ndarray, slice] | None = None,
+    force: np.ndarray, stiffness: PairStiffness, flank: Flank,
 ) -> WearRate:
     """Wear depth per pinion cycle on both flanks for the current worn profiles (module doc).
 
-    ``wear1, wear2`` [m] are on the flank grid ``flank`` (:func:`flank_grid`; by default the
-    path's grid ``s`` itself, for unworn flanks)."""
-    grid, path = flank if flank is not None else (s, slice(0, s.size))
+    ``wear1, wear2`` [m] are on the flank's grid (:func:`flank_grid`)."""
     R1, R2 = geom.curvature_radii(s)  # the unworn involutes; the wear enters as a gap
+    R = contact.equivalent_radius(R1, R2)
     v1, v2 = kinematics.surface_velocities(R1, R2, scn.operating.omega1, scn.gear.z1,
                                            scn.gear.z2)
-    total = wear1[path] + wear2[path]
+    total = wear1[flank.path] + wear2[flank.path]
 
     def gap(x: np.ndarray) -> np.ndarray:
         return np.interp(x, s, total)
 
     load = pair_loads(geom, s, force, gap, stiffness)
-    w = load / scn.gear.face_width
     e_star = contact.reduced_modulus(scn.material, scn.material)
-    # ripples levelled over half the smallest band of a pair carrying half the static load
-    # (the double-contact zones), a constant of the scenario
-    level = levelling_length(0.5 * quasi_static_force(scn, geom) / scn.gear.face_width,
-                             contact.equivalent_radius(R1, R2), e_star)
-    band = solve_worn_contact(s, w, R1, R2, geom.rb1, geom.rb2, e_star, grid, wear1, wear2,
-                              level)
+    band = solve_worn_contact(s, load / scn.gear.face_width, R1, R2, geom.rb1, geom.rb2, e_star,
+                              flank.grid, wear1, wear2, flank.level)
     # the film forms in the inlet, whose geometry the involutes' curvature sets: the film, the
     # asperity share and the flash temperature are those of the band at the pair's load
-    state = solve_contact_state(scn, load, contact.equivalent_radius(R1, R2), v1, v2)
+    state = solve_contact_state(scn, load, R, v1, v2)
     tri = scn.tribology
     psi = (np.ones_like(s) if tri.regime == "dry"
            else film_deficiency(state.v_s, state.temperature, scn.lubricant))
     k_eff = wear_coefficient(tri, state.asperity_ratio, psi)
     slide = np.abs(v1 - v2)
     per_hardness = k_eff / scn.material.hardness
-    pinion = band.sweep(s, grid, R1 / geom.rb1, per_hardness * slide / v1)
-    gear = band.sweep(s, grid, R2 / geom.rb2, per_hardness * slide / v2) * (scn.gear.z1
-                                                                          / scn.gear.z2)
-    return WearRate(pinion, gear, path, load, psi, k_eff, band, state)
+    pinion = band.sweep(s, flank.grid, R1 / geom.rb1, per_hardness * slide / v1)
+    gear = band.sweep(s, flank.grid, R2 / geom.rb2, per_hardness * slide / v2) * (scn.gear.z1
+                                                                                / scn.gear.z2)
+    return WearRate(pinion, gear, flank.path, load, psi, k_eff, band, state)
 
 
 @dataclass(frozen=True)
@@ -240,14 +246,12 @@ def _overshoots(old: WornContact, new: WornContact) -> bool:
     change the converged wear, see ``tests/tribology/test_wear.py``). A change of the load
     alone (the dynamic force, the load sharing) moves the Hertz pressure with it and is not
     counted."""
-    def peak(c: WornContact) -> np.ndarray:
-        return np.where(c.p_hertz > 0, c.p_max / np.where(c.p_hertz > 0, c.p_hertz, 1.0), 1.0)
-
     # bands that carry a real share of the load in both states (a pair shedding its load to
     # the wear gap, or taking it up, changes its band's shape without any instability)
     w_old, w_new = old.p_hertz * old.half_width, new.p_hertz * new.half_width
     loaded = (w_old > 0.1 * w_old.max()) & (w_new > 0.1 * w_new.max())
-    return bool(np.max((peak(new) - peak(old))[loaded], initial=0.0) > PRESSURE_STEP)
+    rise = new.peak_ratio - old.peak_ratio
+    return bool(np.max(rise[loaded], initial=0.0) > PRESSURE_STEP)
 
 
 def simulate_wear(
@@ -293,7 +297,8 @@ def simulate_wear(
 
     step = scn.solver.update_um * 1e-6
     limit = shakedown_pressure(scn.material.hardness)
-    grid, path = flank = flank_grid(scn, geom, s)
+    flank = flank_grid(scn, geom, s)
+    path = flank.path
 
     def rate_at(f1: np.ndarray, f2: np.ndarray) -> WearRate:
         w1, w2 = f1[path], f2[path]
@@ -304,7 +309,7 @@ def simulate_wear(
                 "give one force per grid point, finite and >= 0 [N]")
         return wear_rate(scn, geom, s, f1, f2, f, stiffness(s, w1, w2), flank)
 
-    f1, f2 = np.zeros_like(grid), np.zeros_like(grid)  # wear on the flank grid
+    f1, f2 = np.zeros_like(flank.grid), np.zeros_like(flank.grid)  # wear on the flank grid
     done, blocks, taken, pending = 0.0, 0, {}, list(marks)
     rate = first = rate_at(f1, f2)
     check_shakedown(rate.contact.p_max, s, limit, f1[path], f2[path], done)

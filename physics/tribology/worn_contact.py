@@ -35,12 +35,13 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cached_property, lru_cache
 
 import numpy as np
 import scipy.fft as sfft
 from scipy.interpolate import make_interp_spline
 
+from physics.gear import contact
 from physics.params import OutOfScope
 
 #: half-length of the solution window, in unworn Hertz half-widths, around the gap's minimum
@@ -161,19 +162,29 @@ class WornContact:
     dX: float
 
     @property
-    def p_max(self) -> np.ndarray:
-        """Largest pressure at each position [Pa]."""
+    def peak_ratio(self) -> np.ndarray:
+        """Largest pressure at each position over its unworn Hertz pressure [-]."""
         peak = np.ones_like(self.p_hertz)
         peak[self.solved] = self.P.max(axis=1)
-        return peak * self.p_hertz
+        return peak
+
+    @property
+    def p_max(self) -> np.ndarray:
+        """Largest pressure at each position [Pa]."""
+        return self.peak_ratio * self.p_hertz
+
+    @cached_property
+    def _passed(self) -> np.ndarray:
+        """Load passed up to each cell edge of the solved rows (Hertz units)."""
+        return np.concatenate([np.zeros((self.P.shape[0], 1)),
+                               np.cumsum(self.P, axis=1) * self.dX], axis=1)
 
     def cumulative(self, X: np.ndarray) -> np.ndarray:
         """Load passed up to offset ``X`` (rows: positions; Hertz units, 0 to pi/2)."""
         out = hertz_cumulative(X - self.centre[:, None])
         if self.solved.any():
             rows = np.flatnonzero(self.solved)
-            Q = np.concatenate([np.zeros((rows.size, 1)), np.cumsum(self.P, axis=1) * self.dX],
-                               axis=1)
+            Q = self._passed
             k = (X[rows] - self.centre[rows, None]) / self.dX
             i = np.clip(np.floor(k).astype(int), 0, Q.shape[1] - 2)
             f = np.clip(k - i, 0.0, 1.0)
@@ -261,11 +272,12 @@ def solve_worn_contact(s: np.ndarray, load_per_width: np.ndarray, R1: np.ndarray
     ``cells`` cells across the window."""
     w = np.asarray(load_per_width, dtype=float)
     loaded = w > 0
-    R = R1 * R2 / (R1 + R2)
-    b = np.where(loaded, np.sqrt(4 * np.where(loaded, w, 0.0) * R / (math.pi * e_star)), 0.0)
-    p_h = np.where(loaded, 2 * w / (math.pi * np.where(loaded, b, 1.0)), 0.0)
+    R = contact.equivalent_radius(R1, R2)
+    hertz = contact.hertz_half_width(np.where(loaded, w, 0.0), R, e_star)
+    b = np.where(loaded, hertz, 0.0)
+    bb = np.where(loaded, hertz, 1.0)  # 1 m where unloaded: a divisor, never a band
+    p_h = np.where(loaded, contact.hertz_max_pressure(w, bb), 0.0)
     scale1, scale2 = rb1 / R1, rb2 / R2
-    bb = np.where(loaded, b, 1.0)
     # the flanks' arc lengths on the flank grid (R grows with s on the pinion, falls on the gear)
     h1 = flank_profile(flank, wear1, (R1[0] + flank - s[0])**2 / (2 * rb1), level)
     h2 = flank_profile(flank, wear2, (R2[0] - flank + s[0])**2 / (2 * rb2), level)
@@ -285,7 +297,6 @@ def solve_worn_contact(s: np.ndarray, load_per_width: np.ndarray, R1: np.ndarray
     dX = 2 * WINDOW / cells
     rows = np.flatnonzero(solved)
     P = np.zeros((rows.size, cells))
-    centre = centre.copy()
     if rows.size:
         # centre each window on the least total rigid gap within reach of the band
         low = probe[np.argmin(probe**2 / 2 + corr[rows], axis=1)]
@@ -336,4 +347,4 @@ def levelling_length(load_per_width: float, R: np.ndarray, e_star: float) -> flo
     ``LEVEL`` times the smallest Hertz half-width along the path at the load per width
     ``load_per_width`` [N/m]; a property of the pair and its load, whatever positions a call
     solves."""
-    return float(LEVEL * np.sqrt(4 * load_per_width * np.min(R) / (math.pi * e_star)))
+    return float(LEVEL * contact.hertz_half_width(load_per_width, np.min(R), e_star))
