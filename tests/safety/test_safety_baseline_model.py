@@ -11,15 +11,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from hydra import compose, initialize_config_module
 
-from surrogate import settings
 from surrogate.inference import Surrogate, check_gearboxes
 from surrogate.training import train
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(Path(__file__).parent))
-from test_safety_user_tables import table  # noqa: E402
+from test_safety_user_tables import table, train_cfg  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -27,15 +25,7 @@ def model(tmp_path_factory) -> Path:
     tmp = tmp_path_factory.mktemp("baseline")
     df = table(groups=8).rename(columns={"root_wear_mm": "mean_wear_mm"})
     df.to_csv(tmp / "mine.csv", index=False)
-    settings.register()
-    with initialize_config_module("gearwear_conf.train", version_base="1.3"):
-        cfg = compose("train", overrides=[
-            f"paths.root_dir={tmp}", f"paths.output_dir={tmp / 'run'}",
-            f"data.dataset={tmp / 'unused.parquet'}", f"data.table={tmp / 'mine.csv'}",
-            "data.group=rig", "data.val_replicates=2", "data.test_replicates=1",
-            "experiment=baseline", "trainer.enable_progress_bar=false",
-            "trainer.max_epochs=2", "model.members=2", "logger=csv"])
-    assert np.isfinite(train(cfg))
+    assert np.isfinite(train(train_cfg(tmp, "experiment=baseline", val_replicates=2)))
     return tmp / "run" / "wear_surrogate.pt"
 
 

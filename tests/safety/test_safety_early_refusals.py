@@ -73,20 +73,11 @@ def test_acceptance_apps_refuse_an_unwritable_output_in_one_line(tmp_path, argv)
 
 
 def _tiny_model(tmp: Path) -> Path:
-    from hydra import compose, initialize_config_module
+    from test_safety_user_tables import train_cfg
 
-    from surrogate import settings
     from surrogate.training import train
 
-    settings.register()
-    with initialize_config_module("gearwear_conf.train", version_base="1.3"):
-        cfg = compose("train", overrides=[
-            f"paths.root_dir={tmp}", f"paths.output_dir={tmp / 'run'}",
-            f"data.dataset={tmp / 'unused.parquet'}", f"data.table={tmp / 'in.csv'}",
-            "data.group=rig", "data.val_replicates=1", "data.test_replicates=1",
-            "trainer.enable_progress_bar=false", "trainer.max_epochs=1", "model.members=2",
-            "logger=csv"])
-    train(cfg)
+    train(train_cfg(tmp, table="in.csv", max_epochs=1))
     return tmp / "run" / "wear_surrogate.pt"
 
 

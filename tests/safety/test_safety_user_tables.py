@@ -89,15 +89,17 @@ def test_wear_order_follows_the_time_column_not_the_row_order(tmp_path):
     assert len(read(tmp_path, shuffled)) == 30
 
 
-def train_cfg(tmp: Path, *overrides: str):
+def train_cfg(tmp: Path, *overrides: str, table: str = "mine.csv", val_replicates: int = 1,
+              max_epochs: int = 2):
+    """The train app's config for a small run on the user table ``tmp / table`` (rig groups)."""
     settings.register()
     with initialize_config_module("gearwear_conf.train", version_base="1.3"):
         return compose("train", overrides=[
             f"paths.root_dir={tmp}", f"paths.output_dir={tmp / 'run'}",
-            f"data.dataset={tmp / 'unused.parquet'}", f"data.table={tmp / 'mine.csv'}",
-            "data.group=rig", "data.val_replicates=1", "data.test_replicates=1",
-            "trainer.enable_progress_bar=false", "trainer.max_epochs=2", "model.members=2",
-            "logger=csv", *overrides])
+            f"data.dataset={tmp / 'unused.parquet'}", f"data.table={tmp / table}",
+            "data.group=rig", f"data.val_replicates={val_replicates}", "data.test_replicates=1",
+            "trainer.enable_progress_bar=false", f"trainer.max_epochs={max_epochs}",
+            "model.members=2", "logger=csv", *overrides])
 
 
 def test_a_run_that_fails_after_starting_exports_nothing(tmp_path, monkeypatch):
