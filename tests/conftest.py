@@ -70,3 +70,13 @@ def config_store() -> ConfigStore:
     for group in TRAIN_GROUPS:
         repo.pop(group, None)
     repo.update(saved)
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Keep what a shared fixture makes on one worker of a parallel run (pytest-xdist,
+    ``--dist loadgroup``): every test that reads a README command's folder in one group (each
+    command then runs once), every other test with the rest of its file (its module fixtures
+    are made once)."""
+    for item in items:
+        group = "readme" if "readme_folder" in item.fixturenames else item.nodeid.split("::")[0]
+        item.add_marker(pytest.mark.xdist_group(group))
