@@ -181,6 +181,11 @@ MIXED_UNITS_RATIO = 100.0
 ORDER_COLUMNS = ("cycles", "time_s", "time_h", "time")
 
 
+def _plain(value):
+    """A numpy scalar as the Python value it holds (messages show ``3``, not ``np.int64(3)``)."""
+    return value.item() if isinstance(value, np.generic) else value
+
+
 def _shown(value) -> str:
     """A cell as a message shows it: numbers plainly, text quoted."""
     try:
@@ -245,7 +250,7 @@ def check_user_table(df: pd.DataFrame, path: Path | str, needed: list[str], grou
         med = pd.Series(np.abs(values[:, c])).groupby(codes).median()
         med = med[med > 0]
         if len(med) > 1 and med.max() > MIXED_UNITS_RATIO * med.min():
-            hi_g, lo_g = names[med.idxmax()], names[med.idxmin()]
+            hi_g, lo_g = (_plain(names[i]) for i in (med.idxmax(), med.idxmin()))
             raise ValueError(f"{path}: column {name!r} has a median of {med.max():.3g} in group "
                              f"{hi_g!r} but {med.min():.3g} in group {lo_g!r}, more than "
                              f"{MIXED_UNITS_RATIO:g} times apart: mixed units; give every "
@@ -271,7 +276,8 @@ def check_user_table(df: pd.DataFrame, path: Path | str, needed: list[str], grou
     if falls.any():
         i = int(np.argmax(falls))
         a, b = frame.iloc[i], frame.iloc[i + 1]
-        raise ValueError(f"{path}: group {names[int(b.g)]!r}: {target} falls from {a.w:.6g} "
+        raise ValueError(f"{path}: group {_plain(names[int(b.g)])!r}: {target} falls from "
+                         f"{a.w:.6g} "
                          f"(row {int(a.row) + 1}, {order} {a.t:g}) to {b.w:.6g} (row "
                          f"{int(b.row) + 1}, {order} {b.t:g}); wear does not heal: repair the "
                          f"readings or the {order} column")
@@ -574,6 +580,8 @@ class WearDataModule(L.LightningDataModule):
         self.table = user_rows(raw, table, group, needed, self.target, self.units, group_by)
         self.cases = [0]
         self.labels = raw[[c for c in raw.columns if c not in needed]]
+        if self.baseline:  # before the split: its refusal names the rule, not the counts
+            self.check_baselines(self.table)
         by = self.group_by
         uniques = pd.Index(pd.factorize(raw[by], sort=True)[1])
         self.group_values = [u.item() if isinstance(u, np.generic) else u for u in uniques]
@@ -640,8 +648,6 @@ class WearDataModule(L.LightningDataModule):
         if self.schema is not None:
             return
         if self.table is not None:
-            if self.baseline:
-                self.check_baselines(self.table)
             self.frames = self.split()
             self.schema = FeatureSchema.fit(self.network_rows("train"), self.inputs,
                                             self.units, self.target, self.baseline)

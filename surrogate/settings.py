@@ -55,7 +55,9 @@ class DataConfig:
     group: str | None = None  # the table's trajectory column (one gearbox or test run)
     #: units of the table's own columns, {fme15: m/s2} (else from <table>.units.yaml beside it;
     #: our column names have the dataset's units)
-    units: dict[str, str] = field(default_factory=dict)
+    #: (a plain value, not a typed dict: so that data.units={...} replaces it on the command
+    #: line; checked when the table is read)
+    units: Any = None
     #: the table's column whose values the test and validation groups are named by (default:
     #: data.group); trajectories are then the pairs of its values and data.group's
     group_by: str | None = None
