@@ -75,6 +75,7 @@ from physics.files import atomic_write, pyplot
 from physics.signals.features import features
 from physics.testbeds import IndependentPair, simulate_record, wear_depths
 from surrogate import settings
+from surrogate.baselines import fit_estimator, typical_wear
 from surrogate.data import load_dataset
 from surrogate.inference import Surrogate
 from surrogate.schema import FeatureSchema
@@ -89,11 +90,6 @@ def train_config(root: Path, out: Path, *overrides: str):
         return compose("train", overrides=[
             f"paths.root_dir={root}", f"paths.output_dir={out}", "logger=csv",
             "trainer.enable_progress_bar=false", *overrides])
-
-
-def fit_estimator(train: pd.DataFrame, target: str) -> EmpiricalInverse:
-    return EmpiricalInverse.fit(train.cycles.to_numpy(), train.dte_peak_to_peak.to_numpy(),
-                                train.dte_kurtosis.to_numpy(), train[target].to_numpy())
 
 
 def fit_fleet_estimator(labelled: pd.DataFrame, target: str) -> EmpiricalInverse:
@@ -118,13 +114,6 @@ def throughput(fn, x: np.ndarray) -> tuple[float, float]:
         fn(x[i:i + 1])
         times.append(time.perf_counter() - t)
     return rate, float(np.median(times)) * 1e6
-
-
-def typical_wear(train: pd.DataFrame, target: str) -> float:
-    """The null model: the median wear (``target``) of the training rows' worn states,
-    whatever the features say. A network that does not beat it has learnt nothing from
-    vibration."""
-    return float(train.loc[train[target] > 0, target].median())
 
 
 #: the columns that name one gearbox at one operating point in a test set (those present)

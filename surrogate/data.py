@@ -15,6 +15,7 @@ from 3 to 18 % over training seeds, with 219 from 1.5 to 4.9 %).
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import json
 import logging
@@ -157,11 +158,32 @@ def load_dataset(path: str | Path, spec: dict | None = None, jobs: int = 2) -> p
 #: (kurtosis, crest, ...) of a finite record stay far below 1e6
 PLAUSIBLE = {"m": (0.0, 1e-3), "m/s^2": (0.0, 1e5), "1": (-1e6, 1e6), "mm": (0.0, 10.0),
              "r/min": (0.0, 1e5), "N m": (-1e6, 1e6), "Pa s": (0.0, 1e3), "um": (0.0, 1e4),
-             "kg": (0.0, 1e5), "Hz": (0.0, 1e6), "dB": (-300.0, 300.0)}
+             "kg": (0.0, 1e5), "Hz": (0.0, 1e6), "dB": (-300.0, 300.0), "g": (0.0, 1e4),
+             "m/s": (0.0, 1e3), "rev/s": (0.0, 2e3), "s": (0.0, 1e10), "h": (0.0, 1e7)}
+#: other spellings of the units of :data:`PLAUSIBLE` (``^`` cannot stand unquoted in a Hydra
+#: override: ``data.units={fme15: m/s2}``)
+UNIT_ALIASES = {"m/s2": "m/s^2", "m s^-2": "m/s^2", "m/s**2": "m/s^2", "rpm": "r/min",
+                "1/min": "r/min", "Nm": "N m", "N*m": "N m", "Hz_rev": "rev/s", "rps": "rev/s",
+                "-": "1", "": "1", "µm": "um", "μm": "um"}
+#: the units a wear depth (the target) may be given in: it is not negative and does not fall
+LENGTH_UNITS = ("m", "mm", "um")
+
+
+def normalise_unit(unit) -> str:
+    """A user's unit as the checks know it (:data:`UNIT_ALIASES`); others are kept as given."""
+    text = str(unit).strip()
+    return UNIT_ALIASES.get(text, text)
+
+
 #: per-group medians of one dimensional feature further apart than this: mixed units
 MIXED_UNITS_RATIO = 100.0
 #: the columns of a user table that order a trajectory's rows in time (after data.columns)
 ORDER_COLUMNS = ("cycles", "time_s", "time_h", "time")
+
+
+def _plain(value):
+    """A numpy scalar as the Python value it holds (messages show ``3``, not ``np.int64(3)``)."""
+    return value.item() if isinstance(value, np.generic) else value
 
 
 def _shown(value) -> str:
@@ -173,19 +195,21 @@ def _shown(value) -> str:
 
 
 def check_user_table(df: pd.DataFrame, path: Path | str, needed: list[str], group: str,
-                     target: str | None = None) -> None:
+                     target: str | None = None, units: dict[str, str] | None = None) -> None:
     """A user's table checked before any training, one refusal per rule naming the column,
     the row (1-based, as the file's data rows) or the group, and the fix:
 
     - every group key present (no empty or NaN ``group`` value);
     - every needed value a finite number;
-    - every value within the range its unit allows (:data:`PLAUSIBLE`, by the dataset's
-      units of our column names): a DTE in m of 1e-2 is a unit error;
+    - every value within the range its unit allows (:data:`PLAUSIBLE`, by ``units``: the
+      dataset's units of our column names and the user's of his own, :func:`table_units`): a
+      DTE in m of 1e-2 is a unit error; a unit the table does not know is checked for finite
+      values and one unit per column only;
     - one unit per column: a dimensional feature whose per-group median differs more than
       :data:`MIXED_UNITS_RATIO` times between two groups mixes units;
-    - wear (``target``) not negative and, where an :data:`ORDER_COLUMNS` column is given (with
-      a value in every row; a column left wholly empty counts as not given), not falling within
-      a group in its order.
+    - wear (``target``, in a unit of :data:`LENGTH_UNITS`) not negative and, where an
+      :data:`ORDER_COLUMNS` column is given (with a value in every row; a column left wholly
+      empty counts as not given), not falling within a group in its order.
     """
     keys = df[group]
     empty = keys.isna() | (keys.astype(str).str.strip() == "")
@@ -201,21 +225,22 @@ def check_user_table(df: pd.DataFrame, path: Path | str, needed: list[str], grou
         raise ValueError(f"{path}: row {r + 1}, column {needed[c]!r} = "
                          f"{_shown(df[needed[c]].iloc[r])} is not a finite number; repair or "
                          "drop the row")
-    unit_of = dataset_units()
+    unit_of = {**dataset_units(), **(units or {})}
     for c, name in enumerate(needed):
         unit = unit_of.get(name)
+        if name == target and unit in LENGTH_UNITS and (values[:, c] < 0).any():
+            r = int(np.argmax(values[:, c] < 0))
+            raise ValueError(f"{path}: row {r + 1}, column {name!r} = {values[r, c]:.6g} is "
+                             f"negative; wear is a depth (>= 0, in {unit}): repair the reading")
         if unit not in PLAUSIBLE:
             continue
         lo, hi = PLAUSIBLE[unit]
-        if name == target and unit == "mm" and (values[:, c] < 0).any():
-            r = int(np.argmax(values[:, c] < 0))
-            raise ValueError(f"{path}: row {r + 1}, column {name!r} = {values[r, c]:.6g} is "
-                             "negative; wear is a depth (>= 0, in mm): repair the reading")
         out = (values[:, c] < lo) | (values[:, c] > hi)
         if out.any():
             r = int(np.argmax(out))
             fix = ("it is dimensionless: repair the reading" if unit == "1" else
-                   f"convert the column to {unit} (data.columns maps names, not units)")
+                   f"convert the column to {unit} (data.columns maps names, not units) or "
+                   "state its unit (data.units)")
             raise ValueError(f"{path}: row {r + 1}, column {name!r} = {values[r, c]:.6g} lies "
                              f"outside [{lo:g}, {hi:g}], what its unit {unit} allows; {fix}")
     codes, names = pd.factorize(keys, sort=True)
@@ -225,12 +250,12 @@ def check_user_table(df: pd.DataFrame, path: Path | str, needed: list[str], grou
         med = pd.Series(np.abs(values[:, c])).groupby(codes).median()
         med = med[med > 0]
         if len(med) > 1 and med.max() > MIXED_UNITS_RATIO * med.min():
-            hi_g, lo_g = names[med.idxmax()], names[med.idxmin()]
+            hi_g, lo_g = (_plain(names[i]) for i in (med.idxmax(), med.idxmin()))
             raise ValueError(f"{path}: column {name!r} has a median of {med.max():.3g} in group "
                              f"{hi_g!r} but {med.min():.3g} in group {lo_g!r}, more than "
                              f"{MIXED_UNITS_RATIO:g} times apart: mixed units; give every "
                              f"group in {unit_of[name]}")
-    if target is None or target not in needed or unit_of.get(target) != "mm":
+    if target is None or target not in needed or unit_of.get(target) not in LENGTH_UNITS:
         return  # the order rule is wear's
     wear = values[:, needed.index(target)]
     # an order column without a single value is not given (the bundle spec lets cycles be
@@ -251,19 +276,16 @@ def check_user_table(df: pd.DataFrame, path: Path | str, needed: list[str], grou
     if falls.any():
         i = int(np.argmax(falls))
         a, b = frame.iloc[i], frame.iloc[i + 1]
-        raise ValueError(f"{path}: group {names[int(b.g)]!r}: {target} falls from {a.w:.6g} "
+        raise ValueError(f"{path}: group {_plain(names[int(b.g)])!r}: {target} falls from "
+                         f"{a.w:.6g} "
                          f"(row {int(a.row) + 1}, {order} {a.t:g}) to {b.w:.6g} (row "
                          f"{int(b.row) + 1}, {order} {b.t:g}); wear does not heal: repair the "
                          f"readings or the {order} column")
 
 
-def user_table(path: str | Path, columns: dict[str, str], group: str | None,
-               needed: list[str], target: str | None = None) -> pd.DataFrame:
-    """A user's labelled feature table as the data module's rows: columns renamed by
-    ``columns`` (the table's name -> ours), each ``group`` value one trajectory (``case`` 0,
-    ``replicate`` its index). Features and wear in the dataset's units (``units()``), checked
-    by :func:`check_user_table` before any training. A ``cycles`` column, where given, is
-    kept (else NaN); the rows of each trajectory are read in the table's order."""
+def read_user_table(path: str | Path, columns: dict[str, str]) -> pd.DataFrame:
+    """A user's table as read from ``path`` (CSV or parquet), its columns renamed by
+    ``columns`` (the table's name -> ours)."""
     path = Path(path)
     if path.suffix not in (".csv", ".parquet") or not path.is_file():
         raise ValueError(f"data.table = {str(path)!r} must be an existing .csv or .parquet file")
@@ -276,8 +298,86 @@ def user_table(path: str | Path, columns: dict[str, str], group: str | None,
     if unknown:
         raise ValueError(f"data.columns names {unknown}, which {path} does not have")
     df = df.rename(columns=columns)
-    if group is None or group not in df.columns:
-        raise ValueError(f"data.group = {group!r} must name the column of {path} that tells "
+    twice = sorted(set(df.columns[df.columns.duplicated()]))
+    if twice:
+        raise ValueError(f"{path} has column(s) {twice} more than once (after data.columns); "
+                         "keep one of each")
+    return df
+
+
+def sidecar_path(path: str | Path) -> Path:
+    """The units sidecar of a user's table: ``mine.units.yaml`` beside ``mine.csv``."""
+    path = Path(path)
+    return path.with_name(f"{path.stem}.units.yaml")
+
+
+def table_units(path: str | Path, columns: dict[str, str], given: dict | None,
+                needed: list[str]) -> dict[str, str]:
+    """The units of a user's table: the dataset's for our column names, then those of its
+    sidecar (:func:`sidecar_path`, ``column: unit`` per line), then ``given``
+    (``data.units``), each later one winning; names as the table's or as mapped by
+    ``columns``. Raises naming every ``needed`` column without a unit."""
+    own: dict[str, str] = {}
+    side = sidecar_path(path)
+    if side.is_file():
+        import yaml
+
+        try:
+            read = yaml.safe_load(side.read_text())
+        except yaml.YAMLError as err:
+            raise ValueError(f"{side} is not readable YAML ({str(err).splitlines()[0]})") from None
+        if read is not None and not (isinstance(read, dict) and all(
+                isinstance(k, str) and isinstance(v, str | int | float) for k, v in read.items())):
+            raise ValueError(f"{side} must map column names to units, one per line "
+                             "(fme15: m/s^2); it holds something else")
+        own.update(read or {})
+    own.update({str(k): v for k, v in dict(given or {}).items()})
+    bad = [k for k, v in own.items() if not isinstance(v, str | int | float) or isinstance(v, bool)]
+    if bad:
+        raise ValueError(f"data.units gives {bad[0]!r} no unit ({own[bad[0]]!r}); give a unit "
+                         "per column: data.units={fme15: m/s2}")
+    own = {columns.get(k, k): normalise_unit(v) for k, v in own.items()}
+    units = {**dataset_units(), **own}
+    missing = [c for c in needed if c not in units]
+    if missing:
+        hint = ", ".join(f"{c}: UNIT" for c in missing)
+        raise ValueError(f"{path}: column(s) {missing} have no unit; give them with "
+                         f"data.units={{{hint}}} or in {side.name} beside the table "
+                         "(1 for a dimensionless feature)")
+    return {c: units[c] for c in dict.fromkeys([*own, *needed])}
+
+
+def user_table(path: str | Path, columns: dict[str, str], group: str | None,
+               needed: list[str], target: str | None = None, units: dict | None = None,
+               group_by: str | None = None) -> pd.DataFrame:
+    """A user's labelled feature table as the data module's rows (:func:`user_rows` of
+    :func:`read_user_table`); ``units`` as :func:`table_units` takes them."""
+    df = read_user_table(path, columns)
+    return user_rows(df, path, group, needed, target,
+                     table_units(path, columns, units, needed), group_by)
+
+
+#: columns a user's table may carry for the thesis's estimator beside the network (its
+#: features and the cycle count), kept in the rows where the table gives them
+ESTIMATOR_COLUMNS = ("dte_peak_to_peak", "dte_kurtosis")
+
+
+def user_rows(df: pd.DataFrame, path: str | Path, group: str | None, needed: list[str],
+              target: str | None = None, units: dict[str, str] | None = None,
+              group_by: str | None = None) -> pd.DataFrame:
+    """A user's table (renamed) as the data module's rows: the ``needed`` columns as numbers,
+    ``case`` 0, ``replicate`` the index of each trajectory in sorted order (a value of
+    ``group``, or with ``group_by`` another column, a pair of the two), ``split_group`` the
+    index of the row's ``group_by`` value in sorted order (of ``group`` without one), ``row``
+    the row of the table, ``cycles`` where given (else NaN) and the estimator's features where
+    given (:data:`ESTIMATOR_COLUMNS`). Checked by :func:`check_user_table` first; the rows of
+    each trajectory are read in the table's order."""
+    path = Path(path)
+    for option, col in (("data.group", group), ("data.group_by", group_by)):
+        if col is not None and col not in df.columns:
+            raise ValueError(f"{option} = {col!r} is not a column of {path}; it has {list(df)}")
+    if group is None:
+        raise ValueError(f"data.group = None must name the column of {path} that tells "
                          f"the trajectories (gearboxes, test runs) apart; it has {list(df)}")
     missing = [c for c in needed if c not in df.columns]
     if missing:
@@ -287,13 +387,84 @@ def user_table(path: str | Path, columns: dict[str, str], group: str | None,
         raise ValueError(f"data.table = {path} has no rows")
     if target is None:
         target = next((c for c in needed if dataset_units().get(c) == "mm"), None)
-    check_user_table(df, path, needed, group, target)
+    check_user_table(df, path, needed, group, target, units)
+    by = group_by or group
+    if by != group:
+        check_user_table(df, path, [], by)  # every row in a group of group_by, too
     out = df[needed].astype(float)
     out["case"] = 0
-    out["replicate"] = pd.factorize(df[group], sort=True)[0]
+    keys = [group] if by == group else [by, group]
+    out["replicate"] = df.groupby(keys, sort=True).ngroup().to_numpy()
+    out["split_group"] = pd.factorize(df[by], sort=True)[0]
+    out["row"] = np.arange(len(df))
     out["cycles"] = (df["cycles"].astype(float) if "cycles" in df.columns and "cycles"
                      not in needed else np.nan)
+    for name in ESTIMATOR_COLUMNS:
+        if name in df.columns and name not in needed:
+            out[name] = pd.to_numeric(df[name], errors="coerce").to_numpy(float)
     return out
+
+
+def match_groups(values, uniques: pd.Index, option: str, column: str, source) -> list[int]:
+    """The indices in ``uniques`` (a column's sorted distinct values) of the user's ``values``
+    (``data.test_groups``, ``data.val_groups``): numbers matched as numbers (45 is 45.0),
+    others as text. Raises naming a value the column does not have."""
+    codes = []
+    numeric = pd.api.types.is_numeric_dtype(uniques.dtype)
+    for v in list(values or []):
+        if numeric:
+            try:
+                hit = np.flatnonzero(np.isclose(uniques.to_numpy(float), float(v),
+                                                rtol=1e-12, atol=0))
+            except (TypeError, ValueError):
+                hit = np.array([], int)
+        else:
+            hit = np.flatnonzero(uniques.astype(str) == str(v))
+        if hit.size == 0:
+            shown = [u.item() if isinstance(u, np.generic) else u for u in uniques[:20]]
+            raise ValueError(f"{option} = {list(values)}: column {column!r} of {source} has no "
+                             f"value {v!r}; its values: {shown}"
+                             + (" ..." if len(uniques) > 20 else ""))
+        codes.append(int(hit[0]))
+    return list(dict.fromkeys(codes))
+
+
+def split_table(rows: pd.DataFrame, test_codes: list[int] | None, val_codes: list[int] | None,
+                val_replicates: int | None, test_replicates: int, seed: int,
+                describe) -> dict[str, pd.DataFrame]:
+    """Train/val/test rows of a user's table (:func:`user_rows`): the rows whose
+    ``split_group`` is one of ``test_codes`` (``val_codes``) test (validate); where none are
+    named, ``test_replicates`` (``val_replicates``; None: :func:`validation_count`)
+    trajectories are drawn from the others with ``seed``, in the order of
+    :func:`split_trajectories` (which this is, without named groups). ``describe(n)`` says
+    in the user's terms what the table's ``n`` trajectories are, for messages."""
+    reps = np.sort(rows.replicate.unique())
+    of_rep = rows.groupby("replicate").split_group.first().reindex(reps).to_numpy()
+    perm = np.random.default_rng([seed, 0]).permutation(reps)
+    test = (reps[np.isin(of_rep, test_codes)] if test_codes else None)
+    val = (reps[np.isin(of_rep, val_codes)] if val_codes else None)
+    n_test = 0 if test is not None else test_replicates
+    n_val = (0 if val is not None else
+             validation_count(len(reps)) if val_replicates is None else val_replicates)
+    available = len(reps) - sum(len(x) for x in (test, val) if x is not None)
+    if available < n_test + n_val + 1:
+        named = "".join(f", {len(x)} named by data.{k}_groups" for k, x in
+                        (("test", test), ("val", val)) if x is not None)
+        raise ValueError(
+            f"{describe(len(reps))}{named}; {n_val} more to validate and {n_test} more to test, "
+            f"drawn, and one to train need {n_test + n_val + 1} besides the named ones, "
+            f"{available} remain: lower data.val_replicates and data.test_replicates, name "
+            "the groups by value (data.val_groups, data.test_groups), or split by a finer "
+            "column (data.group)")
+    if test is None:
+        free = perm[~np.isin(perm, val if val is not None else [])]
+        test = free[:n_test]
+    if val is None:
+        free = perm[~np.isin(perm, test)]
+        val = free[:n_val]
+    parts = {"test": rows[rows.replicate.isin(test)], "val": rows[rows.replicate.isin(val)]}
+    parts["train"] = rows[~rows.replicate.isin(np.concatenate([test, val]))]
+    return {k: parts[k].reset_index(drop=True) for k in ("train", "val", "test")}
 
 
 def split_trajectories(df: pd.DataFrame, val_replicates: int | None, test_replicates: int,
@@ -333,11 +504,13 @@ class WearDataModule(L.LightningDataModule):
                  holdout_case: int | None = None, batch_size: int = 64, seed: int = 0,
                  generate: dict | None = None, jobs: int = 2, table: str | None = None,
                  columns: dict[str, str] | None = None, group: str | None = None,
-                 gearboxes: int = 256) -> None:
+                 gearboxes: int = 256, units: dict[str, str] | None = None,
+                 group_by: str | None = None, test_groups: list | None = None,
+                 val_groups: list | None = None, cv: str | None = None) -> None:
         super().__init__()
         self.dataset = str(dataset)
         self.cases = cases_of(case)
-        if holdout_case is not None and int(holdout_case) not in self.cases:
+        if table is None and holdout_case is not None and int(holdout_case) not in self.cases:
             raise ValueError(f"data.holdout_case = {holdout_case} must be one of the cases "
                              f"{self.cases}")
         self.inputs = list(inputs) if inputs else input_columns(list(sensors), operating_point)
@@ -360,24 +533,124 @@ class WearDataModule(L.LightningDataModule):
                 "replicates": replicates_per_case(int(gearboxes), len(self.cases)),
                 **dict(generate or {})}
         if "chunks" not in spec:  # a user's count wins; the spec's checks come first
-            units = spec_from_config(spec | {"chunks": 1}).units
-            spec["chunks"] = min(BUILD_CHUNKS, units)
+            work = spec_from_config(spec | {"chunks": 1}).units
+            spec["chunks"] = min(BUILD_CHUNKS, work)
         self.generate = spec
         self.table = None
+        self.labels: pd.DataFrame | None = None  # a user table's columns besides the network's
         self.source = self.dataset if table is None else str(table)  # named in errors
+        self.units = dataset_units()
+        self.group = self.group_by = None
+        self.test_codes = self.val_codes = None
+        self.cv, self.fold_label = cv, None
+        self.folds: list[int] = []
+        if cv not in (None, "logo"):
+            raise ValueError(f"data.cv = {cv!r} must be logo (leave one group out: one fold per "
+                             "value of data.group_by) or null")
         if table is not None:  # a user's own data: read and checked now, before any work
-            self.table = user_table(table, dict(columns or {}), group,
-                                    [*self.inputs, self.target], self.target)
-            self.cases = [0]
-        elif not Path(self.dataset).is_file():
-            dataset_job(self.dataset, self.generate, self.jobs)  # checks the build's settings
+            self._read_table(table, dict(columns or {}), group, group_by, units, test_groups,
+                             val_groups, holdout_case)
+        else:
+            given = [f"data.{k}" for k, v in (("group_by", group_by), ("test_groups", test_groups),
+                                              ("val_groups", val_groups), ("cv", cv),
+                                              ("units", units)) if v]
+            if given:
+                raise ValueError(f"{', '.join(given)} apply to a table of your own "
+                                 "(data.table=...); the physics dataset is split by "
+                                 "data.test_replicates, data.val_replicates and "
+                                 "data.holdout_case")
+            if not Path(self.dataset).is_file():
+                dataset_job(self.dataset, self.generate, self.jobs)  # checks the build
         self.schema: FeatureSchema | None = None
         self.frames: dict[str, pd.DataFrame] = {}
+
+    def _read_table(self, table: str, columns: dict[str, str], group: str | None,
+                    group_by: str | None, units: dict | None, test_groups: list | None,
+                    val_groups: list | None, holdout_case: int | None) -> None:
+        """Read, check and plan the split of a user's table (``data.table``): every refusal
+        before any work."""
+        if holdout_case is not None:
+            raise ValueError("data.holdout_case applies to the physics dataset; in a table of "
+                             "your own name the test groups by value: data.group_by=COLUMN "
+                             "data.test_groups=[...]")
+        needed = [*self.inputs, self.target]
+        raw = read_user_table(table, columns)
+        self.units = table_units(table, columns, units, needed)
+        self.group, self.group_by = group, group_by or group
+        self.table = user_rows(raw, table, group, needed, self.target, self.units, group_by)
+        self.cases = [0]
+        self.labels = raw[[c for c in raw.columns if c not in needed]]
+        if self.baseline:  # before the split: its refusal names the rule, not the counts
+            self.check_baselines(self.table)
+        by = self.group_by
+        uniques = pd.Index(pd.factorize(raw[by], sort=True)[1])
+        self.group_values = [u.item() if isinstance(u, np.generic) else u for u in uniques]
+        self.test_codes = match_groups(test_groups, uniques, "data.test_groups", by,
+                                       self.source) or None
+        self.val_codes = match_groups(val_groups, uniques, "data.val_groups", by,
+                                      self.source) or None
+        both = sorted(set(self.test_codes or []) & set(self.val_codes or []))
+        if both:
+            raise ValueError(f"data.test_groups and data.val_groups both name {by} = "
+                             f"{[self.group_values[k] for k in both]}; a group tests or "
+                             "validates, not both")
+        if self.cv:
+            if self.test_codes:
+                raise ValueError("data.cv=logo tests on every group in turn; leave "
+                                 "data.test_groups empty (data.val_groups stay fixed)")
+            self.folds = [k for k in range(len(uniques)) if k not in (self.val_codes or [])]
+            if len(self.folds) < 2:
+                raise ValueError(f"data.cv=logo needs two or more values of {by!r} to leave "
+                                 f"out in turn; {self.source} has {self.group_values}"
+                                 + (" besides data.val_groups" if self.val_codes else ""))
+            for k in self.folds:  # every fold's split refused now, not after some trained
+                self.fold(k).split()
+        else:
+            self.split()
+
+    def describe(self, n: int) -> str:
+        """A user table's ``n`` trajectories in its own terms (for messages)."""
+        if self.group_by == self.group:
+            return f"{self.source} has {n} groups of {self.group!r}"
+        return f"{self.source} has {n} trajectories (pairs of {self.group_by!r} and {self.group!r})"
+
+    def split(self) -> dict[str, pd.DataFrame]:
+        """The train/val/test rows of a user's table (:func:`split_table`)."""
+        return split_table(self.table, self.test_codes, self.val_codes, self.val_replicates,
+                           self.test_replicates, self.seed, self.describe)
+
+    def fold(self, k: int) -> WearDataModule:
+        """The data module of fold ``k`` of ``data.cv=logo``: the table's rows of the
+        ``k``-th value of ``data.group_by`` (sorted) test, the rest train and validate."""
+        dm = copy.copy(self)
+        dm.test_codes, dm.cv, dm.folds = [k], None, []
+        dm.fold_label = self.group_values[k]
+        dm.schema, dm.frames = None, {}
+        return dm
+
+    def split_summary(self) -> str:
+        """Rows and trajectories of each part of the split, in the table's terms."""
+        if self.table is None:
+            return ", ".join(f"{k} {len(f)} rows ({f.groupby(['case', 'replicate']).ngroups} "
+                             "trajectories)" for k, f in self.frames.items())
+        by = self.group_by
+
+        def values(f: pd.DataFrame) -> str:
+            codes = np.sort(f.split_group.unique())
+            shown = [self.group_values[c] for c in codes[:8]]
+            return f"{by} {shown}{' ...' if len(codes) > 8 else ''}"
+
+        return ", ".join(f"{k} {len(f)} rows ({values(f)})" for k, f in self.frames.items())
 
     def setup(self, stage: str | None = None) -> None:
         """Read (building it if missing) and split the data, once: Lightning calls this at
         every stage, and a single process needs no separate ``prepare_data``."""
         if self.schema is not None:
+            return
+        if self.table is not None:
+            self.frames = self.split()
+            self.schema = FeatureSchema.fit(self.network_rows("train"), self.inputs,
+                                            self.units, self.target, self.baseline)
             return
         df = self.table if self.table is not None else load_dataset(
             self.dataset, self.generate, self.jobs)
@@ -406,17 +679,30 @@ class WearDataModule(L.LightningDataModule):
         bad = first_rows(df, keys) & (wear > least)
         if bad.any():
             r = int(np.argmax(bad))
-            which = df[keys].iloc[[r]].to_dict("records")[0]
             raise ValueError(
-                f"{self.source}: trajectory {which} (in a table: "
-                "the replicate-th value of data.group, sorted) starts at "
+                f"{self.source}: trajectory {self.trajectory(df, r)} starts at "
                 f"{self.target} = {wear[r]:.4g}, above its least ({least[r]:.4g}); "
                 "data.baseline reads each trajectory against its first row, so that must be "
                 "its baseline record (unworn, or its least worn): put it first")
         from surrogate.inference import check_gearboxes  # single rows, rows out of time order
 
-        check_gearboxes(df, keys, None, f"{self.source} (a gearbox is a trajectory: in a table "
-                                        "the replicate-th value of data.group, sorted)")
+        if self.labels is None:
+            check_gearboxes(df, keys, None, f"{self.source} (a gearbox is a trajectory)")
+            return
+        ids = list(dict.fromkeys([self.group_by, self.group]))
+        named = self.labels[ids].iloc[df.row.to_numpy()].reset_index(drop=True)
+        cycles = df[["cycles"]].reset_index(drop=True) if df.cycles.notna().any() else None
+        check_gearboxes(pd.concat([named, cycles], axis=1) if cycles is not None else named,
+                        ids, None, f"{self.source} (a gearbox is a trajectory)")
+
+    def trajectory(self, df: pd.DataFrame, r: int) -> dict:
+        """The trajectory of row ``r`` of ``df`` (rows of this module), in the table's own
+        columns where it is a user's table."""
+        if self.labels is None:
+            return df[["case", "replicate"]].iloc[[r]].to_dict("records")[0]
+        ids = list(dict.fromkeys([self.group_by, self.group]))
+        row = self.labels[ids].iloc[int(df.row.iloc[r])]
+        return {k: v.item() if isinstance(v, np.generic) else v for k, v in row.items()}
 
     def network_rows(self, split: str) -> pd.DataFrame:
         """The rows of ``split`` as the network reads them: with ``baseline``, the features as

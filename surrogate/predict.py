@@ -1,9 +1,9 @@
 """Wear from features on the CPU: ``python -m surrogate.predict ckpt=PATH input=FILE``.
 
 ``input`` is a CSV or parquet table with the feature columns the model was trained on (their
-names and units are in the checkpoint; identifying columns such as ``case``, ``cycles`` or
-``record`` are passed through). ``output`` (default: ``wear.csv`` in the run folder) gets the
-input's identifying columns (true wear included, where given) and ``<target>_pred`` (the
+names and units are in the checkpoint; a missing one is refused, naming it). Every other column
+(labels, ids, the true wear, features the model does not read) passes through: ``output``
+(default: ``wear.csv`` in the run folder) gets them and ``<target>_pred`` (the
 model's wear: ``root_wear_mm`` or ``mean_wear_mm``), its standard deviation, the interval
 bounds and the ``out_of_range`` flag. A model trained with
 ``data.baseline=true`` reads each gearbox's features against its first row: ``gearbox=COLUMN``
@@ -31,7 +31,6 @@ from omegaconf import DictConfig
 from physics.command import run_command
 from physics.files import atomic_write, check_writable
 from surrogate.inference import Surrogate, check_gearboxes
-from surrogate.schema import KEEP_COLUMNS
 
 log = logging.getLogger(__name__)
 
@@ -91,8 +90,8 @@ def predict_file(ckpt: str | Path, source: str | Path, target: str | Path) -> pd
 def execute(job: PredictJob) -> pd.DataFrame:
     df = job.table
     pred = job.surrogate.predict(df, list(job.gearbox))
-    keep = [c for c in df.columns
-            if (c in KEEP_COLUMNS or c in job.gearbox) and c not in pred.columns]
+    keep = [c for c in df.columns if c not in job.surrogate.schema.inputs
+            and c not in pred.columns]  # labels, ids, other features: passed through
     result = pd.concat([df[keep], pred], axis=1)
     atomic_write(job.output, lambda p: result.to_csv(p, index=False))
     n_out = int(result.out_of_range.sum())

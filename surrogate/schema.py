@@ -7,7 +7,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import pandas as pd
 
-from physics.dataset.generation import NUISANCE_COLUMNS, units
+from physics.dataset.generation import NUISANCE_COLUMNS
 
 SCHEMA_VERSION = 1
 #: a value this many times outside the training envelope (or its inverse) means a wrong unit
@@ -90,7 +90,7 @@ class FeatureSchema:
     def check(self, df: pd.DataFrame) -> np.ndarray:
         """The input matrix of ``df``, after checking its columns, values and units.
 
-        Raises ``ValueError`` for a missing or unknown column, a non-numeric, NaN or infinite
+        Raises ``ValueError`` for a missing or repeated column, a non-numeric, NaN or infinite
         value, or a column whose values lie orders of magnitude outside the training envelope
         (a unit error, e.g. micrometres given for metres).
         """
@@ -102,11 +102,6 @@ class FeatureSchema:
             units = dict(zip(self.inputs, self.units, strict=True))
             raise ValueError(f"input lacks column(s) {missing}; the model needs {units} "
                              "(column: unit)")
-        extra = [c for c in df.columns if c not in self.inputs and c not in IGNORED_COLUMNS]
-        if extra:
-            raise ValueError(f"input has column(s) {extra} the model was not trained on; drop "
-                             f"them (allowed besides the inputs: {sorted(KEEP_COLUMNS)} and "
-                             "the dataset's other features)")
         if len(df) == 0:
             raise ValueError("input has no rows")
         try:
@@ -206,6 +201,3 @@ def baseline_changes(df: pd.DataFrame, columns: list[str], gearbox: list[str],
 KEEP_COLUMNS = frozenset({"case", "replicate", "cycles", "record", "root_wear_mm",
                           "max_wear_mm", "mean_wear_mm", "eta0_Pa_s", "sigma_um", "n1_rpm",
                           "torque_Nm", *NUISANCE_COLUMNS})
-#: columns an input may carry and the model ignores: the identifying ones and every other
-#: column of the physics dataset (features of sensors or kinds the model does not use)
-IGNORED_COLUMNS = KEEP_COLUMNS | frozenset(units())

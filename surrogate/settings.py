@@ -8,7 +8,9 @@ from __future__ import annotations
 
 import math
 import numbers
+import re
 from dataclasses import dataclass, field
+from pathlib import PurePath
 from typing import Any
 
 from omegaconf import MISSING
@@ -51,6 +53,18 @@ class DataConfig:
     table: str | None = None
     columns: dict[str, str] = field(default_factory=dict)  # +data.columns.THEIRS=OURS
     group: str | None = None  # the table's trajectory column (one gearbox or test run)
+    #: units of the table's own columns, {fme15: m/s2} (else from <table>.units.yaml beside it;
+    #: our column names have the dataset's units)
+    #: (a plain value, not a typed dict: so that data.units={...} replaces it on the command
+    #: line; checked when the table is read)
+    units: Any = None
+    #: the table's column whose values the test and validation groups are named by (default:
+    #: data.group); trajectories are then the pairs of its values and data.group's
+    group_by: str | None = None
+    test_groups: list[Any] | None = None  # values of data.group_by that test: [45]
+    val_groups: list[Any] | None = None  # values of data.group_by that validate
+    #: logo: leave-one-group-out cross-validation, one fold per value of data.group_by
+    cv: str | None = None
 
 
 @dataclass
@@ -112,8 +126,22 @@ class TrainerConfig:
                 raise ValueError(f"trainer.{name} = {getattr(self, name)} must be >= 1")
 
 
+def run_name(table: str | None, case) -> str:
+    """The run folder's name: after a user's table (its file name without the suffix), else
+    ``case<case>`` (``conf/train/hydra/default.yaml``)."""
+    if not table:
+        return f"case{case}"
+    stem = re.sub(r"[^A-Za-z0-9_.-]+", "_", PurePath(str(table)).stem).strip("._")
+    return stem or "table"
+
+
 def register() -> None:
-    """Register the schemas (before Hydra composes a train config)."""
+    """Register the schemas (before Hydra composes a train config) and the ``run_name``
+    resolver the run folder's name uses."""
+    from omegaconf import OmegaConf
+
+    if not OmegaConf.has_resolver("run_name"):
+        OmegaConf.register_new_resolver("run_name", run_name)
     register_schema("wear_schema", DataConfig, group="data")
     register_schema("ensemble_schema", ModelConfig, group="model")
     register_schema("cpu_schema", TrainerConfig, group="trainer")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 import json
 import logging
 import math
@@ -20,6 +21,7 @@ from omegaconf import DictConfig, OmegaConf
 
 from physics.estimators.empirical_inverse import wear_errors
 from physics.files import atomic_write, pyplot
+from surrogate import baselines, settings
 from surrogate.data import WearDataModule
 from surrogate.inference import Surrogate, conformal_scale, export
 
@@ -82,9 +84,7 @@ def prepare(cfg: DictConfig) -> TrainJob:
         raise ValueError(f"threads = {cfg.threads!r} must be a whole number >= 1 or null")
     OmegaConf.to_object(cfg.model).check()
     OmegaConf.to_object(cfg.trainer).check()
-    callbacks = [_instantiate(c, "callbacks") for c in (cfg.get("callbacks") or {}).values()]
-    loggers = [_instantiate(c, "logger") for c in (cfg.get("logger") or {}).values()]
-    trainer = _instantiate(cfg.trainer, "trainer", callbacks=callbacks, logger=loggers or False)
+    trainer = make_trainer(cfg)
     data = _instantiate(cfg.data, "data")
     init = Surrogate.load(cfg.init_from) if cfg.get("init_from") else None
     if init is None and cfg.model.get("trainable", "all") != "all":
@@ -95,12 +95,29 @@ def prepare(cfg: DictConfig) -> TrainJob:
         raise ValueError(f"init_from = {cfg.init_from}: that network takes "
                          f"{list(init.schema.inputs)}, this run's data gives {data.inputs}; "
                          "choose the same data.sensors and data.operating_point")
+    if init is not None:
+        theirs = dict(zip(init.schema.inputs, init.schema.units, strict=True))
+        other = {c: (theirs[c], data.units[c]) for c in data.inputs if theirs[c] != data.units[c]}
+        if other:
+            raise ValueError(f"init_from = {cfg.init_from}: that network takes "
+                             + ", ".join(f"{c} in {a}" for c, (a, _) in other.items())
+                             + "; this run's data gives "
+                             + ", ".join(f"{c} in {b}" for c, (_, b) in other.items())
+                             + ": convert the column(s) or train from scratch")
     if init is not None and tuple(init.schema.baseline) != data.baseline:
         raise ValueError(f"init_from = {cfg.init_from}: that network reads "
                          f"{list(init.schema.baseline) or 'no'} features against a baseline "
                          f"record, this run's data {list(data.baseline) or 'none'}; set "
                          f"data.baseline={str(bool(init.schema.baseline)).lower()}")
     return TrainJob(cfg, data, trainer, Path(cfg.paths.output_dir), init)
+
+
+def make_trainer(cfg: DictConfig) -> L.Trainer:
+    """The Lightning trainer of ``cfg`` with its callbacks and loggers (into
+    ``cfg.paths.output_dir``)."""
+    callbacks = [_instantiate(c, "callbacks") for c in (cfg.get("callbacks") or {}).values()]
+    loggers = [_instantiate(c, "logger") for c in (cfg.get("logger") or {}).values()]
+    return _instantiate(cfg.trainer, "trainer", callbacks=callbacks, logger=loggers or False)
 
 
 def train(cfg: DictConfig) -> float:
@@ -110,7 +127,17 @@ def train(cfg: DictConfig) -> float:
 
 def fit(job: TrainJob) -> float:
     """Train; write checkpoint, exported model, metrics, predictions and parity plot to the run
-    folder; return ``cfg.optimized_metric``."""
+    folder; return ``cfg.optimized_metric``. With ``data.cv=logo``, one such run per fold
+    (:func:`cross_validate`)."""
+    if job.data.cv:
+        return cross_validate(job)
+    metrics = fit_metrics(job)
+    value = metrics[job.cfg.optimized_metric]
+    return float(value) if math.isfinite(value) else float("inf")
+
+
+def fit_metrics(job: TrainJob) -> dict:
+    """:func:`fit`'s run; returns its metrics (``metrics.json``)."""
     cfg, dm, trainer, out = job.cfg, job.data, job.trainer, job.out
     L.seed_everything(cfg.seed, workers=True)
     if cfg.get("threads"):
@@ -125,9 +152,8 @@ def fit(job: TrainJob) -> float:
         model = instantiate(cfg.model, n_inputs=len(dm.inputs), schema=dm.schema.to_dict(),
                             _convert_="all", **shape)
         model.load_state_dict(job.init.model.state_dict())
-    log.info("training on %d rows (%d trajectories), validating on %d, testing on %d",
-             len(dm.frames["train"]), dm.frames["train"].groupby(["case", "replicate"]).ngroups,
-             len(dm.frames["val"]), len(dm.frames["test"]))
+    log.info("split%s: %s", f" (fold {dm.group_by} = {dm.fold_label})"
+             if dm.fold_label is not None else "", dm.split_summary())
     try:
         return _fit_and_export(job, dm, trainer, model, out)
     except Exception:
@@ -136,7 +162,7 @@ def fit(job: TrainJob) -> float:
 
 
 def _fit_and_export(job: TrainJob, dm: WearDataModule, trainer: L.Trainer, model, out: Path
-                    ) -> float:
+                    ) -> dict:
     cfg = job.cfg
     trainer.fit(model, dm)
     if trainer.interrupted:
@@ -162,7 +188,7 @@ def _fit_and_export(job: TrainJob, dm: WearDataModule, trainer: L.Trainer, model
         metrics = {**val, **test, "epochs": trainer.current_epoch,
                    "train_rows": len(dm.frames["train"]), "interval_scale": scale}
         if len(dm.frames["test"]):
-            metrics.update(report_test(surrogate, dm.frames["test"], out))
+            metrics.update(report_test(surrogate, dm, out))
         value = metrics.get(cfg.optimized_metric)
         if value is None:
             raise ValueError(f"optimized_metric = {cfg.optimized_metric!r} is not among the "
@@ -175,7 +201,7 @@ def _fit_and_export(job: TrainJob, dm: WearDataModule, trainer: L.Trainer, model
         staged.unlink(missing_ok=True)
         raise
     log.info("model: %s; metrics: %s", path, text)
-    return float(value) if math.isfinite(value) else float("inf")
+    return metrics
 
 
 def set_aside_checkpoints(out: Path) -> Path | None:
@@ -198,24 +224,136 @@ def kept(job: TrainJob) -> str:
             "exported: run the command again to train")
 
 
-def report_test(surrogate: Surrogate, test: pd.DataFrame, out: Path) -> dict[str, float]:
-    """Held-out errors in physical units, interval coverage, and the parity plot."""
-    t, keys = surrogate.schema.target, ["case", "replicate"]  # a trajectory: one gearbox
+def report_test(surrogate: Surrogate, dm: WearDataModule, out: Path) -> dict:
+    """Held-out errors in physical units and interval coverage of the network, and beside it,
+    on the same rows and target, those of the baselines (:mod:`surrogate.baselines`): the
+    median (null) model, a linear model of the same standardised inputs and the thesis's
+    estimator where its inputs exist, all fitted on the training rows. Writes
+    ``test_predictions.csv`` (a user table's own columns, else case, replicate and cycles;
+    the true and predicted wear of every model) and ``parity.png``; logs the figures, and one
+    line where the network is not better than the linear model."""
+    test, t, keys = dm.frames["test"], surrogate.schema.target, ["case", "replicate"]
     pred = surrogate.predict(test[[*surrogate.schema.inputs, *keys]], gearbox=keys)
-    rows = pd.concat([test[["case", "replicate", "cycles", t]].reset_index(drop=True),
-                      pred.reset_index(drop=True)], axis=1)
+    schema = surrogate.schema
+    x_train = schema.scale(dm.network_rows("train")[list(schema.inputs)].to_numpy(float))
+    x_test = schema.scale(dm.network_rows("test")[list(schema.inputs)].to_numpy(float))
+    readings, why = baselines.baseline_readings(dm.frames["train"], x_train, test, x_test, t)
+    ids = (test[["case", "replicate", "cycles"]].reset_index(drop=True) if dm.labels is None
+           else dm.labels.iloc[test.row.to_numpy()].reset_index(drop=True))
+    ids = ids.drop(columns=[c for c in ids.columns if c == t or c in pred.columns])
+    rows = pd.concat([ids, test[[t]].reset_index(drop=True), pred.reset_index(drop=True),
+                      pd.DataFrame({f"{t}_{k}": v for k, v in readings.items()})], axis=1)
     atomic_write(out / "test_predictions.csv", lambda p: rows.to_csv(p, index=False))
-    errors = wear_errors(rows[f"{t}_pred"], rows[t])
+    true = rows[t].to_numpy()
+    errors = wear_errors(rows[f"{t}_pred"], true)
+    others = baselines.scored(readings, true)
     inside = surrogate.coverage(pred, test, keys)
-    fig = parity_figure(rows[t].to_numpy(), rows[f"{t}_pred"].to_numpy(),
+    key, _ = baselines.headline(errors)
+    figures = {"network": errors, **others}
+    text = "; ".join(f"{baselines.LABELS[k]} {baselines.shown(key, e[key])}"
+                     for k, e in figures.items())
+    title = (f"held-out rows ({len(rows)}), {key.replace('_pct', ' [%]').replace('_', ' ')}: "
+             f"{text}; network R2 {errors['r2']:.3f}, coverage {inside:.2f}")
+    log.info("%s%s", title, "" if why is None else f" (no thesis estimator: {why})")
+    verdict = baselines.not_better_line(errors, others["linear"])
+    if verdict:
+        log.warning(verdict)
+    fig = parity_figure(true, rows[f"{t}_pred"].to_numpy(),
                         rows[f"{t}_std"].to_numpy() * surrogate.interval_scale,
-                        f"held-out trajectories: MRE {errors['mean_relative_error_pct']:.2f} %, "
-                        f"R2 {errors['r2']:.4f}, coverage {inside:.2f}", t)
+                        title.replace("; network", ";\nnetwork"), t, name="network")
+    add_baselines(fig.axes[0], true, readings)
     atomic_write(out / "parity.png", lambda p: fig.savefig(p, dpi=120, format="png"))
     pyplot().close(fig)
     return {**{f"test_{k}": v for k, v in errors.items()},
+            **{f"test_{b}_{k}": v for b, e in others.items() for k, v in e.items()},
+            "test_network_better_than_linear": verdict is None,
             "test_interval_coverage": inside,
             "test_out_of_range_rows": int(rows.out_of_range.sum())}
+
+
+#: markers of the baselines in a parity plot
+_MARKERS = {"linear": "x", "estimator": "+"}
+
+
+def add_baselines(ax, true: np.ndarray, readings: dict[str, np.ndarray]) -> None:
+    """The baselines' readings in a parity plot: the median as a horizontal line, the others
+    as points; the axes widened to hold them, and the legend."""
+    for name, value in readings.items():
+        if name == "median" and (len(value) == 0 or np.ptp(value) == 0):
+            ax.axhline(float(value[0]) if len(value) else 0.0, color="0.5", ls=":", lw=1,
+                       label=baselines.LABELS[name])
+        else:
+            ax.plot(true, value, _MARKERS.get(name, "."), ms=4, alpha=0.6,
+                    label=baselines.LABELS[name])
+    top = max([ax.get_xlim()[1], *(1.05 * float(np.max(v)) for v in readings.values()
+                                   if len(v))])
+    ax.set(xlim=(0, top), ylim=(0, top))
+    ax.legend(fontsize=7)
+
+
+def cross_validate(job: TrainJob) -> float:
+    """``data.cv=logo``: one run per value of ``data.group_by`` left out (its rows test, the
+    rest train and validate), each in ``fold_<value>/`` of the run folder as a run of its own.
+    Writes ``cv.csv`` (one row per fold: its group, its test rows, the network's and the
+    baselines' errors), ``metrics.json`` (each figure's mean over the folds),
+    ``test_predictions.csv`` (every fold's held-out rows) and ``parity.png``; logs each fold's
+    figures and the mean. Returns the mean of ``cfg.optimized_metric``."""
+    cfg, dm, out = job.cfg, job.data, job.out
+    by = dm.group_by
+    rows, preds = [], []
+    for k in dm.folds:
+        fold = dm.fold(k)
+        folder = out / f"fold_{settings.run_name(str(fold.fold_label), '')}"
+        fold_cfg = copy.deepcopy(cfg)
+        fold_cfg.paths.output_dir = str(folder)
+        log.info("fold %d of %d: %s = %r left out", len(rows) + 1, len(dm.folds), by,
+                 fold.fold_label)
+        metrics = fit_metrics(TrainJob(fold_cfg, fold, make_trainer(fold_cfg), folder,
+                                       job.init))
+        rows.append({by: fold.fold_label, "test_rows": len(fold.frames["test"]), **metrics})
+        preds.append(pd.read_csv(folder / "test_predictions.csv"))
+    table = pd.DataFrame(rows)
+    first = [by, "test_rows", *(f"test_{p}{k}" for k in ("mean_relative_error_pct", "rmse", "r2")
+                                for p in ("", *(f"{n}_" for n in baselines.NAMES))),
+             "test_interval_coverage"]
+    table = table[[c for c in first if c in table.columns]
+                  + [c for c in table.columns if c not in first]]
+    atomic_write(out / "cv.csv", lambda p: table.to_csv(p, index=False))
+    means = {k: float(v) for k, v in table.drop(columns=[by]).mean(numeric_only=True).items()}
+    t = dm.target
+    net = {k[len("test_"):]: v for k, v in means.items() if k.startswith("test_")}
+    lin = {k[len("test_linear_"):]: v for k, v in means.items() if k.startswith("test_linear_")}
+    key, _ = baselines.headline(net)
+    for row in rows:
+        log.info("fold %s = %r (%d test rows): %s", by, row[by], row["test_rows"], "; ".join(
+            f"{baselines.LABELS[b]} {baselines.shown(key, row[f'test_{p}{key}'])}"
+            for b, p in (("network", ""), *((n, f"{n}_") for n in baselines.NAMES))
+            if f"test_{p}{key}" in row and np.isfinite(row[f"test_{p}{key}"])))
+    shown = "; ".join(f"{baselines.LABELS[b]} {baselines.shown(key, means[f'test_{p}{key}'])}"
+                      for b, p in (("network", ""), *((n, f"{n}_") for n in baselines.NAMES))
+                      if f"test_{p}{key}" in means and np.isfinite(means[f"test_{p}{key}"]))
+    log.info("leave-one-group-out over %s (%d folds), %s, mean over the folds: %s", by,
+             len(rows), key.replace("_pct", " [%]").replace("_", " "), shown)
+    verdict = baselines.not_better_line(net, lin)
+    if verdict:
+        log.warning(verdict.replace("on these test rows", "over the folds' test rows (mean)"))
+    means["test_network_better_than_linear"] = verdict is None
+    metrics = {"cv": "logo", "group_by": by, "folds": len(rows), **means}
+    text = json.dumps(metrics, indent=2, sort_keys=True)
+    atomic_write(out / "metrics.json", lambda p: p.write_text(text + "\n"))
+    atomic_write(out / "config.yaml", lambda p: p.write_text(OmegaConf.to_yaml(cfg)))
+    everything = pd.concat(preds, ignore_index=True)
+    atomic_write(out / "test_predictions.csv", lambda p: everything.to_csv(p, index=False))
+    fig = parity_figure(everything[t].to_numpy(), everything[f"{t}_pred"].to_numpy(), None,
+                        f"leave-one-group-out over {by}, {len(rows)} folds: {shown}", t,
+                        name="network")
+    add_baselines(fig.axes[0], everything[t].to_numpy(),
+                  {b: everything[f"{t}_{b}"].to_numpy() for b in baselines.NAMES
+                   if f"{t}_{b}" in everything.columns})
+    atomic_write(out / "parity.png", lambda p: fig.savefig(p, dpi=120, format="png"))
+    pyplot().close(fig)
+    value = means.get(cfg.optimized_metric, float("nan"))
+    return float(value) if math.isfinite(value) else float("inf")
 
 
 def parity_figure(true: np.ndarray, pred: np.ndarray, half: np.ndarray | None, title: str,

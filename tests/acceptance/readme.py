@@ -138,9 +138,12 @@ def mean_wear(folder: Path) -> None:
 
 
 def another_run(folder: Path) -> None:
-    """A run beside the one the folder started with, with its metrics."""
-    runs = _runs(folder)
-    assert len(runs) == 2 and (runs[-1] / "metrics.json").is_file(), runs
+    """A run on the user's table beside the one the folder started with, named after the
+    table, with its metrics and the baselines beside the network."""
+    runs = sorted(folder.glob("logs/train/runs/my_wear_table_*"))
+    assert len(_runs(folder)) == 1 and len(runs) == 1, runs
+    metrics = json.loads((runs[0] / "metrics.json").read_text())
+    assert "test_linear_mean_relative_error_pct" in metrics
 
 
 def predicted(folder: Path) -> None:

@@ -1,0 +1,255 @@
+"""A user's own table: his feature columns as inputs with their units (data.inputs, data.units
+or a sidecar), splits he chooses (data.group_by with test and validation groups by value,
+leave-one-group-out cross-validation), outputs in his terms (run folder, ids, pass-through
+columns), and the median, linear and estimator baselines beside the network in every run.
+
+The table: one rig at two shaft speeds (15 and 45 rev/s) over 12 wear stages, two records a
+stage, with an acceleration RMS and a frequency-modulation energy feature (``fme15``, a name
+the project does not know)."""
+
+from __future__ import annotations
+
+import json
+import logging
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from hydra import compose, initialize_config_module
+
+from physics.estimators.empirical_inverse import wear_errors
+from surrogate import settings
+from surrogate.baselines import LinearModel, not_better_line
+from surrogate.inference import Surrogate
+from surrogate.predict import predict_file
+from surrogate.training import prepare, train
+
+ROOT = Path(__file__).resolve().parents[2]
+INPUTS = "data.inputs=[fme15,acc_rms]"
+
+
+def rig_table(stages: int = 12, records: int = 2, seed: int = 0) -> pd.DataFrame:
+    """One rig, two speeds, ``stages`` wear stages from new to 0.6 mm, ``records`` a stage."""
+    rng = np.random.default_rng(seed)
+    rows = []
+    for speed in (15, 45):
+        for stage in range(stages):
+            wear = 0.6 * (stage / (stages - 1)) ** 1.3
+            for r in range(records):
+                rows.append({
+                    "rig": "A", "speed": speed, "stage": stage, "record": f"s{speed}_{stage}_{r}",
+                    "acc_rms": (0.2 + 0.01 * speed) * (1 + 1.5 * wear) * rng.normal(1, 0.02),
+                    "fme15": (0.5 + 3 * wear**1.2) * (1 + 0.002 * speed) * rng.normal(1, 0.03),
+                    "wear_mm": wear})
+    return pd.DataFrame(rows)
+
+
+def write(tmp: Path, df: pd.DataFrame | None = None, sidecar: str | None = "fme15: m/s^2\n"
+          ) -> Path:
+    path = tmp / "rig.csv"
+    (rig_table() if df is None else df).to_csv(path, index=False)
+    if sidecar is not None:
+        (tmp / "rig.units.yaml").write_text(sidecar)
+    return path
+
+
+def cfg(tmp: Path, *overrides: str, epochs: int = 3, units: str = "wear_mm: mm"):
+    """A small run on ``tmp / rig.csv``: wear_mm (by ``units``, data.units) from the user's
+    columns."""
+    settings.register()
+    with initialize_config_module("gearwear_conf.train", version_base="1.3"):
+        return compose("train", overrides=[
+            f"paths.root_dir={tmp}", f"paths.output_dir={tmp / 'run'}",
+            f"data.dataset={tmp / 'unused.parquet'}", f"data.table={tmp / 'rig.csv'}",
+            INPUTS, "data.target=wear_mm", f"data.units={{{units}}}",
+            "trainer.enable_progress_bar=false", f"trainer.max_epochs={epochs}",
+            "trainer.min_epochs=1", "model.members=2", "logger=csv", *overrides])
+
+
+BY_SPEED = ("data.group=stage", "data.group_by=speed", "data.test_groups=[45]",
+            "data.val_replicates=3")
+
+
+@pytest.fixture(scope="module")
+def by_speed(tmp_path_factory) -> Path:
+    """Trained at 15 rev/s (three stages of it validate), tested at 45."""
+    tmp = tmp_path_factory.mktemp("by_speed")
+    write(tmp)
+    assert np.isfinite(train(cfg(tmp, *BY_SPEED)))
+    return tmp / "run"
+
+
+# -- 1. any column as input ---------------------------------------------------------------------
+
+def test_acceptance_a_users_own_columns_are_inputs_and_the_checkpoint_records_them(by_speed):
+    s = Surrogate.load(by_speed / "wear_surrogate.pt")
+    assert s.schema.inputs == ("fme15", "acc_rms")
+    assert s.schema.units == ("m/s^2", "m/s^2")  # fme15's from the sidecar, acc_rms ours
+    assert (s.schema.target, s.schema.target_unit) == ("wear_mm", "mm")  # by data.units
+    train_rows = pd.read_csv(by_speed.parent / "rig.csv").query("speed == 15")
+    # standardised with the training rows (15 rev/s less the three validating stages)
+    assert s.schema.mean[0] == pytest.approx(train_rows.fme15.mean(), rel=0.2)
+    assert s.schema.high[0] <= train_rows.fme15.max() and s.schema.std[0] > 0
+
+
+def test_acceptance_predict_requires_the_users_columns_and_passes_the_rest_through(by_speed,
+                                                                                     tmp_path):
+    rows = rig_table(seed=5).assign(note="bench B")
+    rows.drop(columns="fme15").to_csv(tmp_path / "no_fme.csv", index=False)
+    run = subprocess.run([sys.executable, "-m", "surrogate.predict",
+                          f"ckpt={by_speed / 'wear_surrogate.pt'}",
+                          f"input={tmp_path / 'no_fme.csv'}", f"output={tmp_path / 'w.csv'}",
+                          f"hydra.run.dir={tmp_path / 'h'}"],
+                         capture_output=True, text=True, timeout=300, cwd=ROOT)
+    assert run.returncode == 2, run.stderr[-2000:]
+    lines = [ln for ln in run.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1 and "lacks column(s) ['fme15']" in lines[0], lines
+    assert "'fme15': 'm/s^2'" in lines[0] and not (tmp_path / "w.csv").exists()
+    rows.to_csv(tmp_path / "in.csv", index=False)
+    out = predict_file(by_speed / "wear_surrogate.pt", tmp_path / "in.csv", tmp_path / "w.csv")
+    assert list(out.columns[:6]) == ["rig", "speed", "stage", "record", "wear_mm", "note"]
+    assert (out.note == "bench B").all() and out.wear_mm_pred.notna().all()
+
+
+@pytest.mark.parametrize(("units", "sidecar", "change", "message"), [
+    ("wear_mm: mm", None, None, r"column\(s\) \['fme15'\] have no unit; give them with "
+                                r"data.units=\{fme15: UNIT\} or in rig.units.yaml"),
+    ("wear_mm: mm, fme15: m/s2", None, lambda d: d.assign(fme15=d.fme15 * 1e6),
+     r"row 1, column 'fme15' = 512959 lies outside \[0, 100000\], what its unit m/s\^2 allows"),
+    ("wear_mm: mm", "fme15: '1'\n",
+     lambda d: d.assign(fme15=np.where(d.index == 4, np.inf, d.fme15)),
+     r"row 5, column 'fme15' = inf is not a finite number"),
+    ("wear_mm: mm", "fme15: V\n",
+     lambda d: d.assign(fme15=np.where(d.stage == 3, d.fme15 * 1e3, d.fme15)),
+     r"column 'fme15' has a median of .* in group 3 but .* mixed units; give every group in V"),
+    ("wear_mm: mm", "fme15: [m]\n", None, r"rig.units.yaml must map column names to units"),
+])
+def test_a_users_columns_are_checked_by_the_units_he_gives(tmp_path, units, sidecar,
+                                                           change, message):
+    df = rig_table()
+    write(tmp_path, change(df) if change else df, sidecar)
+    with pytest.raises(ValueError, match=message) as err:
+        prepare(cfg(tmp_path, "data.group=stage", "data.val_replicates=2",
+                    "data.test_replicates=2", units=units))
+    assert "\n" not in str(err.value)
+
+
+# -- 2. splits a user chooses -------------------------------------------------------------------
+
+def test_acceptance_train_at_one_speed_test_at_the_other_outputs_keep_the_users_ids(by_speed):
+    pred = pd.read_csv(by_speed / "test_predictions.csv")
+    assert set(pred.speed) == {45} and len(pred) == 24  # every row at 45, none at 15
+    assert {"rig", "stage", "record", "wear_mm", "wear_mm_pred"} <= set(pred.columns)
+    assert "replicate" not in pred.columns and "case" not in pred.columns
+    assert pred.record.str.startswith("s45_").all()
+    log = (by_speed / "train.log").read_text() if (by_speed / "train.log").exists() else ""
+    assert "case 0" not in log
+
+
+def test_splits_name_groups_by_value_and_refuse_in_the_users_terms(tmp_path):
+    write(tmp_path)
+    job = prepare(cfg(tmp_path, "data.group=stage", "data.test_groups=[10,11]",
+                      "data.val_groups=[0.0,5]"))
+    job.data.setup()
+    stages = {k: set(job.data.labels.stage.iloc[f.row]) for k, f in job.data.frames.items()}
+    assert stages == {"test": {10, 11}, "val": {0, 5}, "train": set(range(1, 10)) - {5}}
+    with pytest.raises(ValueError, match=r"data.test_groups = \[46\]: column 'speed' of .*rig.csv "
+                                         r"has no value 46; its values: \[15, 45\]"):
+        prepare(cfg(tmp_path, "data.group=stage", "data.group_by=speed", "data.test_groups=[46]"))
+    with pytest.raises(ValueError, match=r"both name speed = \[45\]"):
+        prepare(cfg(tmp_path, *BY_SPEED, "data.val_groups=[45]"))
+    with pytest.raises(ValueError) as err:  # the defaults: 8 test, 8 validating groups
+        prepare(cfg(tmp_path, "data.group=speed"))
+    text = str(err.value)
+    assert "has 2 groups of 'speed'" in text and "data.test_groups" in text
+    assert "case 0" not in text and "data.generate" not in text and "\n" not in text
+    with pytest.raises(ValueError, match="apply to a table of your own"):
+        prepare(cfg(tmp_path, "data.table=null", "data.group_by=speed"))
+
+
+def test_acceptance_leave_one_group_out_prints_each_fold_and_the_mean(tmp_path):
+    """The command line, in a folder of its own: a run named after the table, one fold per
+    speed, cv.csv and metrics.json with each fold's and the mean figures."""
+    write(tmp_path, sidecar="fme15: m/s^2\nwear_mm: mm\n")
+    run = subprocess.run([sys.executable, str(ROOT / "train.py"), "data.table=rig.csv",
+                          INPUTS, "data.target=wear_mm", "data.group=stage",
+                          "data.group_by=speed", "data.cv=logo", "data.val_replicates=3",
+                          "trainer.max_epochs=3", "trainer.min_epochs=1", "model.members=2",
+                          "logger=csv", "trainer.enable_progress_bar=false"],
+                         capture_output=True, text=True, timeout=600, cwd=tmp_path)
+    assert run.returncode == 0, run.stderr[-3000:]
+    out = run.stdout + run.stderr
+    (folder,) = (tmp_path / "logs" / "train" / "runs").glob("rig_*")  # named after the table
+    assert "fold speed = 15 (24 test rows): network" in out
+    assert "fold speed = 45 (24 test rows): network" in out
+    assert "leave-one-group-out over speed (2 folds)" in out
+    cv = pd.read_csv(folder / "cv.csv")
+    assert list(cv.speed) == [15, 45] and (cv.test_rows == 24).all()
+    metrics = json.loads((folder / "metrics.json").read_text())
+    assert metrics["folds"] == 2 and metrics["group_by"] == "speed"
+    for key in ("test_mean_relative_error_pct", "test_linear_mean_relative_error_pct",
+                "test_median_mean_relative_error_pct"):
+        assert metrics[key] == pytest.approx(cv[key].mean())
+    for k in (15, 45):
+        assert (folder / f"fold_{k}" / "wear_surrogate.pt").is_file()
+    pred = pd.read_csv(folder / "test_predictions.csv")
+    assert len(pred) == 48 and set(pred.speed) == {15, 45}
+    assert (folder / "parity.png").is_file()
+
+
+# -- 3. baselines beside the network ------------------------------------------------------------
+
+def test_acceptance_every_run_scores_the_baselines_on_the_same_rows(by_speed):
+    metrics = json.loads((by_speed / "metrics.json").read_text())
+    pred = pd.read_csv(by_speed / "test_predictions.csv")
+    for name in ("", "linear_", "median_"):
+        column = f"wear_mm_{name[:-1]}" if name else "wear_mm_pred"
+        mine = wear_errors(pred[column], pred.wear_mm)["mean_relative_error_pct"]
+        assert metrics[f"test_{name}mean_relative_error_pct"] == pytest.approx(mine)
+    assert pred.wear_mm_median.nunique() == 1  # the training rows' median, whatever the rows
+    assert "test_estimator_rmse" not in metrics  # no DTE features in this table
+    assert isinstance(metrics["test_network_better_than_linear"], bool)
+
+
+def test_a_network_no_better_than_a_line_says_so_in_one_line(tmp_path, caplog):
+    """Wear a straight line of one input: the linear model reads it exactly, and a network of
+    two epochs does not; the run says so, once."""
+    df = rig_table().assign(wear_mm=lambda d: (d.acc_rms - d.acc_rms.min()) * 0.4)
+    write(tmp_path, df)
+    with caplog.at_level(logging.WARNING, logger="surrogate.training"):
+        train(cfg(tmp_path, "data.group=stage", "data.val_replicates=2", "data.test_replicates=3",
+                  epochs=2))
+    lines = [r.getMessage() for r in caplog.records if "not better" in r.getMessage()]
+    assert len(lines) == 1, lines
+    assert lines[0].startswith("the network (") and ("is not better than a linear model of "
+                                                     "the same inputs (") in lines[0]
+    metrics = json.loads((tmp_path / "run" / "metrics.json").read_text())
+    assert metrics["test_linear_mean_relative_error_pct"] < 1e-6
+    assert metrics["test_network_better_than_linear"] is False
+
+
+def test_the_estimator_stands_beside_where_its_inputs_exist(tmp_path):
+    sys.path.insert(0, str(ROOT / "tests" / "safety"))
+    from test_safety_user_tables import table, train_cfg
+
+    table(groups=8).to_csv(tmp_path / "mine.csv", index=False)
+    train(train_cfg(tmp_path, val_replicates=2))
+    metrics = json.loads((tmp_path / "run" / "metrics.json").read_text())
+    assert np.isfinite(metrics["test_estimator_mean_relative_error_pct"])
+    pred = pd.read_csv(tmp_path / "run" / "test_predictions.csv")
+    assert {"rig", "root_wear_mm_estimator", "root_wear_mm_linear"} <= set(pred.columns)
+
+
+def test_the_linear_model_and_the_verdict():
+    rng = np.random.default_rng(0)
+    x = rng.normal(size=(50, 2))
+    model = LinearModel.fit(x, 3 + x @ [1.0, -0.5])
+    assert model.coef == pytest.approx([3, 1, -0.5])
+    assert model.predict(np.array([[-10.0, 0.0]]))[0] == 0.0  # no negative wear
+    net, lin = {"mean_relative_error_pct": 13.5}, {"mean_relative_error_pct": 13.1}
+    assert not_better_line(net, lin) == ("the network (13.5 %) is not better than a linear "
+                                         "model of the same inputs (13.1 %) on these test rows")
+    assert not_better_line(lin, net) is None
