@@ -89,7 +89,8 @@ def test_a_ripple_at_a_non_integer_order_is_an_unexplained_residual(tmp_path, sc
     saved = json.loads((tmp_path / "run" / "report.json").read_text())
     assert tuple(saved)[:len(STABLE_KEYS)] == STABLE_KEYS
     assert saved["verdict"] == "unexplained_residual" and saved["chosen_effect"] is None
-    (group, where), = saved["unexplained"]["groups"].items()
+    (label, where), = saved["unexplained"]["groups"].items()
+    assert label == "2000rpm_300Nm_accel_m_s2_40960Hz"
     orders = [x["order"] for x in where["lines"]]
     assert min(abs(o - 2.6) for o in orders) < 0.05  # the ripple's own line ...
     # ... and its mesh sidebands, each 2.6 orders from a mesh harmonic
