@@ -142,7 +142,7 @@ def summary_line(r: dict) -> str:
                           f"{x['of']} records)" for x in g["lines"][:6])
         offsets: dict[float, int] = {}
         for x in g["lines"]:
-            key = round(abs(x["offset_order"]), 2)
+            key = round(abs(x["offset_order"]) * 20) / 20  # to 0.05 order
             offsets[key] = offsets.get(key, 0) + 1
         common = ", ".join(f"{o:g} ({c} lines)" for o, c in
                            sorted(offsets.items(), key=lambda kv: -kv[1])[:3])
