@@ -8,7 +8,9 @@ per operating point), ``records`` (records, groups, split), ``simulation`` (the 
 records), ``comparison`` (residuals and errors), ``fit`` (calibration and search),
 ``discrepancy`` (the model discrepancy), ``wear_reading`` (the model-based wear estimate),
 ``attribution`` (candidates, null test, second round), ``form_error`` (a sister gearbox's
-form reference), ``report``; ``bundle_loop.run_loop`` orchestrates them, ``table_loop`` runs
+form reference), ``lines`` (spectral lines no declared order explains), ``verdict`` (an
+effect, an unexplained residual or nothing), ``usable`` (what a bundle lets the loop do,
+decided before work), ``report``; ``bundle_loop.run_loop`` orchestrates them, ``table_loop`` runs
 the loop on a feature table. Imports every physics subpackage above it except the apps; the
 test rigs that make bundles to try it on are in :mod:`physics.testbeds`."""
 
@@ -46,12 +48,17 @@ _SOURCES = {
         "WearScore", "Reader", "wear_estimates", "wear_reference", "wear_score", "wear_skill",
         "wear_check", "reads_wear"),
     "physics.loop.attribution": (
-        "Round", "attribute", "candidates_for", "stacked", "second_candidates", "signature_gain",
-        "free_directions", "separable_share", "bic"),
+        "Round", "TimeLimit", "attribute", "candidates_for", "stacked", "second_candidates",
+        "signature_gain", "free_directions", "separable_share", "bic"),
     "physics.loop.form_error": ("FormReference", "form_reference", "check_reference"),
     "physics.loop.report": (
         "LoopReport", "STABLE_KEYS", "write_report", "null_test", "holds", "first_passing",
         "verdict_line"),
+    "physics.loop.lines": (
+        "unexplained_lines", "declared_lines", "record_spectrum", "crossing_probability"),
+    "physics.loop.verdict": (
+        "VERDICTS", "verdict", "unexplained_entries", "group_lines", "entry_kind"),
+    "physics.loop.usable": ("check_usable", "shown_candidates"),
     "physics.loop.bundle_loop": ("run_loop",),
     "physics.loop.table_loop": ("run_feature_table", "parse_columns"),
 }

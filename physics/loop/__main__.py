@@ -5,6 +5,7 @@
 from __future__ import annotations
 
 import logging
+import signal
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -14,6 +15,7 @@ from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, OmegaConf
 
 from physics.command import register_schema, run_command
+from physics.loop.attribution import candidates_for
 from physics.loop.bundle import Bundle, check_not_own_reference, read_measurements
 from physics.loop.bundle_loop import run_loop
 from physics.loop.config import LoopConfig, LoopSettings
@@ -21,6 +23,7 @@ from physics.loop.form_error import check_reference, form_reference
 from physics.loop.records import group_keys
 from physics.loop.report import write_report
 from physics.loop.table_loop import run_feature_table
+from physics.loop.usable import check_usable, shown_candidates
 from physics.params import (
     Scenario,
     scenario_from_config,
@@ -47,6 +50,10 @@ def prepare(cfg: DictConfig) -> LoopJob:
     settings = LoopSettings(**opts)
     base = scenario_from_config(cfg)
     data, scn = read_measurements(cfg.data, base)
+    if isinstance(data, Bundle):  # what the loop cannot use: refused before work
+        check_usable(data, scn, settings)
+        shown_candidates(candidates_for(set(data.manifest.quantity), settings), data, scn,
+                         settings)
     reference = None
     if cfg.reference is not None:
         check_not_own_reference(cfg.data, cfg.reference)
@@ -58,12 +65,26 @@ def prepare(cfg: DictConfig) -> LoopJob:
         if not isinstance(reference, Bundle):
             raise ValueError(f"reference={cfg.reference}: must be a bundle folder "
                              "(shared/specs/measured-bundle.md), not a feature table")
+        check_usable(reference, scn, settings)
         check_reference(data, reference.gear, group_keys(reference.manifest)[0])
     return LoopJob(data, scn, settings, bool(cfg.progress),
                    Path(HydraConfig.get().runtime.output_dir), reference)
 
 
+def _stop(signum, frame):
+    """SIGTERM (a batch system's time limit) as Ctrl-C: the loop keeps what it has."""
+    raise KeyboardInterrupt
+
+
 def execute(job: LoopJob) -> None:
+    previous = signal.signal(signal.SIGTERM, _stop)
+    try:
+        _execute(job)
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def _execute(job: LoopJob) -> None:
     if isinstance(job.data, Bundle):
         reference = None
         if job.reference is not None:
@@ -75,6 +96,8 @@ def execute(job: LoopJob) -> None:
     else:
         report = run_feature_table(job.data, job.scenario, job.settings)
     write_report(report, job.out)
+    if report.partial and report.partial["interrupted"]:
+        raise KeyboardInterrupt  # after the partial report: run_command ends the run
     log.info("chosen effect: %s; held-out error %.3f -> %.3f; report in %s",
              report.chosen_effect, report.error_before, report.error_after, job.out)
 
@@ -82,8 +105,11 @@ def execute(job: LoopJob) -> None:
 @hydra.main(version_base="1.3", config_path="pkg://gearwear_conf.loop", config_name="loop")
 def main(cfg: DictConfig) -> None:
     run_command(cfg, prepare, execute,
-                kept=lambda job: "nothing is kept (the loop writes its report at the end); "
-                                 "run the command again")
+                kept=lambda job: (f"a partial report of the first round is kept in {job.out} "
+                                  "(report.json: partial)"
+                                  if (job.out / "report.json").is_file() else
+                                  "nothing is kept (the loop writes its report after its first "
+                                  "round); run the command again"))
 
 
 if __name__ == "__main__":

@@ -12,6 +12,8 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
+import time
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -35,6 +37,19 @@ log = logging.getLogger(__name__)
 #: unit-coordinate step of the free parameters' directions that judge a candidate's
 #: separability (:func:`free_directions`)
 SEPARABILITY_STEP = 0.02
+
+
+class TimeLimit(Exception):
+    """The loop's time limit (``loop.time_limit_s``) passed during a round."""
+
+
+def in_time(items: Iterable, deadline: float | None) -> Iterator:
+    """``items`` one by one, until the clock (:func:`time.monotonic`) passes ``deadline``
+    (None: no limit); then :class:`TimeLimit`."""
+    for x in items:
+        if deadline is not None and time.monotonic() > deadline:
+            raise TimeLimit
+        yield x
 
 
 def bic(chi2: float, n: int, k: int) -> float:
@@ -148,6 +163,8 @@ class Round:
     # the other candidates that pass the null test too, in ranking order: where there are
     # any, the records do not single out the adopted effect
     also_passing: list[Candidate] = field(default_factory=list)
+    # the null test's conditions on every candidate, in ranking order
+    all_checks: list[dict] = field(default_factory=list)
 
     @property
     def best(self) -> Candidate:
@@ -168,14 +185,15 @@ class Round:
 
 def attribute(rec: Records, judged: Records, declared: Effect | None, declared_values: dict,
               nuisance: dict, free_nuisance: list[str], candidates: list[tuple[Effect, dict]],
-              reader: Reader, progress: bool = False) -> Round:
+              reader: Reader, progress: bool = False, deadline: float | None = None) -> Round:
     """Screen, refine and judge ``candidates`` against the model ``declared`` (None: the calibrated
     declared model; else it with an adopted effect at ``declared_values``) at ``nuisance``; the
     null test on each, the best that passes adopted (see the module text); if one is, which model
     reads the wear after it (:func:`~physics.loop.wear_reading.reads_wear`; ``reader`` reads it
     before). Fits weigh the residuals of ``rec`` (noise alone); the held-out judgement uses
     ``judged`` (the same records with the model discrepancy,
-    :func:`~physics.loop.discrepancy.with_discrepancy`)."""
+    :func:`~physics.loop.discrepancy.with_discrepancy`). Past ``deadline``
+    (:func:`time.monotonic`) the next candidate raises :class:`TimeLimit`."""
     settings = rec.settings
     base_train = model_signals(rec, rec.train, nuisance, declared, declared_values)
     base_test = model_signals(rec, rec.test, nuisance, declared, declared_values)
@@ -185,11 +203,13 @@ def attribute(rec: Records, judged: Records, declared: Effect | None, declared_v
     before = rms(residuals(judged, rec.test, base_test))
     effects = {eff.name: eff for eff, _ in candidates}
     ranking = [screen_effect(rec, eff, option, nuisance)
-               for eff, option in tqdm(candidates, desc="screening", disable=not progress)]
+               for eff, option in in_time(tqdm(candidates, desc="screening",
+                                                      disable=not progress), deadline)]
     ranking.sort(key=lambda c: c.train_rss)
     top = settings.refine
     ranking[:top] = [search(rec, effects[c.name], c, free_nuisance)
-                     for c in tqdm(ranking[:top], desc="refining", disable=not progress)]
+                     for c in in_time(tqdm(ranking[:top], desc="refining",
+                                              disable=not progress), deadline)]
     directions = free_directions(rec, nuisance, declared, declared_values, free_nuisance)
     for c in ranking:
         without = residuals(rec, rec.train, model_signals(rec, rec.train, c.nuisance, declared,
@@ -219,8 +239,10 @@ def attribute(rec: Records, judged: Records, declared: Effect | None, declared_v
     best = ranking[pick]
     allowed, checks = verdicts[pick]
     adopted = holds(checks)
+    every = [ch for _, ch in verdicts]
     if not adopted:
-        return Round(ranking, effects, null_bic, allowed, adopted, base_test, checks, reader)
+        return Round(ranking, effects, null_bic, allowed, adopted, base_test, checks, reader,
+                     all_checks=every)
     # last: it costs a simulation per wear state and record
     adopted_reader = Reader(f"the model with {best.name}", best.nuisance, effects[best.name],
                             best.values)
@@ -233,7 +255,7 @@ def attribute(rec: Records, judged: Records, declared: Effect | None, declared_v
     also = [c for k, (c, (_, ch)) in enumerate(zip(ranking, verdicts, strict=True))
             if k != pick and holds(ch)]
     return Round(ranking, effects, null_bic, allowed, adopted, base_test, checks, after,
-                 reading, wear, pick, also)
+                 reading, wear, pick, also, every)
 
 
 def stacked(first: Effect, values: dict, second: Effect) -> Effect:

@@ -34,6 +34,10 @@ QUANTITIES = ("dte_m", "accel_m_s2")
 #: optional columns that set a record's lubricant or roughness
 OPTIONAL_NUMERIC = ("eta0_Pa_s", "sigma_um")
 _NAME = re.compile(r"^[A-Za-z0-9_-]+$")
+#: what a manifest's torque_Nm cell or a gear.yaml value may say where it is not known
+UNKNOWN = ("", "unknown", "null", "none", "nan", "na")
+#: the gear data the signature needs (its orders): never unknown
+SIGNATURE_GEAR = ("z1", "z2")
 #: the largest gear.yaml read (a gear pair's overrides are a few hundred bytes)
 MAX_YAML_BYTES = 64 * 1024
 #: the most the records of one bundle may take in memory together, as float64
@@ -46,6 +50,8 @@ class Bundle:
     manifest: pd.DataFrame
     signals: dict[str, np.ndarray]
     gear: dict
+    #: gear.yaml keys stated as unknown: the configured pair's values are used
+    unknown_gear: tuple[str, ...] = ()
 
     @property
     def records(self) -> list[str]:
@@ -66,7 +72,7 @@ def read_bundle(path: str | Path, gear: GearPair | None = None) -> Bundle:
     if not path.is_dir():
         raise ValueError(f"bundle {path}: no such folder (see shared/specs/measured-bundle.md)")
     man = _read_manifest(path)
-    overrides = _read_gear(path, gear)
+    overrides, unknown = _read_gear(path, gear)
     z1 = dataclasses.replace(gear, **overrides).z1
     sizes = {rec: _signal_size(path, rec) for rec in man.record}
     total = sum(sizes.values()) * 8
@@ -87,7 +93,7 @@ def read_bundle(path: str | Path, gear: GearPair | None = None) -> Bundle:
             raise _fail(path, rec, f"fs_hz = {row.fs_hz:g} is below 4 x the third mesh "
                                    f"harmonic ({f_need:g} Hz)")
         signals[rec] = x
-    return Bundle(path, man, signals, overrides)
+    return Bundle(path, man, signals, overrides, unknown)
 
 
 def _read_manifest(path: Path) -> pd.DataFrame:
@@ -113,16 +119,23 @@ def _read_manifest(path: Path) -> pd.DataFrame:
     for rec in man.record:
         if not _NAME.match(rec):
             raise _fail(path, rec, "names use letters, digits, '_' and '-' only")
-    numeric = {"fs_hz": False, "n1_rpm": False, "torque_Nm": False, "wear_mm": True,
+    numeric = {"fs_hz": False, "n1_rpm": False, "torque_Nm": None, "wear_mm": True,
                "cycles": True} | {c: True for c in OPTIONAL_NUMERIC if c in man.columns}
     for col, may_be_empty in numeric.items():
         text = man[col].str.strip()
+        if may_be_empty is None:  # the torque: a positive number or unknown
+            text = text.where(~text.str.lower().isin(UNKNOWN), "")
         values = pd.to_numeric(text.where(text != ""), errors="coerce")
         for rec, s, v in zip(man.record, text, values, strict=True):
-            if s == "" and may_be_empty:
+            if s == "" and may_be_empty is not False:
                 continue
             shown = repr(float(v)) if np.isfinite(v) else repr(s)
-            if may_be_empty:
+            if may_be_empty is None:
+                if not (np.isfinite(v) and v > 0):
+                    raise _fail(path, rec, f"{col} = {shown} must be a positive number, or "
+                                           "empty or 'unknown' where it is not known (then "
+                                           "calibrated: docs/loop.md)")
+            elif may_be_empty:
                 if not (np.isfinite(v) and v >= 0):
                     raise _fail(path, rec, f"{col} = {shown} must be empty or a number >= 0")
             elif not (np.isfinite(v) and v > 0):
@@ -139,11 +152,13 @@ def _read_manifest(path: Path) -> pd.DataFrame:
     return man
 
 
-def _read_gear(path: Path, gear: GearPair) -> dict:
-    """The overrides of ``gear.yaml``, checked by building the pair they give."""
+def _read_gear(path: Path, gear: GearPair) -> tuple[dict, tuple[str, ...]]:
+    """The overrides of ``gear.yaml``, checked by building the pair they give, and the keys
+    it states as unknown (null or ``unknown``: the configured pair's values stand in; not the
+    signature's :data:`SIGNATURE_GEAR`)."""
     f = path / "gear.yaml"
     if not f.is_file():
-        return {}
+        return {}, ()
     size = f.stat().st_size
     if size > MAX_YAML_BYTES:
         raise _fail(path, None, f"gear.yaml holds {size:,} bytes, above the limit of "
@@ -165,11 +180,20 @@ def _read_gear(path: Path, gear: GearPair) -> dict:
     if unknown:
         raise ValueError(f"bundle {path}: gear.yaml: unknown key(s) {unknown}; allowed: "
                          f"{sorted(known)}")
+    missing = tuple(k for k, v in overrides.items()
+                    if v is None or (isinstance(v, str) and v.strip().lower() in UNKNOWN))
+    for k in missing:
+        if k in SIGNATURE_GEAR:
+            raise ValueError(f"bundle {path}: gear.yaml: {k} = {overrides[k]!r}: the tooth "
+                             f"numbers {SIGNATURE_GEAR} set the orders of the signature and "
+                             "cannot be unknown; count them, or leave the key out to use the "
+                             "configured pair's")
+        del overrides[k]
     try:
         dataclasses.replace(gear, **overrides)
     except ValueError as err:
         raise ValueError(f"bundle {path}: gear.yaml: {err}") from None
-    return overrides
+    return overrides, missing
 
 
 def _plain_yaml(text: str) -> None:
@@ -240,10 +264,12 @@ def _read_signal(path: Path, rec: str) -> np.ndarray:
 
 
 def record_scenario(base: Scenario, row) -> Scenario:
-    """The scenario of one manifest row: its speed, torque and, where given, lubricant
-    viscosity and roughness."""
+    """The scenario of one manifest row: its speed, torque (the configured one where the
+    manifest leaves it unknown) and, where given, lubricant viscosity and roughness."""
+    torque = float(row.torque_Nm)
     op = dataclasses.replace(base.operating, n1_rpm=float(row.n1_rpm),
-                             torque_Nm=float(row.torque_Nm))
+                             torque_Nm=torque if np.isfinite(torque) else
+                             base.operating.torque_Nm)
     lub, tri = base.lubricant, base.tribology
     if "eta0_Pa_s" in row._fields and not pd.isna(row.eta0_Pa_s):
         lub = dataclasses.replace(lub, eta0_Pa_s=float(row.eta0_Pa_s))

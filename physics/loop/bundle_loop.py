@@ -105,9 +105,11 @@ into its run folder.
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
-from physics.loop.attribution import attribute, candidates_for, second_candidates
+from physics.loop.attribution import TimeLimit, attribute, candidates_for, second_candidates
 from physics.loop.bundle import Bundle
 from physics.loop.comparison import (
     feature_error,
@@ -119,13 +121,15 @@ from physics.loop.comparison import (
     rms,
 )
 from physics.loop.config import LoopSettings
-from physics.loop.declared import declared_modes, declared_nuisance
+from physics.loop.declared import TORQUE, declared_modes, declared_nuisance
 from physics.loop.discrepancy import entry_family, with_discrepancy
 from physics.loop.fit import calibrate, screened
 from physics.loop.form_error import FormReference
 from physics.loop.records import Records, prepare
 from physics.loop.report import LoopReport
 from physics.loop.simulation import model_signals
+from physics.loop.usable import check_usable, shown_candidates
+from physics.loop.verdict import closest, group_lines, unexplained_entries, verdict
 from physics.loop.wear_reading import Reader, wear_score
 from physics.params import Scenario
 
@@ -150,6 +154,25 @@ def group_summary(rec: Records, before: list[np.ndarray], after: list[np.ndarray
     return out
 
 
+def assumed(bundle: Bundle, base: Scenario, nuisance: dict) -> dict:
+    """What the bundle left unknown and what stood in: the torque of records without one
+    (the configured torque times the calibrated factor, its prior), gear data stated unknown
+    (the configured pair's values)."""
+    out = {}
+    unknown = ~np.isfinite(bundle.manifest.torque_Nm.to_numpy(float))
+    if unknown.any():
+        t0 = base.operating.torque_Nm
+        lo, hi, _ = TORQUE["torque_factor"]
+        out["torque_Nm"] = {"records": [r for r, u in zip(bundle.records, unknown, strict=True)
+                                        if u],
+                            "configured": t0, "prior": [lo * t0, hi * t0],
+                            "calibrated": t0 * nuisance.get("torque_factor", 1.0),
+                            "worn_teeth_at": t0}
+    if bundle.unknown_gear:
+        out["gear"] = {k: getattr(base.gear, k) for k in bundle.unknown_gear}
+    return out
+
+
 def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = None,
              progress: bool = False, reference: FormReference | None = None) -> LoopReport:
     """The whole loop on one bundle; returns its report (see the module text). With a
@@ -157,7 +180,10 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
     records) the declared model's mean form error measured there is removed from the
     measured signatures first."""
     settings = settings or LoopSettings()
-    candidates = candidates_for(set(bundle.manifest.quantity), settings)
+    started = time.monotonic()
+    check_usable(bundle, base, settings)  # refusals before work
+    candidates, left_out = shown_candidates(
+        candidates_for(set(bundle.manifest.quantity), settings), bundle, base, settings)
     start = declared_nuisance(base) | declared_modes(base)  # a bad chain mode: before work
     if reference is not None:
         reference.check(bundle)
@@ -173,9 +199,20 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
     rounds = [first]
     eff = first.effects[first.best.name]
     more = second_candidates(eff, first.best.values, candidates) if first.adopted else []
-    if more:  # greedy: a second effect on the residual of the first, the same rule
-        rounds.append(attribute(rec, judged, eff, first.best.values, first.best.nuisance,
-                                free_nuisance, more, first.reader, progress))
+    partial = None
+    deadline = started + settings.time_limit_s if settings.time_limit_s else None
+    try:
+        if more and deadline is not None and time.monotonic() > deadline:
+            raise TimeLimit
+        if more:  # greedy: a second effect on the residual of the first, the same rule
+            rounds.append(attribute(rec, judged, eff, first.best.values, first.best.nuisance,
+                                    free_nuisance, more, first.reader, progress, deadline))
+    except (TimeLimit, KeyboardInterrupt) as stop:
+        partial = {"stopped": (f"time limit of {settings.time_limit_s:g} s"
+                               if isinstance(stop, TimeLimit) else "interrupted"),
+                   "after_round": 1, "interrupted": isinstance(stop, KeyboardInterrupt),
+                   "missing": f"the greedy second round on {first.best.name} was not "
+                              "finished: a second effect was not searched"}
     last = next((r for r in reversed(rounds) if r.adopted), None)
     best = last.best if last else None
     chosen = last.effects[best.name] if last else None
@@ -187,8 +224,14 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
     # each adopted round has scored its reader before and after on the held-out records
     wear_before = first.wear[0] if first.adopted else wear_score(rec, nuisance, None, {})
     wear_after = last.wear[1] if last else wear_before
+    entries = ({} if last else
+               unexplained_entries(judged, rec.test, base_test, settings.false_add_rate))
+    lines = {} if last else group_lines(rec, settings.false_add_rate)
+    said, unexplained = verdict(last is not None, entries, lines,
+                                closest(first.ranking, first.all_checks))
     rec.cache.clear()  # the report keeps the records, not the simulations
     return LoopReport(
+        verdict=said, unexplained=unexplained, partial=partial,
         mode="bundle",
         chosen_effect=chosen.name if chosen else None,
         chosen_option=({k: v for c in adopted for k, v in c.option.items()} if last
@@ -217,7 +260,10 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
             "error_after_db": rms(np.concatenate(residuals_db(rec, rec.test, after_test))),
             "error_before_with_discrepancy": rms(residuals(judged, rec.test, base_test)),
             "error_after_with_discrepancy": rms(residuals(judged, rec.test, after_test)),
-            "not_identifiable": [n for n in screened(settings) if n not in free_nuisance],
+            "not_identifiable": [n for n in (*screened(settings), *TORQUE)
+                                 if n in nuisance and n not in free_nuisance],
+            "not_searched": left_out,
+            "assumed": assumed(bundle, base, nuisance),
             "form_reference": reference.summary() if reference is not None else None,
             "train_records": [bundle.records[i] for i in rec.train],
             "test_records": [bundle.records[i] for i in rec.test],

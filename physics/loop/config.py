@@ -59,6 +59,9 @@ class LoopSettings:
     # project's own it absorbs a friction, leaves a tooth defect's error above half and lets the
     # greedy second round stack a spurious effect (docs/loop.md)
     model_form: bool = False
+    # seconds of work after which the greedy second round stops and the report of the first
+    # round is written, marked partial (0: no limit; the first round always runs to its end)
+    time_limit_s: float = bounded(0.0, 0.0, 1e7, "seconds; 0 for no limit", closed=True)
 
     def __post_init__(self):
         validate_fields(self, "loop")

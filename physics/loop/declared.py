@@ -47,9 +47,14 @@ MOUNT = {"mount_hz": (5.0, 1000.0, True), "mount_damping": (0.02, 0.5, True)}
 #: the acceleration chain's modes, each by the frequency that declares it
 CHAIN_MODES = {"support_hz": SUPPORT, "mount_hz": MOUNT}
 CHAIN = SUPPORT | MOUNT
+#: the torque of records whose manifest leaves it unknown: the configured torque
+#: (``operating.torque_Nm``) times ``torque_factor``, calibrated with the nuisance under a wide
+#: prior (a factor of 5 either way, explored over the whole range); the worn teeth stay those of
+#: the configured torque
+TORQUE = {"torque_factor": (0.2, 5.0, True)}
 #: bounds of every nuisance parameter of the declared model (the calibrated ones' search range;
 #: the stated mounting's, the range its stated values must lie in)
-BOUNDS = NUISANCE | CHAIN | {n: b[:3] for n, b in MODEL_FORM.items()}
+BOUNDS = NUISANCE | CHAIN | {n: b[:3] for n, b in MODEL_FORM.items()} | TORQUE
 #: the nuisance parameters the dynamics see (``m_h`` acts on the measurement chain); the model
 #: form's only with ``loop.model_form``
 SCENARIO_DYNAMIC = ("damping_ratio", "eccentricity1_um", "profile_error_um")
@@ -63,7 +68,7 @@ RUNOUT_MODULATION = ("mesh_modulation", "modulation_phase_rad")
 #: the parameters a Sobol sample explores before least squares (their residual surface has
 #: several basins): the dynamic ones and the support mode's (a basin per mesh harmonic it can
 #: sit on)
-EXPLORED = (*DYNAMIC_NUISANCE, *SUPPORT)
+EXPLORED = (*DYNAMIC_NUISANCE, *SUPPORT, *TORQUE)
 
 
 def declared_nuisance(scn: Scenario) -> dict[str, float]:

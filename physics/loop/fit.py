@@ -36,6 +36,7 @@ from physics.loop.declared import (
     RUNOUT_MODULATION,
     SCENARIO_DYNAMIC,
     SUPPORT,
+    TORQUE,
     completed,
     declared_modes,
     declared_nuisance,
@@ -198,7 +199,9 @@ def explore(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[
     # holding to), around the calibration with an effect
     scn = rec.scenarios[0]
     prior = completed(c.nuisance, scn) | declared_nuisance(scn) | declared_modes(scn)
-    span = {n: (0.5 if wide(rec, eff) and n in MODEL_FORM else EXPLORE_SPAN) for n in dyn}
+    # an unknown torque's wide prior: its whole range, around the configured torque
+    span = {n: (0.5 if (wide(rec, eff) and n in MODEL_FORM) or n in TORQUE else EXPLORE_SPAN)
+            for n in dyn}
     centres = {n: (0.5 if span[n] == 0.5 else to_unit(prior[n], *BOUNDS[n])) for n in dyn}
     dim = len(params) + len(dyn)
     n_points = rec.settings.explore * (CALIBRATION_EXPLORE if wide(rec, eff) else 1)
@@ -248,9 +251,13 @@ def calibrate(rec: Records, start: dict) -> tuple[dict, list[str]]:
     values); returns the calibrated nuisance and the names of the free ones. ``m_h`` (and a
     declared support mode) scales and shapes every acceleration amplitude and is always free
     for acceleration records; a dynamic parameter that is not identifiable stays at its
-    declared value."""
+    declared value. Records of unknown torque add its factor
+    (:data:`~physics.loop.declared.TORQUE`, from 1)."""
+    names = screened(rec.settings)
+    if rec.torque_unknown is not None and rec.torque_unknown.any():
+        start, names = {"torque_factor": 1.0} | start, (*names, *TORQUE)
     start = with_level(rec, completed(start, rec.scenarios[0]), None, {})
-    free = identifiable(rec, start, screened(rec.settings))
+    free = identifiable(rec, start, names)
     if accel_in(rec):
         free += ["housing_mass_kg", *[n for n in SUPPORT if n in start]]
     c = Candidate("declared", {}, {}, start, train_cost(rec, start, None, {}), 0)

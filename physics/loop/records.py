@@ -37,7 +37,8 @@ class Group:
     is estimated); a residual is standardised by their quadrature sum, :attr:`sd`.
     """
 
-    key: tuple[float, float, str, float]  # n1_rpm, torque_Nm, quantity, fs_hz
+    # n1_rpm, torque_Nm (None: unknown), quantity, fs_hz
+    key: tuple[float, float | None, str, float]
     records: np.ndarray  # indices into the bundle
     names: list[str]  # the signature's entries
     entry_sd: np.ndarray  # [dB]
@@ -52,10 +53,11 @@ class Group:
         return group_label(self.key)
 
 
-def group_label(key: tuple[float, float, str, float]) -> str:
-    """A group's name: ``<n1>rpm_<torque>Nm_<quantity>_<fs>Hz``."""
+def group_label(key: tuple[float, float | None, str, float]) -> str:
+    """A group's name: ``<n1>rpm_<torque>Nm_<quantity>_<fs>Hz`` (``unknownNm`` for records of
+    unknown torque)."""
     n1, torque, quantity, fs = key
-    return f"{n1:g}rpm_{torque:g}Nm_{quantity}_{fs:g}Hz"
+    return f"{n1:g}rpm_{'unknown' if torque is None else f'{torque:g}'}Nm_{quantity}_{fs:g}Hz"
 
 
 @dataclass
@@ -74,6 +76,9 @@ class Records:
     settings: LoopSettings
     wear_states: list[list[tuple[float, PairModel]]] = field(default_factory=list)
     cache: dict = field(default_factory=dict)  # simulations by dynamic parameters
+    # records whose manifest leaves the torque unknown: the configured torque times the
+    # calibrated ``torque_factor`` (:data:`~physics.loop.declared.TORQUE`)
+    torque_unknown: np.ndarray | None = None
 
     def group(self, i: int) -> Group:
         """The group of record ``i``."""
@@ -105,8 +110,10 @@ def split_records(man: pd.DataFrame, test_fraction: float, seed: int,
 
 def group_keys(man: pd.DataFrame) -> tuple[list[tuple], np.ndarray]:
     """The distinct (n1_rpm, torque_Nm, quantity, fs_hz) of a manifest, in order of first
-    appearance, and each record's index into them."""
-    keys = list(zip(man.n1_rpm.astype(float), man.torque_Nm.astype(float), man.quantity,
+    appearance, and each record's index into them; an unknown torque is None (the records of
+    unknown torque at one speed, quantity and rate form one group)."""
+    torque = [float(t) if np.isfinite(t) else None for t in man.torque_Nm.astype(float)]
+    keys = list(zip(man.n1_rpm.astype(float), torque, man.quantity,
                     man.fs_hz.astype(float), strict=True))
     distinct = list(dict.fromkeys(keys))
     return distinct, np.array([distinct.index(k) for k in keys], int)
@@ -122,8 +129,8 @@ def prepare(bundle: Bundle, base: Scenario, settings: LoopSettings) -> Records:
     keys, group_of = group_keys(man)
     train, test = split_records(man, settings.test_fraction, settings.seed, group_of)
     keyed: dict[tuple, list[int]] = {}
-    for i, row in enumerate(man.itertuples(index=False)):
-        keyed.setdefault((row.n1_rpm, row.torque_Nm), []).append(i)
+    for i, scn in enumerate(scenarios):  # an unknown torque: the configured one's worn states
+        keyed.setdefault((scn.operating.n1_rpm, scn.operating.torque_Nm), []).append(i)
     models: list[PairModel | None] = [None] * len(man)
     wear_states: list[list[tuple[float, PairModel]]] = [[] for _ in range(len(man))]
     for idx in keyed.values():
@@ -155,7 +162,8 @@ def prepare(bundle: Bundle, base: Scenario, settings: LoopSettings) -> Records:
                                       0.5 * shaft_rates(scenarios[i])[0] * scenarios[i].gear.z1)
                       for i, r in enumerate(man.record)])
     return Records(bundle, scenarios, models, [s.mean(axis=0) for s in segments], groups,
-                   group_of, noise, train, test, settings, wear_states)
+                   group_of, noise, train, test, settings, wear_states,
+                   torque_unknown=~np.isfinite(man.torque_Nm.to_numpy(float)))
 
 
 def entry_scatter(segments: list[np.ndarray], floor_db: float) -> np.ndarray:

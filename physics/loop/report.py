@@ -12,11 +12,13 @@ from typing import Any
 import numpy as np
 
 from physics.files import atomic_write, pyplot
+from physics.loop.verdict import summary_line, unexplained_figure
 from physics.signals.order_analysis import line_amplitudes
 
 #: the keys every report.json leads with, in this order (README: stable keys)
-STABLE_KEYS = ("mode", "chosen_effect", "chosen_option", "chosen_parameters", "error_before",
-               "error_after", "error_unit", "feature_error_before_pct", "feature_error_after_pct",
+STABLE_KEYS = ("mode", "verdict", "unexplained", "partial", "chosen_effect", "chosen_option",
+               "chosen_parameters", "error_before", "error_after", "error_unit",
+               "feature_error_before_pct", "feature_error_after_pct",
                "wear_error_before_pct", "wear_error_after_pct", "calibration", "calibrated_on",
                "nuisance_after", "null_bic", "ranking", "decision_rule")
 
@@ -125,6 +127,16 @@ class LoopReport:
     decision_rule: dict
     details: dict = field(default_factory=dict)
     signals: Any = field(default=None, repr=False, compare=False)
+    # "effect", "unexplained_residual" or "none" (:func:`physics.loop.verdict.verdict`); where
+    # the residual is unexplained, its groups, entries, lines and the closest candidates
+    verdict: str | None = None
+    unexplained: dict | None = None
+    # a run stopped after its first round: why and after which round (None: complete)
+    partial: dict | None = None
+
+    def __post_init__(self):
+        if self.verdict is None:
+            self.verdict = "effect" if self.chosen_effect else "none"
 
     def to_dict(self) -> dict:
         return {k: getattr(self, k) for k in STABLE_KEYS} | self.details
@@ -136,6 +148,12 @@ class LoopReport:
 
 def markdown(r: dict) -> str:
     lines = ["# Measured-data loop", ""]
+    if r.get("partial"):
+        p = r["partial"]
+        lines += [f"**Partial report:** the run stopped ({p['stopped']}) after round "
+                  f"{p['after_round']}; {p['missing']}.", ""]
+    if r.get("verdict"):
+        lines += [summary_line(r), ""]
     chosen = r["chosen_effect"]
     lines.append(f"**Chosen effect:** {chosen or 'none (no candidate passes the null test)'}")
     if chosen:
@@ -174,6 +192,18 @@ def markdown(r: dict) -> str:
         lines.append(f"Read against a reference gearbox: the declared model's mean residual "
                      f"there (RMS per group: {per}) was removed from the measured signatures "
                      "before the calibration.")
+    for name, why in (r.get("not_searched") or {}).items():
+        lines.append(f"Not searched, the records cannot show it: {name} ({why}).")
+    known = r.get("assumed") or {}
+    if "torque_Nm" in known:
+        t = known["torque_Nm"]
+        lines.append(f"Torque unknown for {len(t['records'])} records: calibrated as a nuisance "
+                     f"within {t['prior'][0]:.3g}-{t['prior'][1]:.3g} N m around the configured "
+                     f"{t['configured']:.3g} N m, at {t['calibrated']:.3g} N m (worn teeth of "
+                     f"{t['worn_teeth_at']:.3g} N m).")
+    if "gear" in known:
+        lines.append(f"Gear data stated unknown, the configured pair's used: "
+                     f"{', '.join(f'{k} = {v:g}' for k, v in known['gear'].items())}.")
     if r.get("not_identifiable"):
         lines.append(f"Not identifiable from these records (held at the declared value): "
                      f"{', '.join(r['not_identifiable'])}.")
@@ -295,6 +325,8 @@ def figures(report: LoopReport, out: Path) -> None:
     plt.close(fig)
     if report["wear_estimates"]:
         _wear_parity(report.to_dict(), out)
+    if report.unexplained:
+        unexplained_figure(report, out)
 
 
 def _wear_parity(report: dict, out: Path) -> None:

@@ -11,7 +11,7 @@ import numpy as np
 
 from physics.dynamics.model import PairModel, simulate
 from physics.dynamics.model_form import with_modulation
-from physics.loop.declared import DYNAMIC_NUISANCE, modes_of, with_nuisance
+from physics.loop.declared import DYNAMIC_NUISANCE, TORQUE, modes_of, with_nuisance
 from physics.loop.effects import Effect
 from physics.loop.records import Records
 from physics.signals.measurement import declared_chain, sensed
@@ -31,7 +31,8 @@ def responses(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | None,
     dynamic = eff is not None and eff.model is not None
     key = None
     if models is None:
-        key = (tuple(int(i) for i in idx), tuple(nuisance.get(n) for n in DYNAMIC_NUISANCE),
+        key = (tuple(int(i) for i in idx),
+               tuple(nuisance.get(n) for n in (*DYNAMIC_NUISANCE, *TORQUE)),
                (eff.name, tuple(sorted(values.items()))) if dynamic else None)
         if key in rec.cache:
             return rec.cache[key]
@@ -39,6 +40,11 @@ def responses(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | None,
     base_ratio = rec.scenarios[0].dynamics.damping_ratio
     ms = [with_nuisance(m, nuisance, base_ratio)
           for m in (models if models is not None else [rec.models[i] for i in idx])]
+    unknown = rec.torque_unknown
+    if unknown is not None and "torque_factor" in nuisance:  # before an effect: a ripple's
+        f = nuisance["torque_factor"]                         # share is of this torque
+        ms = [dataclasses.replace(m, static_force=m.static_force * f) if unknown[i] else m
+              for m, i in zip(ms, idx, strict=True)]
     if dynamic:
         ms = [eff.model(m, values) for m in ms]
     ms = [with_modulation(m, nuisance) for m in ms]

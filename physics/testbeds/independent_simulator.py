@@ -787,10 +787,14 @@ def make_independent_bundle(
         wear_mm: Sequence[float] = (0.0, 0.003, 0.006, 0.009, 0.012, 0.015),
         quantities: Sequence[str] = ("dte_m",), fs_hz: float = 40960.0,
         duration_s: float = 0.5, snr_db: float = 30.0, seed: int = 0,
-        effect_size: float = 1.0, pair: IndependentPair | None = None) -> tuple[Path, dict]:
+        effect_size: float = 1.0, pair: IndependentPair | None = None,
+        values: dict | None = None) -> tuple[Path, dict]:
     """Write a bundle (``shared/specs/measured-bundle.md``) of the independent model: one record
     per operating point x wear depth x quantity, all from one gear set (its error phases drawn
     once from ``seed``), each record at its own random start angle and with its own noise.
+
+    ``values`` set some of the effect's values beyond its typical ones: ``{"order": 2.6}``
+    puts a torque ripple at a non-integer order of the pinion shaft (default: 1/2).
 
     Returns the bundle's path and the truth: the effect (canonical name), its values, the
     pair's parameters, the seed, and ``effect_to_noise_db``, the power the effect adds to the
@@ -811,7 +815,13 @@ def make_independent_bundle(
     qs = list(quantities)
     if not qs or any(q not in QUANTITIES for q in qs) or len(set(qs)) != len(qs):
         raise _bad("quantities", quantities, f"must be distinct names from {QUANTITIES}")
+    given = dict(values or {})
     name, values = effect_values(effect, effect_size)
+    extra = sorted(set(given) - set(values))
+    if extra:
+        raise _bad("values", given, f"set values {extra} that {name} does not have; it has "
+                   f"{sorted(values)}")
+    values |= given
     if name is not None and not set(qs) & set(_EFFECTS[name][2]):
         raise _bad("effect", effect, f"does not show in {qs} records; it acts on "
                    f"{_EFFECTS[name][2]}")

@@ -29,8 +29,13 @@ from physics.signals.measurement import add_noise, declared_chain, sensed
 
 def make_bundle(path: str | Path, base: Scenario, effect_name: str | None, seed: int,
                 quantity: str = "accel_m_s2", records: int = 10, duration_s: float = 1.0,
-                cycles_max: float = 1.5e7, snr_db: float = 30.0) -> tuple[Path, dict]:
-    """Write a bundle; return its path and the truth (effect, its values, the nuisance)."""
+                cycles_max: float = 1.5e7, snr_db: float = 30.0,
+                values: dict | None = None) -> tuple[Path, dict]:
+    """Write a bundle; return its path and the truth (effect, its values, the nuisance).
+    ``values`` set some of the effect's values and options beyond the library's: e.g.
+    ``{"order": 2.6}`` makes a torque ripple at a non-integer shaft order, which no candidate
+    of the library has."""
+    given = dict(values or {})
     rng = np.random.default_rng([seed, 7])
     dyn = base.dynamics
     nuisance = {k: v * rng.uniform(0.6, 1.6)
@@ -44,6 +49,7 @@ def make_bundle(path: str | Path, base: Scenario, effect_name: str | None, seed:
         option = eff.options[int(rng.integers(len(eff.options)))]
         values = dict(option) | {p.name: float(np.clip(p.typical * rng.uniform(0.7, 1.4),
                                                        p.low, p.high)) for p in eff.params}
+        values |= given
     cycles = np.linspace(0.0, cycles_max, records)
     ms = mesh_stiffness(base.gear, base.material)
     by_cycles, root = worn_models(base, ms, list(cycles))

@@ -561,6 +561,8 @@ def test_loop_app_finds_an_undeclared_transfer_path(tmp_path, scn):
     report = json.loads((tmp_path / "run" / "report.json").read_text())
     assert tuple(report)[:len(STABLE_KEYS)] == STABLE_KEYS  # one report type, stable keys
     assert report["chosen_effect"] == "transfer_path"
+    assert report["verdict"] == "effect" and report["unexplained"] is None
+    assert report["partial"] is None
     assert report["second_round"] is None
     verdict = report["verdicts"][0]  # every condition held
     assert verdict["adopted"] and all(c["holds"] for c in verdict["checks"].values())

@@ -1,0 +1,108 @@
+"""What a bundle lets the loop do, decided before any work: the rules a bundle the loop cannot
+use breaks (:func:`check_usable`, each refusal one line naming the record, the value, the rule
+and the fix), and each candidate effect's parameter range clipped to what the records can show
+(:func:`shown_candidates`).
+
+A bundle that passes the format's rules (:mod:`physics.loop.bundle`) and these runs to the end.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from physics.loop.bundle import Bundle
+from physics.loop.config import LoopSettings
+from physics.loop.effects import Effect, Param
+from physics.loop.records import split_records
+from physics.params import Scenario
+
+#: the highest line the signature reads, as a share of the sampling rate
+TOP_SHARE = 0.45
+#: a line is resolved in an analysis segment of ``segment_s`` if it lies this many frequency
+#: bins (``1 / segment_s``) from its neighbour (the Hann window's main lobe is +-2 bins)
+RESOLVED_BINS = 2.0
+
+
+def check_usable(bundle: Bundle, base: Scenario, settings: LoopSettings) -> None:
+    """Refuse, before any work, a bundle the loop cannot use: a record whose analysis segment
+    (``loop.segment_s``) holds less than one pinion revolution (the synchronous average needs
+    one), a record shorter than two segments (their scatter is the comparison's noise), or a
+    split without a train and a test record."""
+    man = bundle.manifest
+    seg = settings.segment_s
+    for row in man.itertuples(index=False):
+        revs = seg * row.n1_rpm / 60
+        if revs < 1:
+            raise ValueError(f"bundle {bundle.path}: record {row.record!r}: an analysis segment "
+                             f"of loop.segment_s = {seg:g} s holds {revs:.2f} pinion "
+                             f"revolutions at n1_rpm = {row.n1_rpm:g}; the signature's "
+                             f"synchronous average needs one: set loop.segment_s >= "
+                             f"{60 / row.n1_rpm:.3g}")
+        seconds = bundle.signals[row.record].size / row.fs_hz
+        if seconds < 2 * seg:
+            raise ValueError(f"bundle {bundle.path}: record {row.record!r} holds {seconds:.3g} s, "
+                             f"less than two analysis segments of loop.segment_s = {seg:g} s "
+                             "(their scatter is the comparison's noise): set loop.segment_s <= "
+                             f"{seconds / 2:.3g} (and >= {60 / row.n1_rpm:.3g}, one revolution) "
+                             "or give longer records")
+    try:
+        split_records(man, settings.test_fraction, settings.seed)
+    except ValueError as err:
+        raise ValueError(f"bundle {bundle.path}: {err}") from None
+
+
+def _clipped(p: Param, high: float) -> Param:
+    """``p`` with its upper bound ``high``, its typical size inside."""
+    typical = p.typical if p.typical < high else (math.sqrt(p.low * high) if p.log
+                                                  else 0.5 * (p.low + high))
+    return dataclasses.replace(p, high=high, typical=typical)
+
+
+def shown_candidates(candidates: list[tuple[Effect, dict]], bundle: Bundle, base: Scenario,
+                     settings: LoopSettings) -> tuple[list[tuple[Effect, dict]], dict[str, str]]:
+    """The candidates with each parameter range clipped to what the bundle's records can show,
+    and those left out with the reason: a transfer path's mode below ``0.45 fs`` of the records
+    it acts on (the signature's top; the filter needs ``fs / 2``), a torque ripple's order and
+    a gear run-out's sidebands resolved in an analysis segment (:data:`RESOLVED_BINS` bins of
+    ``1 / loop.segment_s`` from their neighbour) at the slowest record's speed."""
+    man = bundle.manifest
+    z1, z2 = (bundle.gear.get(k, getattr(base.gear, k)) for k in ("z1", "z2"))
+    f1 = float(man.n1_rpm.min()) / 60
+    resolved = RESOLVED_BINS / settings.segment_s
+    kept, dropped = [], {}
+    for eff, option in candidates:
+        label = eff.name + (f" {option}" if option else "")
+        fs = man.fs_hz[man.quantity.isin(eff.quantities)].to_numpy(float)
+        if eff.name == "transfer_path" and fs.size:
+            top = TOP_SHARE * float(fs.min())
+            p = next(p for p in eff.params if p.name == "fn_hz")
+            if top <= p.low:
+                dropped[label] = (f"its mode (fn_hz >= {p.low:g} Hz) lies above 0.45 fs = "
+                                  f"{top:g} Hz of the records it acts on")
+                continue
+            if top < p.high:
+                eff = dataclasses.replace(eff, params=tuple(
+                    _clipped(q, top) if q is p else q for q in eff.params))
+        if eff.name == "torque_ripple" and option["order"] * f1 < resolved:
+            dropped[label] = (f"its line at {option['order'] * f1:.3g} Hz is not resolved in a "
+                              f"segment of {settings.segment_s:g} s (needs >= {resolved:g} Hz)")
+            continue
+        if eff.name == "gear_runout" and f1 * z1 / z2 < resolved:
+            dropped[label] = (f"its sidebands at +-{f1 * z1 / z2:.3g} Hz are not resolved in a "
+                              f"segment of {settings.segment_s:g} s (needs >= {resolved:g} Hz)")
+            continue
+        kept.append((eff, option))
+    if not kept:
+        raise ValueError(f"bundle {bundle.path}: none of the candidates "
+                         f"{sorted({e.name for e, _ in candidates})} can show in these records "
+                         f"({'; '.join(f'{k}: {v}' for k, v in dropped.items())}); widen "
+                         "loop.candidates or lengthen loop.segment_s")
+    return kept, dropped
+
+
+def unknown_torque(bundle: Bundle) -> np.ndarray:
+    """Which records' manifest leaves the torque unknown."""
+    return ~np.isfinite(bundle.manifest.torque_Nm.to_numpy(float))

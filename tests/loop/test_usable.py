@@ -1,0 +1,168 @@
+"""Every accepted bundle runs to the end: ranges clipped to what the records show, an unknown
+torque calibrated, a partial report after the first round, refusals before work."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import physics.loop.bundle_loop as bundle_loop
+from physics.loop import (
+    EFFECTS,
+    LoopSettings,
+    candidates_for,
+    check_usable,
+    group_label,
+    read_bundle,
+    run_loop,
+    shown_candidates,
+    write_bundle,
+)
+from physics.loop.report import write_report
+from physics.params import scenario_from_config
+from physics.testbeds import make_bundle
+
+ROOT = Path(__file__).resolve().parents[2]
+#: a public gearbox's acceleration records: 12.9 kHz
+FS = 12900.0
+SETTINGS = LoopSettings(max_nfev=4, explore=4, refine=1,
+                        candidates=("transfer_path", "friction"))
+
+
+def manifest(n=4, **over):
+    d = {"record": [f"r{i}" for i in range(n)], "quantity": "accel_m_s2", "fs_hz": FS,
+         "n1_rpm": 2000.0, "torque_Nm": 300.0, "wear_mm": "", "cycles": "", "split": ""}
+    d.update(over)
+    return pd.DataFrame(d)
+
+
+def noise(n=4, seconds=0.6, fs=FS):
+    rng = np.random.default_rng(0)
+    return {f"r{i}": rng.standard_normal(int(seconds * fs)) for i in range(n)}
+
+
+@pytest.mark.parametrize("cell", ["", "unknown", "Unknown", "null", "NaN"])
+def test_the_torque_may_be_unknown(tmp_path, cell):
+    b = read_bundle(write_bundle(tmp_path / "b", manifest(torque_Nm=cell), noise()))
+    assert b.manifest.torque_Nm.isna().all()
+    assert group_label((2000.0, None, "accel_m_s2", FS)) == "2000rpm_unknownNm_accel_m_s2_12900Hz"
+
+
+def test_a_bad_torque_is_refused_naming_value_rule_and_fix(tmp_path):
+    path = write_bundle(tmp_path / "b", manifest(torque_Nm="abc"), noise())
+    with pytest.raises(ValueError, match=r"record 'r0': torque_Nm = 'abc' must be a positive "
+                                         r"number, or empty or 'unknown'"):
+        read_bundle(path)
+
+
+def test_gear_data_the_signature_does_not_need_may_be_unknown(tmp_path):
+    b = read_bundle(write_bundle(tmp_path / "b", manifest(), noise(),
+                                 gear={"face_width_mm": "unknown", "z1": 18}))
+    assert b.gear == {"z1": 18} and b.unknown_gear == ("face_width_mm",)
+    bad = write_bundle(tmp_path / "c", manifest(), noise(), gear={"z1": "unknown"})
+    with pytest.raises(ValueError, match=r"tooth numbers .* cannot be unknown"):
+        read_bundle(bad)
+
+
+def test_each_range_is_clipped_to_what_the_records_show(tmp_path):
+    b = read_bundle(write_bundle(tmp_path / "b", manifest(), noise()))
+    scn = scenario_from_config({"case": 3})
+    kept, dropped = shown_candidates(candidates_for({"accel_m_s2"}, LoopSettings()), b, scn,
+                                     LoopSettings())
+    path = next(e for e, _ in kept if e.name == "transfer_path")
+    fn = next(p for p in path.params if p.name == "fn_hz")
+    assert fn.high == pytest.approx(0.45 * FS) and fn.low < fn.typical < fn.high
+    assert dropped == {}
+    assert next(p for p in EFFECTS["transfer_path"].params if p.name == "fn_hz").high == 15000
+    # at 200 r/min a half-order ripple (1.7 Hz) and the gear's sidebands are not resolved in
+    # 0.25 s segments; the whole-order ripples are left too
+    slow = read_bundle(write_bundle(tmp_path / "s", manifest(n1_rpm=200.0), noise(seconds=4)))
+    kept, dropped = shown_candidates(candidates_for({"accel_m_s2"}, LoopSettings()), slow, scn,
+                                     LoopSettings())
+    assert "gear_runout" in dropped and "torque_ripple {'order': 0.5}" in dropped
+    assert "friction" in {e.name for e, _ in kept}
+
+
+def test_a_bundle_the_loop_cannot_use_is_refused_before_work(tmp_path):
+    scn = scenario_from_config({"case": 3})
+    b = read_bundle(write_bundle(tmp_path / "b", manifest(), noise()))
+    with pytest.raises(ValueError, match=r"record 'r0': an analysis segment of loop.segment_s "
+                                         r"= 0.02 s holds 0.67 pinion revolutions .* set "
+                                         r"loop.segment_s >= 0.03"):
+        check_usable(b, scn, LoopSettings(segment_s=0.02))
+    with pytest.raises(ValueError, match=r"less than two analysis segments .* set "
+                                         r"loop.segment_s <= 0.3"):
+        check_usable(b, scn, LoopSettings(segment_s=0.4))
+
+
+def test_the_app_refuses_in_one_line_without_traceback(tmp_path):
+    path = write_bundle(tmp_path / "b", manifest(), noise())
+    run = subprocess.run([sys.executable, "-m", "physics.loop", f"data={path}",
+                          "loop.segment_s=0.02", f"hydra.run.dir={tmp_path / 'run'}"],
+                         cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert run.returncode == 2
+    assert "Traceback" not in run.stderr
+    last = run.stderr.strip().splitlines()[-1]
+    assert last.startswith("error: bundle") and "loop.segment_s >= 0.03" in last
+    assert not (tmp_path / "run" / "report.json").exists()
+
+
+@pytest.fixture(scope="module")
+def public_like(tmp_path_factory):
+    """Acceleration records at 12.9 kHz with a housing mode, of a torque the manifest leaves
+    unknown, and a gear.yaml whose face width is unknown."""
+    scn = scenario_from_config({"case": 3, "dynamics": {"sample_rate_hz": FS}})
+    folder = tmp_path_factory.mktemp("public")
+    path, truth = make_bundle(folder / "made", scn, "transfer_path", seed=2, records=6,
+                              duration_s=0.75)
+    b = read_bundle(path)
+    man = b.manifest.assign(torque_Nm="unknown", wear_mm="", cycles="")
+    path = write_bundle(folder / "b", man, b.signals, gear={"face_width_mm": None})
+    return read_bundle(path), scenario_from_config({"case": 3}), truth
+
+
+def test_a_public_like_bundle_runs_to_the_end_and_stops_after_round_one(public_like,
+                                                                        tmp_path):
+    bundle, scn, _ = public_like
+    report = run_loop(bundle, scn, dataclasses.replace(SETTINGS, time_limit_s=1e-6))
+    assert report["verdict"] == "effect" and report["chosen_effect"] == "transfer_path"
+    assert report["chosen_parameters"]["fn_hz"] < 0.45 * FS
+    assert report["partial"]["stopped"].startswith("time limit")
+    assert report["partial"]["after_round"] == 1 and report["second_round"] is None
+    torque = report["assumed"]["torque_Nm"]
+    assert torque["records"] == bundle.records and torque["prior"] == [60.0, 1500.0]
+    assert 60 <= torque["calibrated"] <= 1500
+    assert report["assumed"]["gear"] == {"face_width_mm": scn.gear.face_width_mm}
+    assert set(report["groups"]) == {"2000rpm_unknownNm_accel_m_s2_12900Hz"}
+    write_report(report, tmp_path / "run", with_figures=False)
+    saved = json.loads((tmp_path / "run" / "report.json").read_text())
+    assert saved["partial"]["stopped"].startswith("time limit")
+    md = (tmp_path / "run" / "report.md").read_text()
+    assert "**Partial report:**" in md and "Torque unknown for 6 records" in md
+
+
+def test_an_interrupt_after_round_one_keeps_its_report(public_like, monkeypatch):
+    bundle, scn, _ = public_like
+    calls = []
+
+    def attribute(*args, **kwargs):
+        calls.append(1)
+        if len(calls) > 1:
+            raise KeyboardInterrupt
+        return real(*args, **kwargs)
+
+    real = bundle_loop.attribute
+    monkeypatch.setattr(bundle_loop, "attribute", attribute)
+    report = run_loop(bundle, scn, SETTINGS)
+    assert len(calls) == 2
+    assert report["partial"] == {"stopped": "interrupted", "after_round": 1,
+                                 "interrupted": True,
+                                 "missing": report["partial"]["missing"]}
+    assert report["chosen_effect"] == "transfer_path"
