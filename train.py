@@ -9,17 +9,20 @@ from __future__ import annotations
 import hydra
 from omegaconf import DictConfig
 
-from physics.command import run_command
+from physics.command import entry, run_command
 from surrogate import settings
 
 settings.register()
 
 
 @hydra.main(version_base="1.3", config_path="pkg://gearwear_conf.train", config_name="train")
-def main(cfg: DictConfig) -> float:
+def task(cfg: DictConfig) -> float:
     from surrogate.training import fit, kept, prepare  # after Hydra parsed the command line
 
     return run_command(cfg, prepare, fit, kept)
+
+
+main = entry(task, check="surrogate.training:prepare")
 
 
 if __name__ == "__main__":

@@ -19,7 +19,7 @@ from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
 from physics.estimators.empirical_inverse import wear_errors
-from physics.files import atomic_write, pyplot
+from physics.files import atomic_write, check_inside, pyplot
 from surrogate.data import WearDataModule
 from surrogate.inference import Surrogate, conformal_scale, export
 
@@ -75,6 +75,8 @@ def prepare(cfg: DictConfig) -> TrainJob:
     """Check the whole run before any work: case, model settings, trainer, callbacks, loggers
     and the data module (whose dataset, if missing, is planned and checked but not built)."""
     quiet_lightning()
+    root = Path(str(cfg.paths.root_dir)) / "logs"
+    check_inside(root / str(cfg.task_name), root, f"task_name = {cfg.task_name!r}")
     for key in ("seed",):
         if isinstance(cfg[key], bool) or not isinstance(cfg[key], int) or cfg[key] < 0:
             raise ValueError(f"{key} = {cfg[key]!r} must be a whole number >= 0")

@@ -512,9 +512,31 @@ def build_dataset(job: DatasetJob) -> Path | None:
     if not held:
         acquire_output(job)
     try:
+        remove_temporaries(job)  # of an earlier run of it that was killed outright
         return _build(job)
+    except BaseException:
+        # Ctrl-C, SIGTERM or a failure: a worker that was ended mid-write leaves its
+        # temporary file, which this build removes while it still holds the lock
+        remove_temporaries(job)
+        raise
     finally:
         release_lock(own)
+
+
+def remove_temporaries(job: DatasetJob) -> None:
+    """Remove the temporary files (:func:`physics.files.atomic_write`) of the outputs ``job``
+    writes: of its chunks, and for a whole build of the manifest and the merged files too.
+    Only the build holding the lock calls this, so no other writer's file is touched."""
+    chunks = range(job.spec.chunks) if job.merge else [job.chunk]
+    patterns = [f".chunk_{c:03d}.*.tmp" for c in chunks if c is not None]
+    if job.merge:
+        patterns.append(".*.tmp")
+        for stem in (job.name, f"{job.name}_signals"):
+            for path in job.out.glob(f".{stem}.*.tmp"):
+                path.unlink(missing_ok=True)
+    for pattern in patterns:
+        for path in job.folder.glob(pattern):
+            path.unlink(missing_ok=True)
 
 
 def _compute(job: DatasetJob, todo: tuple[int, ...]) -> None:

@@ -13,7 +13,7 @@ import pandas as pd
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, OmegaConf
 
-from physics.command import register_schema, run_command
+from physics.command import entry, register_schema, run_command
 from physics.loop.bundle import Bundle, check_not_own_reference, read_measurements
 from physics.loop.bundle_loop import run_loop
 from physics.loop.config import LoopConfig, LoopSettings
@@ -80,10 +80,13 @@ def execute(job: LoopJob) -> None:
 
 
 @hydra.main(version_base="1.3", config_path="pkg://gearwear_conf.loop", config_name="loop")
-def main(cfg: DictConfig) -> None:
+def task(cfg: DictConfig) -> None:
     run_command(cfg, prepare, execute,
                 kept=lambda job: "nothing is kept (the loop writes its report at the end); "
                                  "run the command again")
+
+
+main = entry(task, check=prepare)
 
 
 if __name__ == "__main__":
