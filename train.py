@@ -6,11 +6,15 @@ case of thesis Table 11, ``all`` for one network of the five.
 
 from __future__ import annotations
 
-import hydra
-from omegaconf import DictConfig
+from physics.interrupt import install_signal_handlers
 
-from physics.command import entry, run_command
-from surrogate import settings
+install_signal_handlers()  # before the slow imports: Ctrl-C is handled from the start
+
+import hydra  # noqa: E402
+from omegaconf import DictConfig  # noqa: E402
+
+from physics.command import entry, run_command  # noqa: E402
+from surrogate import settings  # noqa: E402
 
 settings.register()
 

@@ -29,7 +29,6 @@ import dataclasses
 import logging
 import os
 import shutil
-import signal
 import sys
 from collections.abc import Callable
 from pathlib import Path
@@ -37,6 +36,8 @@ from typing import Any, TypeVar
 
 from hydra.experimental.callback import Callback
 from omegaconf import DictConfig, OmegaConf, open_dict, read_write
+
+from physics import interrupt
 
 Plan = TypeVar("Plan")
 
@@ -102,15 +103,18 @@ class RunRecord(Callback):
     the run folder, what already exists there, so that a refused run removes only what it made."""
 
     def on_run_start(self, config: DictConfig, **kwargs: Any) -> None:
-        _record_before(Path(str(config.hydra.run.dir)))
+        global _RUN_DIR
+        _RUN_DIR = Path(str(config.hydra.run.dir))
+        _record_before(_RUN_DIR)
 
     def on_multirun_start(self, config: DictConfig, **kwargs: Any) -> None:
-        global _NOTE
         _record_before(Path(str(config.hydra.sweep.dir)))
+        if "joblib" in str(config.hydra.launcher.get("_target_", "")):
+            interrupt.quiet_workers()
         check_sweep(config)  # every job's config, before the first starts
         sweep = Path(str(config.hydra.sweep.dir))
-        _NOTE = lambda: (f"the sweep's finished jobs are kept in {sweep}; run the jobs "  # noqa
-                         "that did not finish again")
+        interrupt.note(lambda: f"the sweep's finished jobs are kept in {sweep}; run the jobs "
+                               "that did not finish again")
 
     def on_job_end(self, config: DictConfig, job_return: Any, **kwargs: Any) -> None:
         """A failed job of a basic sweep is recorded and reported at the sweep's end: the
@@ -199,7 +203,6 @@ def run_command(cfg: DictConfig, prepare: Callable[[DictConfig], Plan],
     printed by :func:`entry`. In a sweep's job a refusal or failure is recorded and raised as
     an ordinary exception, so that Hydra marks that job failed and runs the others.
     """
-    global _NOTE
     folder = _run_folder()
     job = _sweep_job()
     if job is not None and folder is not None:
@@ -214,98 +217,54 @@ def run_command(cfg: DictConfig, prepare: Callable[[DictConfig], Plan],
         logging.getLogger(__name__).error("job %d refused: %s", job, err)
         raise JobFailed(str(err)) from None
     except BaseException as err:
-        if not _interrupted(err):
+        if not interrupt.interrupted(err):
             raise
-        if job is None:  # nothing was done yet: the run's folder goes, as for a refusal
-            _remove_what_the_run_made(folder)
-        raise KeyboardInterrupt from None
+        raise KeyboardInterrupt from None  # the entry undoes the run (nothing was done yet)
+    global _WORK_STARTED
+    _WORK_STARTED = True
     if job is None and kept is not None:
-        _NOTE = lambda: kept(plan)  # noqa: E731
+        interrupt.note(lambda: kept(plan))
     try:
         result = execute(plan)
     except BaseException as err:
-        if _interrupted(err):
+        if interrupt.interrupted(err):
             raise KeyboardInterrupt from None
         if job is not None:
             _record_failure(folder, f"failed: {type(err).__name__}: {err}")
             logging.getLogger(__name__).exception("job %d failed", job)
         raise
     if job is None:
-        _NOTE = lambda: "the run had finished; its results are kept"  # noqa: E731
+        interrupt.note(lambda: "the run had finished; its results are kept")
     return result
 
 
-# --- Ctrl-C and SIGTERM ------------------------------------------------------------------------
-
-class Terminated(KeyboardInterrupt):
-    """SIGTERM, raised where the program is, like Ctrl-C's KeyboardInterrupt: every cleanup
-    that runs for Ctrl-C (``finally``, atomic writes, joblib's abort) runs for it too."""
-
-
-#: the first of SIGINT or SIGTERM this process received (None: neither)
-_SIGNAL: int | None = None
-#: what an interrupted run has kept and how to resume, at this moment of the run
-_NOTE: Callable[[], str] | None = None
-#: exit codes: 128 + the signal's number, as a shell reports a process the signal ended
-EXIT_CODES = {signal.SIGINT: 130, signal.SIGTERM: 143}
-
-
-def _on_signal(signum: int, frame: Any) -> None:
-    global _SIGNAL
-    if _SIGNAL is None:
-        _SIGNAL = signum
-    raise Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
-
-
-def install_signal_handlers() -> None:
-    """SIGINT raises KeyboardInterrupt and SIGTERM :class:`Terminated`; both note the signal,
-    so that an interrupted run is reported as one whatever exception the interruption became
-    on its way out (a numba kernel's SystemError, Lightning's ``exit(1)`` after its
-    graceful shutdown, a joblib worker's error)."""
-    for signum in EXIT_CODES:
-        signal.signal(signum, _on_signal)
-
-
-def _interrupted(err: BaseException) -> bool:
-    return _SIGNAL is not None or isinstance(err, KeyboardInterrupt)
-
-
-def _end_interrupted() -> None:
-    """One line saying what was kept and how to resume; exit 130 (SIGINT) or 143 (SIGTERM)."""
-    for signum in EXIT_CODES:  # the report and the exit are not interrupted again
-        signal.signal(signum, signal.SIG_IGN)
-    try:
-        note = _NOTE() if _NOTE is not None else "nothing was written; run the command again"
-    except Exception:  # the note is a courtesy; the exit code must come
-        note = "run the command again"
-    name = "SIGTERM" if _SIGNAL == signal.SIGTERM else "Ctrl-C"
-    print(f"interrupted ({name}): {note}", file=sys.stderr, flush=True)
-    raise SystemExit(EXIT_CODES.get(_SIGNAL, 130))
-
+# --- the console entry -------------------------------------------------------------------
 
 def entry(task: Callable[[], Any], check: Callable[[DictConfig], Any] | str | None = None
           ) -> Callable[[], Any]:
-    """The console entry of an app around its ``@hydra.main`` function ``task``: signals as
-    in :func:`install_signal_handlers`, and one line with exit code 130/143 when the run was
-    interrupted, wherever it was. ``check(cfg)`` (or ``"module:function"``) validates a
-    job's config without side effects: a sweep's jobs are checked with it before any starts
-    (:class:`RunRecord`)."""
+    """The console entry of an app around its ``@hydra.main`` function ``task``: Ctrl-C and
+    SIGTERM as :func:`physics.interrupt.guard` ends them. ``check(cfg)`` (or
+    ``"module:function"``) validates a job's config without side effects: a sweep's jobs are
+    checked with it before any starts (:class:`RunRecord`)."""
     def main() -> Any:
         global _CHECK
         _CHECK = check
-        install_signal_handlers()
-        try:
-            result = task()
-        except BaseException as err:
-            if not _interrupted(err):
-                raise
-            _end_interrupted()
-        if _SIGNAL is not None:  # an interruption that the code on its way swallowed
-            _end_interrupted()
-        return result
+        return interrupt.guard(task, undo=_undo_unstarted)
 
     main.__doc__ = task.__doc__
     return main
+
+
+#: the folder of this single run (RunRecord.on_run_start), and whether its work has started
+_RUN_DIR: Path | None = None
+_WORK_STARTED = False
+
+
+def _undo_unstarted() -> None:
+    """An interrupted single run whose work had not started: what it made goes, as for a
+    refusal (a sweep keeps its folders: its jobs' records)."""
+    if _RUN_DIR is not None and not _WORK_STARTED:
+        _remove_what_the_run_made(_RUN_DIR)
 
 
 # --- sweeps -----------------------------------------------------------------------------------

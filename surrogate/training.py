@@ -195,9 +195,20 @@ def set_aside_checkpoints(out: Path) -> Path | None:
 
 
 def kept(job: TrainJob) -> str:
-    """What an interrupted training kept."""
-    return (f"the checkpoints so far are in {job.out / 'checkpoints'}; the run is not "
-            "exported: run the command again to train")
+    """What an interrupted training kept: while its dataset was being built, the dataset's
+    finished chunks; while it trained, its checkpoints (if any were written yet)."""
+    ckpts = job.out / "checkpoints"
+    if ckpts.is_dir() and any(ckpts.glob("*.ckpt")):
+        return (f"the checkpoints so far are in {ckpts}; the run is not exported: run the "
+                "command again to train")
+    dm = job.data
+    if dm.table is None and not Path(dm.dataset).is_file():
+        from physics.dataset.generation import chunks_kept
+        from surrogate.data import dataset_job
+
+        return (f"no training was done; of the dataset {dm.dataset}, "
+                f"{chunks_kept(dataset_job(dm.dataset, dm.generate, dm.jobs))}")
+    return "no model was exported and no checkpoint written; run the command again to train"
 
 
 def report_test(surrogate: Surrogate, test: pd.DataFrame, out: Path) -> dict[str, float]:

@@ -59,6 +59,7 @@ from physics.dynamics.model import build_model, simulate
 from physics.dynamics.model_form import FACTORS
 from physics.files import atomic_write, check_writable, read_lock, release_lock, sha256_file
 from physics.gear.stiffness import MeshStiffness, SainsotRangeWarning, mesh_stiffness
+from physics.interrupt import quiet_workers
 from physics.params import (
     OutOfScope,
     PhysicsConfig,
@@ -551,6 +552,7 @@ def _compute(job: DatasetJob, todo: tuple[int, ...]) -> None:
                 run_chunk(*args, c, job.folder, job.digest, job.store_signals)
                 bar.update(1)
         else:  # loky processes: they also start inside a joblib-launched multirun job
+            quiet_workers()
             runs = Parallel(n_jobs=jobs, return_as="generator_unordered")(
                 delayed(run_chunk)(*args, c, job.folder, job.digest, job.store_signals)
                 for c in todo)
@@ -579,6 +581,9 @@ def chunks_kept(job: DatasetJob) -> str:
     """What an interrupted build kept, and how to go on."""
     done = [c for c in range(job.spec.chunks)
             if chunk_is_done(job.folder, c, job.digest, job.store_signals)]
+    if not done:
+        return (f"no chunk of the {job.spec.chunks} was finished, nothing is kept; run the "
+                "same command again")
     return (f"{len(done)} of {job.spec.chunks} chunks are kept in {job.folder}; the same command "
             "resumes from them")
 
