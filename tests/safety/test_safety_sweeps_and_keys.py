@@ -70,10 +70,15 @@ APPS = {"dataset": ("gearwear_conf.dataset", "dataset"),
 
 def _composed(app: str, overrides: list[str]):
     """The app's config as Hydra composes it for a run, with Hydra's runtime config set."""
-    import physics.dataset.__main__
-    import physics.loop.__main__
-    import physics.reproduce.__main__  # noqa: F401
+    from physics.command import register_schema
+    from physics.dataset.generation import DatasetConfig
+    from physics.loop.config import LoopConfig
+    from physics.reproduce.thesis import ReproduceConfig
     from surrogate import settings
+
+    for name, schema in (("dataset_schema", DatasetConfig), ("loop_schema", LoopConfig),
+                         ("reproduce_schema", ReproduceConfig)):
+        register_schema(name, schema)  # as the apps do
 
     if app == "train":
         settings.register()
