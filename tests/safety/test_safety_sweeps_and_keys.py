@@ -148,3 +148,16 @@ def test_a_refused_run_folder_spelled_with_dots_is_undone(tmp_path):
         command.refuse(ValueError("bad"), Path(str(tmp_path / "a" / "x" / "runs" / "r")))
     assert sorted(p.name for p in (tmp_path / "a").iterdir()) == ["mine.txt", "work"]
     assert not list(work.iterdir())
+
+
+@pytest.mark.parametrize(("override", "key"), [("speeds_rpm=[1000,-100]", "speeds_rpm"),
+                                               ("torques_Nm=[-5]", "torques_Nm")])
+def test_a_bad_list_entry_is_blamed_on_its_list(override, key, tmp_path, config_store):
+    from physics.reproduce.thesis import prepare
+
+    for cfg in _composed("reproduce", [override, f"out_dir={tmp_path / 'out'}"]):
+        with pytest.raises(ValueError, match=rf"^{key}: the entry -[\d.]+ is refused: "
+                                             rf"operating\.\w+ = .*; change or drop that entry "
+                                             rf"of {key}$"):
+            prepare(cfg)
+    assert not list(tmp_path.iterdir())
