@@ -6,20 +6,27 @@ case of thesis Table 11, ``all`` for one network of the five.
 
 from __future__ import annotations
 
-import hydra
-from omegaconf import DictConfig
+from physics.interrupt import install_signal_handlers
 
-from physics.command import run_command
-from surrogate import settings
+install_signal_handlers()  # before the slow imports: Ctrl-C is handled from the start
+
+import hydra  # noqa: E402
+from omegaconf import DictConfig  # noqa: E402
+
+from physics.command import entry, run_command  # noqa: E402
+from surrogate import settings  # noqa: E402
 
 settings.register()
 
 
 @hydra.main(version_base="1.3", config_path="pkg://gearwear_conf.train", config_name="train")
-def main(cfg: DictConfig) -> float:
+def task(cfg: DictConfig) -> float:
     from surrogate.training import fit, kept, prepare  # after Hydra parsed the command line
 
     return run_command(cfg, prepare, fit, kept)
+
+
+main = entry(task, check="surrogate.training:prepare")
 
 
 if __name__ == "__main__":

@@ -11,3 +11,7 @@ and the surrogate without measurements; not imported by the product). ``params``
 parameters), ``scope`` (the model's operating scope), ``command`` and ``files`` serve them all.
 Each subpackage names its public API in ``__all__``.
 """
+
+from physics.interrupt import install_for_apps as _install_for_apps
+
+_install_for_apps()  # an app's Ctrl-C and SIGTERM handled from its first import on

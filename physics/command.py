@@ -9,12 +9,25 @@
   yet, so the refusal is one line on stderr (no traceback), what Hydra made for it is removed
   (only what this run made, by the record :class:`RunRecord` took before it started), and the
   exit code is 2. ``execute(plan)`` then does the work; an error there is a bug and keeps its
-  traceback. Ctrl-C during the work ends with one line naming what was kept and
-  how to resume (exit code 130).
+  traceback.
+- :func:`entry` is an app's console entry around its ``@hydra.main`` function: Ctrl-C (SIGINT)
+  or SIGTERM, in any phase (start-up, checks, numba kernels, joblib workers, Lightning's fit
+  loop), ends the app with one line on stderr saying what was kept and how to resume, without
+  a traceback, exit code 130 (143 for SIGTERM). A run interrupted during its checks removes
+  what it made, as a refused one does.
+- :func:`check_keys`: a key the app does not have (``+foo=1``) is refused before any work.
+- Sweeps (``-m``): :class:`RunRecord` checks every job's config before the first job starts
+  (the whole sweep is refused in one line naming the bad job's overrides); at run time a job
+  that fails is recorded (``failed.txt`` in its folder) and the others run on; the sweep ends
+  with one line naming the failed jobs (exit code 1).
 """
 
 from __future__ import annotations
 
+import copy
+import dataclasses
+import logging
+import os
 import shutil
 import sys
 from collections.abc import Callable
@@ -22,7 +35,9 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 from hydra.experimental.callback import Callback
-from omegaconf import DictConfig, OmegaConf
+from omegaconf import DictConfig, OmegaConf, open_dict, read_write
+
+from physics import interrupt
 
 Plan = TypeVar("Plan")
 
@@ -63,13 +78,24 @@ def _run_folder() -> Path | None:
 _BEFORE: dict[Path, frozenset[str] | None] = {}
 
 
+def _absolute(path: Path) -> Path:
+    """``path`` absolute with ``..`` folded (as the folder it names, not as it is spelled)."""
+    return Path(os.path.abspath(path))
+
+
 def _record_before(folder: Path) -> None:
-    """Record which of ``folder`` and its ancestors exist and what they hold, before any write."""
-    folder = folder.absolute()
+    """Record which of ``folder`` and its ancestors exist and what they hold, before any write.
+    A folder spelled with ``..`` (``logs/../../x``) is made through each folder it passes, so
+    every one of them is recorded."""
+    spelled = Path(folder).absolute()
+    passed = {_absolute(Path(*spelled.parts[:i])) for i in range(2, len(spelled.parts))}
+    folder = _absolute(spelled)
     for path in (folder, *folder.parents):
         _BEFORE[path] = frozenset(c.name for c in path.iterdir()) if path.is_dir() else None
         if path.is_dir():  # the first existing ancestor ends the chain of folders to be made
             break
+    for path in passed - set(_BEFORE):
+        _BEFORE[path] = None if not path.is_dir() else frozenset()
 
 
 class RunRecord(Callback):
@@ -77,10 +103,39 @@ class RunRecord(Callback):
     the run folder, what already exists there, so that a refused run removes only what it made."""
 
     def on_run_start(self, config: DictConfig, **kwargs: Any) -> None:
-        _record_before(Path(str(config.hydra.run.dir)))
+        global _RUN_DIR
+        _RUN_DIR = Path(str(config.hydra.run.dir))
+        _record_before(_RUN_DIR)
 
     def on_multirun_start(self, config: DictConfig, **kwargs: Any) -> None:
         _record_before(Path(str(config.hydra.sweep.dir)))
+        if "joblib" in str(config.hydra.launcher.get("_target_", "")):
+            interrupt.quiet_workers()
+        check_sweep(config)  # every job's config, before the first starts
+        sweep = Path(str(config.hydra.sweep.dir))
+        interrupt.note(lambda: f"the sweep's finished jobs are kept in {sweep}; run the jobs "
+                               "that did not finish again")
+
+    def on_job_end(self, config: DictConfig, job_return: Any, **kwargs: Any) -> None:
+        """A failed job of a basic sweep is recorded and reported at the sweep's end: the
+        basic sweeper would otherwise raise its error after the batch and stop the sweep."""
+        from hydra.core.utils import JobStatus
+        from hydra.types import RunMode
+
+        if (config.hydra.mode != RunMode.MULTIRUN or job_return.status != JobStatus.FAILED
+                or not str(config.hydra.sweeper.get("_target_", "")).endswith(".BasicSweeper")):
+            return
+        folder = Path(str(config.hydra.runtime.output_dir))
+        if not (folder / FAILED).is_file():
+            err = job_return._return_value
+            _record_failure(folder, f"failed: {type(err).__name__}: {err}")
+        job_return.status, job_return.return_value = JobStatus.COMPLETED, None
+
+    def on_multirun_end(self, config: DictConfig, **kwargs: Any) -> None:
+        summary = sweep_summary()
+        if summary is not None:
+            print(f"error: {summary}", file=sys.stderr)
+            raise SystemExit(1)
 
 
 def _record_of(folder: Path) -> dict[Path, frozenset[str] | None] | None:
@@ -105,10 +160,10 @@ def _remove_what_the_run_made(folder: Path | None) -> None:
     chain that did not exist before, if it is now empty. Without a record nothing is removed."""
     if folder is None:
         return
-    record = _record_of(folder.absolute())
+    folder = _absolute(folder)
+    record = _record_of(folder)
     if record is None:
         return
-    folder = folder.absolute()
     before = record[folder]
     if folder.is_dir():
         for entry in folder.iterdir():
@@ -124,6 +179,12 @@ def _remove_what_the_run_made(folder: Path | None) -> None:
             path.rmdir()  # only if empty: anything a user put there since stays
         except OSError:
             break
+    made = [p for p, held in record.items() if held is None and p.is_dir()]
+    for path in sorted(made, key=lambda p: len(p.parts), reverse=True):
+        try:  # a folder made on the way to a run folder spelled with '..'
+            path.rmdir()
+        except OSError:
+            pass
 
 
 def refuse(err: BaseException, folder: Path | None = None) -> None:
@@ -138,16 +199,237 @@ def run_command(cfg: DictConfig, prepare: Callable[[DictConfig], Plan],
                 ) -> Any:
     """Validate with ``prepare``, then work with ``execute`` (see the module text).
 
-    ``kept(plan)`` says, after Ctrl-C, what was kept and how to resume.
+    ``kept(plan)`` says, after Ctrl-C or SIGTERM, what was kept and how to resume; the line is
+    printed by :func:`entry`. In a sweep's job a refusal or failure is recorded and raised as
+    an ordinary exception, so that Hydra marks that job failed and runs the others.
     """
     folder = _run_folder()
+    job = _sweep_job()
+    if job is not None and folder is not None:
+        (folder / FAILED).unlink(missing_ok=True)  # a record of an earlier sweep in this folder
     try:
+        check_keys(cfg)
         plan = prepare(cfg)
     except ValueError as err:
-        refuse(err, folder)
+        if job is None:
+            refuse(err, folder)
+        _record_failure(folder, f"refused: {err}")
+        logging.getLogger(__name__).error("job %d refused: %s", job, err)
+        raise JobFailed(str(err)) from None
+    except BaseException as err:
+        if not interrupt.interrupted(err):
+            raise
+        raise KeyboardInterrupt from None  # the entry undoes the run (nothing was done yet)
+    global _WORK_STARTED
+    _WORK_STARTED = True
+    if job is None and kept is not None:
+        interrupt.note(lambda: kept(plan))
     try:
-        return execute(plan)
-    except KeyboardInterrupt:
-        note = kept(plan) if kept is not None else "nothing was kept; run the command again"
-        print(f"interrupted: {note}", file=sys.stderr)
-        raise SystemExit(130) from None
+        result = execute(plan)
+    except BaseException as err:
+        if interrupt.interrupted(err):
+            raise KeyboardInterrupt from None
+        if job is not None:
+            _record_failure(folder, f"failed: {type(err).__name__}: {err}")
+            logging.getLogger(__name__).exception("job %d failed", job)
+        raise
+    if job is None:
+        interrupt.note(lambda: "the run had finished; its results are kept")
+    return result
+
+
+# --- the console entry -------------------------------------------------------------------
+
+def entry(task: Callable[[], Any], check: Callable[[DictConfig], Any] | str | None = None
+          ) -> Callable[[], Any]:
+    """The console entry of an app around its ``@hydra.main`` function ``task``: Ctrl-C and
+    SIGTERM as :func:`physics.interrupt.guard` ends them. ``check(cfg)`` (or
+    ``"module:function"``) validates a job's config without side effects: a sweep's jobs are
+    checked with it before any starts (:class:`RunRecord`)."""
+    def main() -> Any:
+        global _CHECK
+        _CHECK = check
+        return interrupt.guard(task, undo=_undo_unstarted)
+
+    main.__doc__ = task.__doc__
+    return main
+
+
+#: the folder of this single run (RunRecord.on_run_start), and whether its work has started
+_RUN_DIR: Path | None = None
+_WORK_STARTED = False
+
+
+def _undo_unstarted() -> None:
+    """An interrupted single run whose work had not started: what it made goes, as for a
+    refusal (a sweep keeps its folders: its jobs' records)."""
+    if _RUN_DIR is not None and not _WORK_STARTED:
+        _remove_what_the_run_made(_RUN_DIR)
+
+
+# --- sweeps -----------------------------------------------------------------------------------
+
+#: the record a failed job of a sweep leaves in its folder: one line, why it failed
+FAILED = "failed.txt"
+#: the check of a job's config for a sweep (set by :func:`entry`)
+_CHECK: Callable[[DictConfig], Any] | str | None = None
+
+
+class JobFailed(Exception):
+    """A sweep's job refused its config (an Exception, not SystemExit: the sweep goes on)."""
+
+
+@dataclasses.dataclass(frozen=True)
+class SweepJob:
+    num: int
+    overrides: tuple[str, ...]
+    folder: Path
+
+
+#: the jobs of the running sweep (filled by RunRecord.on_multirun_start)
+_JOBS: list[SweepJob] = []
+
+
+def _sweep_job() -> int | None:
+    """The number of this process's job when it runs in a sweep, else None."""
+    try:
+        from hydra.core.hydra_config import HydraConfig
+        from hydra.types import RunMode
+
+        hc = HydraConfig.get()
+        return int(hc.job.num) if hc.mode == RunMode.MULTIRUN else None
+    except (ImportError, ValueError, TypeError, AttributeError):
+        return None
+
+
+def _record_failure(folder: Path | None, why: str) -> None:
+    if folder is not None:
+        from physics.files import write_text
+
+        write_text(folder / FAILED, " ".join(why.split()) + "\n")
+
+
+def _resolve(check: Callable[[DictConfig], Any] | str) -> Callable[[DictConfig], Any]:
+    if callable(check):
+        return check
+    import importlib
+
+    module, name = check.split(":")
+    return getattr(importlib.import_module(module), name)
+
+
+def _sweep_jobs(config: DictConfig) -> list[SweepJob] | None:
+    """The jobs a basic sweeper will launch for ``config`` (None for another sweeper, e.g.
+    Optuna's, whose jobs are drawn as it goes)."""
+    from hydra._internal.core_plugins.basic_sweeper import BasicSweeper
+    from hydra.core.override_parser.overrides_parser import OverridesParser
+
+    if not str(config.hydra.sweeper.get("_target_", "")).endswith(".BasicSweeper"):
+        return None
+    params = [f"{k}={v}" for k, v in (config.hydra.sweeper.get("params") or {}).items()]
+    arguments = [*params, *OmegaConf.to_container(config.hydra.overrides.task, resolve=False)]
+    parsed = OverridesParser.create().parse_overrides(arguments)
+    batches = BasicSweeper.split_arguments(parsed, None)
+    return [SweepJob(num, tuple(overrides), Path())
+            for num, overrides in enumerate(o for batch in batches for o in batch)]
+
+
+def check_sweep(config: DictConfig) -> None:
+    """Compose every job of the sweep ``config`` and check it (:func:`check_keys` and the
+    app's check) before any job starts; a bad job refuses the whole sweep in one line naming
+    its overrides (exit code 2). Also notes each job's folder for the sweep's summary."""
+    from hydra.core.global_hydra import GlobalHydra
+    from hydra.core.hydra_config import HydraConfig
+
+    _JOBS.clear()
+    jobs = _sweep_jobs(config)
+    if jobs is None or not GlobalHydra.instance().is_initialized():
+        return
+    loader = GlobalHydra.instance().config_loader()
+    saved = HydraConfig.instance().cfg
+    check = _resolve(_CHECK) if _CHECK is not None else None
+    try:
+        for job in jobs:
+            try:
+                cfg = loader.load_sweep_config(config, list(job.overrides))
+                with open_dict(cfg):
+                    cfg.hydra.job.num = job.num
+                    cfg.hydra.job.id = str(job.num)
+                    folder = Path(str(cfg.hydra.sweep.dir)) / str(cfg.hydra.sweep.subdir)
+                    cfg.hydra.runtime.output_dir = str(folder.absolute())
+                _JOBS.append(dataclasses.replace(job, folder=folder))
+                HydraConfig.instance().set_config(cfg)
+                task = copy.deepcopy(cfg)
+                with read_write(task), open_dict(task):
+                    del task["hydra"]
+                check_keys(task)
+                if check is not None:
+                    check(task)
+            except ValueError as err:
+                overrides = " ".join(job.overrides) or "no overrides"
+                print(f"error: job {job.num} of the sweep ({overrides}): {err}; no job was "
+                      "started: fix or drop that value and run the sweep again",
+                      file=sys.stderr)
+                raise SystemExit(2) from None
+    finally:
+        HydraConfig.instance().cfg = saved
+
+
+def sweep_summary() -> str | None:
+    """One line naming the sweep's failed jobs (from their records), None if none failed."""
+    failed = [(job, (job.folder / FAILED).read_text().strip()) for job in _JOBS
+              if (job.folder / FAILED).is_file()]
+    if not failed:
+        return None
+    names = "; ".join(f"job {job.num} ({' '.join(job.overrides)}) {why}" for job, why in failed)
+    return (f"{len(failed)} of {len(_JOBS)} jobs of the sweep failed: {names}; the others "
+            f"finished in {_JOBS[0].folder.parent}; each failed job's log is in its folder")
+
+
+# --- keys the app does not have ---------------------------------------------------------------
+
+def _root_keys(cfg: DictConfig) -> set[str] | None:
+    """The top-level keys an app whose root has no schema allows: its primary config's keys
+    and its config groups (None where Hydra does not tell them)."""
+    try:
+        from hydra.core.global_hydra import GlobalHydra
+        from hydra.core.hydra_config import HydraConfig
+
+        hc = HydraConfig.get()
+        groups = {k for k, v in hc.runtime.choices.items()
+                  if "/" not in k and k != "hydra" and v is not None}
+        primary = GlobalHydra.instance().config_loader().repository.load_config(
+            hc.job.config_name)
+    except (ImportError, ValueError, AttributeError):
+        return None
+    if primary is None or primary.config is None:
+        return None
+    return groups | (set(primary.config.keys()) - {"defaults", "hydra"})
+
+
+def check_keys(cfg: DictConfig) -> None:
+    """Refuse (ValueError, one line) a key that the app's config does not have, as
+    ``+foo=1`` adds it: each node with a schema (a dataclass) is checked against its fields,
+    and a root without one against its primary config's keys and groups."""
+    root = _root_keys(cfg) if not dataclasses.is_dataclass(OmegaConf.get_type(cfg)) else None
+    _check_node(cfg, "", root)
+
+
+def _check_node(node: DictConfig, path: str, allowed: set[str] | None) -> None:
+    kind = OmegaConf.get_type(node)
+    if dataclasses.is_dataclass(kind):
+        allowed = {f.name for f in dataclasses.fields(kind)}
+    keys = [k for k in node.keys() if not (path == "" and k == "hydra")]
+    if allowed is not None:
+        unknown = [k for k in keys if k not in allowed]
+        if unknown:
+            key = f"{path}{unknown[0]}"
+            where = f"the keys of {path[:-1]}" if path else "the top-level keys"
+            raise ValueError(f"{key} = {node._get_node(unknown[0])._value()!r}: this command "
+                             f"has no key {key}; {where} are {', '.join(sorted(allowed))} "
+                             f"(drop +{key}=..., or check its spelling; --cfg job prints the "
+                             "config)")
+    for k in keys:
+        child = node._get_node(k)
+        if isinstance(child, DictConfig) and not child._is_missing() and not child._is_none():
+            _check_node(child, f"{path}{k}.", None)

@@ -506,4 +506,8 @@ def main(argv: list[str] | None = None) -> None:
 
 
 if __name__ == "__main__":
-    main()
+    from physics import interrupt
+
+    interrupt.note(lambda: "the datasets built so far are kept in data/ and reused; the "
+                           "benchmark's tables are written at its end: run it again")
+    interrupt.guard(main)

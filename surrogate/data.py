@@ -405,6 +405,21 @@ def user_rows(df: pd.DataFrame, path: str | Path, group: str | None, needed: lis
     return out
 
 
+def check_split(case: int, trajectories: int, val_replicates: int | None,
+                test_replicates: int, holdout_case: int | None) -> tuple[int, int]:
+    """The (test, validation) trajectory counts of ``case``; ValueError when it has too few
+    trajectories for them and one to train on."""
+    n_test = 0 if holdout_case is not None else test_replicates
+    n_val = validation_count(trajectories) if val_replicates is None else val_replicates
+    if trajectories < n_test + n_val + 1:
+        raise ValueError(
+            f"case {case} has {trajectories} trajectories; a split with {n_val} "
+            f"validation and {n_test} test trajectories needs at least "
+            f"{n_test + n_val + 1}: lower data.val_replicates and "
+            "data.test_replicates, or add trajectories (data.generate.replicates)")
+    return n_test, n_val
+
+
 def match_groups(values, uniques: pd.Index, option: str, column: str, source) -> list[int]:
     """The indices in ``uniques`` (a column's sorted distinct values) of the user's ``values``
     (``data.test_groups``, ``data.val_groups``): numbers matched as numbers (45 is 45.0),
@@ -477,14 +492,8 @@ def split_trajectories(df: pd.DataFrame, val_replicates: int | None, test_replic
         if case == holdout_case:
             parts["test"].append(rows)
             continue
-        n_test = 0 if holdout_case is not None else test_replicates
-        n_val = validation_count(len(reps)) if val_replicates is None else val_replicates
-        if len(reps) < n_test + n_val + 1:
-            raise ValueError(
-                f"case {case} has {len(reps)} trajectories; a split with {n_val} "
-                f"validation and {n_test} test trajectories needs at least "
-                f"{n_test + n_val + 1}: lower data.val_replicates and "
-                "data.test_replicates, or add trajectories (data.generate.replicates)")
+        n_test, n_val = check_split(case, len(reps), val_replicates, test_replicates,
+                                    holdout_case)
         perm = np.random.default_rng([seed, int(case)]).permutation(reps)
         groups = {"test": perm[:n_test], "val": perm[n_test:n_test + n_val],
                   "train": perm[n_test + n_val:]}
@@ -561,8 +570,37 @@ class WearDataModule(L.LightningDataModule):
                                  "data.holdout_case")
             if not Path(self.dataset).is_file():
                 dataset_job(self.dataset, self.generate, self.jobs)  # checks the build
+            self.check_dataset_columns_and_split()
         self.schema: FeatureSchema | None = None
         self.frames: dict[str, pd.DataFrame] = {}
+
+    def check_dataset_columns_and_split(self) -> None:
+        """Before any work on the physics dataset: the inputs and the target are its columns,
+        and each case has the trajectories the split asks for. Read from the file's header and
+        its case and replicate columns or, for a dataset still to be built, from the columns
+        and replicates the build will give."""
+        if Path(self.dataset).is_file():
+            import pyarrow.parquet as pq
+
+            try:
+                columns = pq.read_schema(self.dataset).names
+                keys = pd.read_parquet(self.dataset, columns=["case", "replicate"])
+            except Exception as err:  # any unreadable file: one line
+                raise ValueError(f"data.dataset = {self.dataset} is not a readable dataset "
+                                 f"({type(err).__name__}: {err}); delete it to build it "
+                                 "again") from None
+            counts = keys.groupby("case").replicate.nunique().to_dict()
+        else:
+            columns = list(dataset_units())
+            counts = dict.fromkeys(self.cases, int(self.generate["replicates"]))
+        missing = [c for c in [*self.inputs, self.target] if c not in columns]
+        if missing:
+            raise ValueError(f"data.inputs/data.target: columns {missing} are not in "
+                             f"{self.source}; choose from {sorted(columns)}")
+        for case in self.cases:
+            if case in counts and case != self.holdout_case:
+                check_split(case, counts[case], self.val_replicates, self.test_replicates,
+                            self.holdout_case)
 
     def _read_table(self, table: str, columns: dict[str, str], group: str | None,
                     group_by: str | None, units: dict | None, test_groups: list | None,

@@ -196,10 +196,13 @@ class Surrogate:
             raise ValueError(f"{path} is not a {FORMAT} file; pass the wear_surrogate.pt a "
                              "training run exported")
         try:
-            FeatureSchema.from_dict(payload["hparams"]["schema"])  # version check first
+            schema = FeatureSchema.from_dict(payload["hparams"]["schema"])  # version first
             model = WearRegressor(**payload["hparams"])
             model.load_state_dict(payload["state_dict"])
             scale = float(payload["interval_scale"])
+            if len(schema.inputs) != int(payload["hparams"]["n_inputs"]):
+                raise ValueError(f"its schema names {len(schema.inputs)} inputs, its network "
+                                 f"takes {payload['hparams']['n_inputs']}")
         except (KeyError, TypeError, RuntimeError, ValueError) as err:
             raise ValueError(f"{path} is incomplete or from another model ({err}); pass the "
                              "wear_surrogate.pt a training run exported") from None

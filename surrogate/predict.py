@@ -28,7 +28,7 @@ import hydra
 import pandas as pd
 from omegaconf import DictConfig
 
-from physics.command import run_command
+from physics.command import entry, run_command
 from physics.files import atomic_write, check_writable
 from surrogate.inference import Surrogate, check_gearboxes
 
@@ -104,8 +104,13 @@ def execute(job: PredictJob) -> pd.DataFrame:
 
 @hydra.main(version_base="1.3", config_path="pkg://gearwear_conf.predict",
             config_name="predict")
-def main(cfg: DictConfig) -> None:
-    run_command(cfg, prepare, execute)
+def task(cfg: DictConfig) -> None:
+    run_command(cfg, prepare, execute,
+                kept=lambda job: f"nothing is kept ({job.output} is written at the end, "
+                                 "whole or not at all); run the command again")
+
+
+main = entry(task, check=prepare)
 
 
 if __name__ == "__main__":

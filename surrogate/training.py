@@ -20,7 +20,7 @@ from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
 from physics.estimators.empirical_inverse import wear_errors
-from physics.files import atomic_write, pyplot
+from physics.files import atomic_write, check_inside, pyplot
 from surrogate import baselines, settings
 from surrogate.data import WearDataModule
 from surrogate.inference import Surrogate, conformal_scale, export
@@ -77,6 +77,8 @@ def prepare(cfg: DictConfig) -> TrainJob:
     """Check the whole run before any work: case, model settings, trainer, callbacks, loggers
     and the data module (whose dataset, if missing, is planned and checked but not built)."""
     quiet_lightning()
+    root = Path(str(cfg.paths.root_dir)) / "logs"
+    check_inside(root / str(cfg.task_name), root, f"task_name = {cfg.task_name!r}")
     for key in ("seed",):
         if isinstance(cfg[key], bool) or not isinstance(cfg[key], int) or cfg[key] < 0:
             raise ValueError(f"{key} = {cfg[key]!r} must be a whole number >= 0")
@@ -219,9 +221,20 @@ def set_aside_checkpoints(out: Path) -> Path | None:
 
 
 def kept(job: TrainJob) -> str:
-    """What an interrupted training kept."""
-    return (f"the checkpoints so far are in {job.out / 'checkpoints'}; the run is not "
-            "exported: run the command again to train")
+    """What an interrupted training kept: while its dataset was being built, the dataset's
+    finished chunks; while it trained, its checkpoints (if any were written yet)."""
+    ckpts = job.out / "checkpoints"
+    if ckpts.is_dir() and any(ckpts.glob("*.ckpt")):
+        return (f"the checkpoints so far are in {ckpts}; the run is not exported: run the "
+                "command again to train")
+    dm = job.data
+    if dm.table is None and not Path(dm.dataset).is_file():
+        from physics.dataset.generation import chunks_kept
+        from surrogate.data import dataset_job
+
+        return (f"no training was done; of the dataset {dm.dataset}, "
+                f"{chunks_kept(dataset_job(dm.dataset, dm.generate, dm.jobs))}")
+    return "no model was exported and no checkpoint written; run the command again to train"
 
 
 def report_test(surrogate: Surrogate, dm: WearDataModule, out: Path) -> dict:

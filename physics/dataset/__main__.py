@@ -11,7 +11,7 @@ import logging
 import hydra
 from omegaconf import DictConfig, OmegaConf
 
-from physics.command import register_schema, run_command
+from physics.command import entry, register_schema, run_command
 from physics.dataset.generation import (
     DatasetConfig,
     DatasetJob,
@@ -28,7 +28,9 @@ log = logging.getLogger(__name__)
 register_schema("dataset_schema", DatasetConfig)
 
 
-def prepare(cfg: DictConfig) -> DatasetJob:
+def plan(cfg: DictConfig) -> DatasetJob:
+    """Check the config and plan the build; nothing is written (a sweep's jobs are checked
+    with this before any starts)."""
     container = OmegaConf.to_container(cfg, resolve=True)
     job = plan_dataset(base_scenario(container), spec_from_config(container["data"]),
                        cfg.out_dir, cfg.name, cfg.chunk, cfg.jobs, cfg.store_signals,
@@ -36,6 +38,11 @@ def prepare(cfg: DictConfig) -> DatasetJob:
     if len(job.todo) < (job.spec.chunks if job.merge else 1):
         log.info("finished chunks of this config (hash %s) are kept in %s and skipped",
                  job.digest, job.folder)
+    return job
+
+
+def prepare(cfg: DictConfig) -> DatasetJob:
+    job = plan(cfg)
     acquire_output(job)  # the last check: one writer per dataset (released by build_dataset)
     return job
 
@@ -55,8 +62,11 @@ def execute(job: DatasetJob) -> None:
 
 @hydra.main(version_base="1.3", config_path="pkg://gearwear_conf.dataset",
             config_name="dataset")
-def main(cfg: DictConfig) -> None:
+def task(cfg: DictConfig) -> None:
     run_command(cfg, prepare, execute, kept=chunks_kept)
+
+
+main = entry(task, check=plan)
 
 
 if __name__ == "__main__":

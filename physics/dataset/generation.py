@@ -59,6 +59,7 @@ from physics.dynamics.model import build_model, simulate
 from physics.dynamics.model_form import FACTORS
 from physics.files import atomic_write, check_writable, read_lock, release_lock, sha256_file
 from physics.gear.stiffness import MeshStiffness, SainsotRangeWarning, mesh_stiffness
+from physics.interrupt import quiet_workers
 from physics.params import (
     OutOfScope,
     PhysicsConfig,
@@ -512,9 +513,31 @@ def build_dataset(job: DatasetJob) -> Path | None:
     if not held:
         acquire_output(job)
     try:
+        remove_temporaries(job)  # of an earlier run of it that was killed outright
         return _build(job)
+    except BaseException:
+        # Ctrl-C, SIGTERM or a failure: a worker that was ended mid-write leaves its
+        # temporary file, which this build removes while it still holds the lock
+        remove_temporaries(job)
+        raise
     finally:
         release_lock(own)
+
+
+def remove_temporaries(job: DatasetJob) -> None:
+    """Remove the temporary files (:func:`physics.files.atomic_write`) of the outputs ``job``
+    writes: of its chunks, and for a whole build of the manifest and the merged files too.
+    Only the build holding the lock calls this, so no other writer's file is touched."""
+    chunks = range(job.spec.chunks) if job.merge else [job.chunk]
+    patterns = [f".chunk_{c:03d}.*.tmp" for c in chunks if c is not None]
+    if job.merge:
+        patterns.append(".*.tmp")
+        for stem in (job.name, f"{job.name}_signals"):
+            for path in job.out.glob(f".{stem}.*.tmp"):
+                path.unlink(missing_ok=True)
+    for pattern in patterns:
+        for path in job.folder.glob(pattern):
+            path.unlink(missing_ok=True)
 
 
 def _compute(job: DatasetJob, todo: tuple[int, ...]) -> None:
@@ -529,6 +552,7 @@ def _compute(job: DatasetJob, todo: tuple[int, ...]) -> None:
                 run_chunk(*args, c, job.folder, job.digest, job.store_signals)
                 bar.update(1)
         else:  # loky processes: they also start inside a joblib-launched multirun job
+            quiet_workers()
             runs = Parallel(n_jobs=jobs, return_as="generator_unordered")(
                 delayed(run_chunk)(*args, c, job.folder, job.digest, job.store_signals)
                 for c in todo)
@@ -557,6 +581,9 @@ def chunks_kept(job: DatasetJob) -> str:
     """What an interrupted build kept, and how to go on."""
     done = [c for c in range(job.spec.chunks)
             if chunk_is_done(job.folder, c, job.digest, job.store_signals)]
+    if not done:
+        return (f"no chunk of the {job.spec.chunks} was finished, nothing is kept; run the "
+                "same command again")
     return (f"{len(done)} of {job.spec.chunks} chunks are kept in {job.folder}; the same command "
             "resumes from them")
 

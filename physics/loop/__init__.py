@@ -57,7 +57,7 @@ _SOURCES = {
     "physics.loop.lines": (
         "unexplained_lines", "declared_lines", "record_spectrum", "crossing_probability"),
     "physics.loop.verdict": (
-        "VERDICTS", "verdict", "unexplained_entries", "group_lines", "entry_kind"),
+        "VERDICTS", "judge", "unexplained_entries", "group_lines", "entry_kind"),
     "physics.loop.usable": ("check_usable", "shown_candidates"),
     "physics.loop.bundle_loop": ("run_loop",),
     "physics.loop.table_loop": ("run_feature_table", "parse_columns"),

@@ -14,7 +14,7 @@ import pandas as pd
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, OmegaConf
 
-from physics.command import register_schema, run_command
+from physics.command import entry, register_schema, run_command
 from physics.loop.attribution import candidates_for
 from physics.loop.bundle import Bundle, check_not_own_reference, read_measurements
 from physics.loop.bundle_loop import run_loop
@@ -103,13 +103,16 @@ def _execute(job: LoopJob) -> None:
 
 
 @hydra.main(version_base="1.3", config_path="pkg://gearwear_conf.loop", config_name="loop")
-def main(cfg: DictConfig) -> None:
+def task(cfg: DictConfig) -> None:
     run_command(cfg, prepare, execute,
                 kept=lambda job: (f"a partial report of the first round is kept in {job.out} "
                                   "(report.json: partial)"
                                   if (job.out / "report.json").is_file() else
                                   "nothing is kept (the loop writes its report after its first "
                                   "round); run the command again"))
+
+
+main = entry(task, check=prepare)
 
 
 if __name__ == "__main__":

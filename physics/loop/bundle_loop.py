@@ -129,7 +129,7 @@ from physics.loop.records import Records, prepare
 from physics.loop.report import LoopReport
 from physics.loop.simulation import model_signals
 from physics.loop.usable import check_usable, shown_candidates
-from physics.loop.verdict import closest, group_lines, unexplained_entries, verdict
+from physics.loop.verdict import closest, group_lines, judge, unexplained_entries
 from physics.loop.wear_reading import Reader, wear_score
 from physics.params import Scenario
 
@@ -227,7 +227,7 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
     entries = ({} if last else
                unexplained_entries(judged, rec.test, base_test, settings.false_add_rate))
     lines = {} if last else group_lines(rec, settings.false_add_rate)
-    said, unexplained = verdict(last is not None, entries, lines,
+    said, unexplained = judge(last is not None, entries, lines,
                                 closest(first.ranking, first.all_checks))
     rec.cache.clear()  # the report keeps the records, not the simulations
     return LoopReport(

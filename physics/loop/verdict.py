@@ -113,7 +113,7 @@ def closest(ranking: list, checks: list[dict]) -> list[dict]:
              "checks": ch} for c, ch in list(zip(ranking, checks, strict=True))[:CLOSEST]]
 
 
-def verdict(adopted: bool, entries: dict, lines: dict, near: list[dict]
+def judge(adopted: bool, entries: dict, lines: dict, near: list[dict]
             ) -> tuple[str, dict | None]:
     """The verdict and, for an unexplained residual, where it lives: per group its entries and
     lines, and the candidates that came closest (``near``)."""

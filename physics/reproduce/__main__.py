@@ -6,7 +6,7 @@ from __future__ import annotations
 import hydra
 from omegaconf import DictConfig
 
-from physics.command import register_schema, run_command
+from physics.command import entry, register_schema, run_command
 from physics.reproduce.thesis import ReproduceConfig, prepare, run
 
 register_schema("reproduce_schema", ReproduceConfig)
@@ -14,9 +14,12 @@ register_schema("reproduce_schema", ReproduceConfig)
 
 @hydra.main(version_base="1.3", config_path="pkg://gearwear_conf.reproduce",
             config_name="reproduce")
-def main(cfg: DictConfig) -> None:
+def task(cfg: DictConfig) -> None:
     run_command(cfg, prepare, run, kept=lambda plan: f"the tables written so far are in "
                 f"{plan.out}; run the command again to compute them all")
+
+
+main = entry(task, check=prepare)
 
 
 if __name__ == "__main__":

@@ -27,6 +27,7 @@ centre distance. Every value is computed; nothing is copied from the thesis.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import logging
 import math
@@ -484,6 +485,17 @@ def _cycles(name: str, values: list[float]) -> None:
                              f"{MAX_CYCLES:g}, 95 years at 2000 r/min); give fewer cycles")
 
 
+@contextlib.contextmanager
+def _entry(key: str, value: float):
+    """Checks of one entry of list ``key``: a refusal names the list and the entry (the
+    scenario's own message names the parameter the entry sets)."""
+    try:
+        yield
+    except ValueError as err:
+        raise ValueError(f"{key}: the entry {value!r} is refused: {err}; change or drop that "
+                         f"entry of {key}") from None
+
+
 def prepare(cfg: DictConfig) -> ReproducePlan:
     """Check the whole reproduction before any work: the output folder takes files, and every
     scenario it will run is built and checked against the model's scope
@@ -498,16 +510,20 @@ def prepare(cfg: DictConfig) -> ReproducePlan:
             raise ValueError(f"{name} is empty; give at least one value")
     check_scenario(scn)
     for n in cfg.speeds_rpm:
-        check_scenario(check_scope(_with(scn, "operating", n1_rpm=n)))
+        with _entry("speeds_rpm", n):
+            check_scenario(check_scope(_with(scn, "operating", n1_rpm=n)))
     for t in cfg.torques_Nm:
-        check_scenario(check_scope(_with(scn, "operating", torque_Nm=t)))
+        with _entry("torques_Nm", t):
+            check_scenario(check_scope(_with(scn, "operating", torque_Nm=t)))
     for s in cfg.roughness_um:
-        check_scenario(_with(scn, "tribology", sigma_um=s))
+        with _entry("roughness_um", s):
+            check_scenario(_with(scn, "tribology", sigma_um=s))
     for lub in lubs.values():
         check_scenario(dataclasses.replace(scn, lubricant=lub))
     for off in cfg.center_distance_offsets_pct:
         a = scn.gear.standard_center_distance_mm * (1 + off / 100)
-        check_scenario(_with(scn, "gear", center_distance_mm=a))
+        with _entry("center_distance_offsets_pct", off):
+            check_scenario(_with(scn, "gear", center_distance_mm=a))
     _cycles("stiffness.wear_cycles", list(st.wear_cycles))
     _cycles("evolution.table9_cycles", list(ev.table9_cycles))
     _cycles("evolution.table14_cycles", list(ev.table14_cycles))

@@ -153,6 +153,11 @@ def test_a_built_dataset_holds_enough_gearboxes_and_a_tenth_validates(tmp_path):
     dm = instantiate(cfg.data)
     assert dm.generate["replicates"] == 256 and dm.val_replicates is None
     cfg = train_cfg(tmp_path, tmp_path / "x.parquet", "case=all", "+data.generate.replicates=4")
+    with pytest.raises(Exception, match=r"case 1 has 4 trajectories; a split with 1 "
+                                        r"validation and 8 test"):  # before the build
+        instantiate(cfg.data)
+    cfg = train_cfg(tmp_path, tmp_path / "x.parquet", "case=all", "+data.generate.replicates=4",
+                    "data.test_replicates=1", "data.val_replicates=1")
     small = instantiate(cfg.data).generate
     assert small["replicates"] == 4 and small["chunks"] == 20  # one chunk per trajectory
     assert dm.generate["chunks"] == BUILD_CHUNKS  # many chunks: both processes busy to the end
@@ -633,7 +638,8 @@ def test_a_baseline_network_reads_changes_and_needs_the_gearbox(dataset, tmp_pat
 def test_a_baseline_network_refuses_trajectories_that_do_not_start_unworn(dataset, tmp_path):
     shuffled = tmp_path / "shuffled.parquet"
     pd.read_parquet(dataset).sort_values("cycles", ascending=False).to_parquet(shuffled)
-    dm = instantiate(train_cfg(tmp_path, shuffled, "case=3", "experiment=baseline").data)
+    dm = instantiate(train_cfg(tmp_path, shuffled, "case=3", "experiment=baseline",
+                               "data.test_replicates=1", "data.val_replicates=1").data)
     with pytest.raises(ValueError, match=r"trajectory \{'case': 3, 'replicate': \d+\}.* starts "
                                          r"at mean_wear_mm = [\d.e-]+, above its least \(0\)"):
         dm.setup()
@@ -664,7 +670,8 @@ def test_a_baseline_table_must_start_each_group_at_its_baseline(dataset, tmp_pat
     mine = pd.concat([mine.iloc[1:], mine.iloc[:1]])  # the first gearbox's baseline moved last
     mine.to_csv(tmp_path / "mine.csv", index=False)
     cfg = train_cfg(tmp_path, dataset, f"data.table={tmp_path / 'mine.csv'}", "data.group=rig",
-                    "experiment=baseline")
+                    "experiment=baseline", "data.test_replicates=1",
+                    "data.val_replicates=1")
     # refused as the table is read, before the split is drawn
     with pytest.raises(Exception, match=r"mine\.csv: trajectory \{'rig': 0\} starts at "
                                         r"mean_wear_mm"):

@@ -1,0 +1,159 @@
+"""Ctrl-C and SIGTERM in the apps: one line saying what was kept and how to resume, exit code 130
+(SIGINT) or 143 (SIGTERM), no traceback, wherever the run was.
+
+The handlers (:func:`install_signal_handlers`) raise KeyboardInterrupt for SIGINT and
+:class:`Terminated` (a KeyboardInterrupt) for SIGTERM, so that every cleanup written for Ctrl-C
+(``finally``, atomic writes, joblib's abort, Lightning's teardown) runs for both; they also note
+the signal, so that an interruption is reported as one whatever exception it became on its way
+out (a numba kernel's ``SystemError``, Lightning's ``exit(1)`` after its graceful shutdown, a
+joblib worker's error). :func:`guard` runs an app's entry and ends an interrupted run with the
+line; what it says is set as the run goes (:func:`note`). An app started with ``python -m``
+gets the handlers when ``physics`` is first imported (:func:`install_for_apps`), before its
+slow imports; ``train.py`` installs them as its first statement.
+
+Kept free of heavy imports: it runs before numpy, numba, torch or Hydra are loaded.
+"""
+
+from __future__ import annotations
+
+import signal
+import sys
+from collections.abc import Callable
+from typing import Any
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised where the program is, like Ctrl-C's KeyboardInterrupt."""
+
+
+#: exit codes: 128 + the signal's number, as a shell reports a process the signal ended
+EXIT_CODES = {signal.SIGINT: 130, signal.SIGTERM: 143}
+#: the apps run as ``python -m <module>`` (``train.py`` installs the handlers itself)
+APPS = ("physics.dataset", "physics.reproduce", "physics.loop", "surrogate.predict",
+        "surrogate.benchmark")
+
+#: the first of SIGINT or SIGTERM this process received (None: neither)
+_SIGNAL: int | None = None
+#: what an interrupted run has kept and how to resume, at this moment of the run
+_NOTE: Callable[[], str] | None = None
+
+
+#: where the app is: "start" (its imports, before :func:`guard`), "run" (inside it), "done"
+#: (the app's entry returned: its work is written, and a signal then is let be)
+_PHASE = "start"
+
+
+def _on_signal(signum: int, frame: Any) -> None:
+    global _SIGNAL
+    if _SIGNAL is None:
+        _SIGNAL = signum
+    if _PHASE == "start":  # nothing to clean up yet: end here, wherever the imports were
+        end()
+    if _PHASE == "done":  # the work is done and written, the app ends: let it (exit code 0)
+        return
+    raise Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
+
+
+def install_signal_handlers() -> None:
+    """SIGINT raises KeyboardInterrupt and SIGTERM :class:`Terminated`; both note the signal."""
+    for signum in EXIT_CODES:
+        signal.signal(signum, _on_signal)
+
+
+def quiet_workers() -> None:
+    """Start joblib's (loky's) worker processes with SIGINT blocked, from their first
+    instruction on: Ctrl-C reaches the whole process group, and a worker still importing
+    would print a traceback of its own. The app's process alone answers: its joblib call
+    stops the workers, and it reports once. (Loky starts a worker by fork and exec; a blocked
+    signal stays blocked across both.)"""
+    from joblib.externals.loky.backend import fork_exec as module
+
+    launch = module.fork_exec
+    if getattr(launch, "_sigint_blocked", False):
+        return
+
+    def fork_exec(*args: Any, **kwargs: Any) -> Any:
+        before = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        try:
+            return launch(*args, **kwargs)
+        finally:
+            signal.pthread_sigmask(signal.SIG_SETMASK, before)
+
+    fork_exec._sigint_blocked = True  # type: ignore[attr-defined]
+    module.fork_exec = fork_exec
+
+
+def install_for_apps() -> None:
+    """The handlers, if this process is one of the :data:`APPS` (``python -m <app>``)."""
+    argv = list(getattr(sys, "orig_argv", []))
+    if "-m" in argv[:-1] and argv[argv.index("-m") + 1] in APPS:
+        install_signal_handlers()
+
+
+def received() -> int | None:
+    """The signal this process received, None if none."""
+    return _SIGNAL
+
+
+def interrupted(err: BaseException) -> bool:
+    """Whether ``err`` ends an interrupted run (a signal came, or it is a KeyboardInterrupt)."""
+    return _SIGNAL is not None or isinstance(err, KeyboardInterrupt)
+
+
+def note(text: Callable[[], str] | None) -> None:
+    """Set what an interruption from now on has kept (called when it happens)."""
+    global _NOTE
+    _NOTE = text
+
+
+def _report() -> None:
+    for signum in EXIT_CODES:  # the report and the exit are not interrupted again
+        signal.signal(signum, signal.SIG_IGN)
+    try:
+        text = _NOTE() if _NOTE is not None else "nothing was written; run the command again"
+    except Exception:  # the note is a courtesy; the exit code must come
+        text = "run the command again"
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):
+            pass
+    print(f"interrupted: {text}", file=sys.stderr, flush=True)
+
+
+def end() -> None:
+    """One line saying what was kept and how to resume; exit 130 (SIGINT) or 143 (SIGTERM)."""
+    _report()
+    raise SystemExit(EXIT_CODES.get(_SIGNAL, 130))
+
+
+def guard(main: Callable[[], Any], undo: Callable[[], None] | None = None) -> Any:
+    """Run an app's entry ``main()``; an interrupted run ends with :func:`end`, also one that
+    the code on its way swallowed the interruption of; ``undo()`` runs first (an app removes
+    what a run interrupted before its work made)."""
+    global _PHASE
+    install_signal_handlers()
+    _PHASE = "run"
+    try:
+        try:
+            result = main()
+        except BaseException as err:
+            if not interrupted(err):
+                raise
+            _undo_and_end(undo)
+        if _SIGNAL is not None:
+            _undo_and_end(undo)
+    finally:
+        _PHASE = "done"
+    return result
+
+
+def _undo_and_end(undo: Callable[[], None] | None) -> None:
+    for signum in EXIT_CODES:
+        signal.signal(signum, signal.SIG_IGN)
+    if undo is not None:
+        try:
+            undo()
+        except Exception:  # what stays is named by the note; the exit code must come
+            pass
+    end()

@@ -1,0 +1,151 @@
+"""Ctrl-C (SIGINT to the process group, as a terminal sends it) and SIGTERM (to the app's
+process) at random moments of each app on a small config: exit code 130 / 143, exactly one
+``interrupted:`` line on stderr, no traceback, no temporary or lock file left, and a run
+interrupted before its work leaves nothing at all. A signal that comes after the work ended
+may find the run finished (exit 0, no line); at least one try per app must be interrupted.
+
+The default run tries each app 3 times; the slow variant 10 times in a row."""
+
+from __future__ import annotations
+
+import os
+import random
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).parent))
+
+ROOT = Path(__file__).resolve().parents[2]
+SMALL_DATASET = ["data.cases=[3]", "data.replicates=2", "data.wear_states=2", "data.chunks=2",
+                 "progress=false"]
+FAST_REPRO = ["solver.n_points=101", "stiffness.fem_refine=1", "stiffness.fem_refines=[1]",
+              "stiffness.positions=40", "evolution.cases=[3]", "evolution.points=9",
+              "evolution.table14_cycles=[0,1.5e7]"]
+SMALL_LOOP = ["loop.max_nfev=4", "loop.explore=4", "loop.candidates=[friction,tip_relief]",
+              "progress=false"]
+TINY_TRAIN = ["+data.generate.replicates=4", "+data.generate.wear_states=3",
+              "+data.generate.chunks=2", "data.val_replicates=1", "data.test_replicates=1",
+              "trainer.max_epochs=3000", "trainer.min_epochs=3000", "model.members=2",
+              "trainer.enable_progress_bar=false"]
+
+
+@pytest.fixture(scope="module")
+def inputs(tmp_path_factory) -> Path:
+    """A bundle for the loop, a model and a feature table for predict."""
+    from test_safety_user_tables import table, train_cfg
+
+    from physics.params import Scenario
+    from physics.testbeds import make_bundle
+    from surrogate.training import train
+
+    folder = tmp_path_factory.mktemp("inputs")
+    make_bundle(folder / "bundle", Scenario(), "friction", seed=1, records=6, duration_s=0.5)
+    table().to_csv(folder / "in.csv", index=False)
+    train(train_cfg(folder, table="in.csv", max_epochs=1))
+    table().drop(columns="rig").to_csv(folder / "features.csv", index=False)
+    return folder
+
+
+def argv(app: str, inputs: Path) -> tuple[list[str], float]:
+    """The command of ``app`` and the latest moment (s) a signal is sent."""
+    py = sys.executable
+    if app == "dataset":
+        return [py, "-m", "physics.dataset", *SMALL_DATASET], 10.0
+    if app == "reproduce":
+        return [py, "-m", "physics.reproduce", *FAST_REPRO, "out_dir=results"], 8.0
+    if app == "loop":
+        return [py, "-m", "physics.loop", f"data={inputs / 'bundle'}", *SMALL_LOOP], 10.0
+    if app == "train":
+        return [py, str(ROOT / "train.py"), *TINY_TRAIN], 16.0
+    ckpt = next(inputs.rglob("wear_surrogate.pt"))
+    return [py, "-m", "surrogate.predict", f"ckpt={ckpt}",
+            f"input={inputs / 'features.csv'}", "output=wear.csv"], 6.0
+
+
+def interrupt(cmd: list[str], cwd: Path, signum: int, delay: float
+              ) -> subprocess.CompletedProcess:
+    proc = subprocess.Popen(cmd, cwd=cwd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                            text=True, start_new_session=True)
+    time.sleep(delay)
+    try:
+        if signum == signal.SIGINT:
+            os.killpg(proc.pid, signum)  # as a terminal sends Ctrl-C: to the whole group
+        else:
+            os.kill(proc.pid, signum)  # as kill(1) or a process manager sends it
+    except ProcessLookupError:
+        pass
+    _, err = proc.communicate(timeout=300)
+    return subprocess.CompletedProcess(cmd, proc.returncode, "", err)
+
+
+def left(folder: Path) -> list[str]:
+    return sorted(str(p.relative_to(folder)) for p in folder.rglob("*")
+                  if p.name.endswith((".tmp", ".lock")) or ".staged" in p.name)
+
+
+def check_tries(app: str, inputs: Path, tmp_path: Path, tries: int) -> None:
+    rng = random.Random()
+    cmd, latest = argv(app, inputs)
+    interrupted = 0
+    for i in range(tries):
+        signum = (signal.SIGINT, signal.SIGTERM)[i % 2]
+        delay = rng.uniform(0.2, latest)
+        work = tmp_path / f"try{i}"
+        work.mkdir()
+        run = interrupt(cmd, work, signum, delay)
+        what = f"{app}, {signal.Signals(signum).name} after {delay:.2f} s:\n{run.stderr[-3000:]}"
+        lines = [ln for ln in run.stderr.splitlines() if ln.startswith("interrupted:")]
+        assert "Traceback" not in run.stderr, what
+        assert not left(work), f"{left(work)} left; {what}"
+        if run.returncode in (0, -signum):  # the work had ended: nothing to report
+            assert not lines, what
+            continue
+        assert run.returncode == {signal.SIGINT: 130, signal.SIGTERM: 143}[signum], what
+        assert len(lines) == 1, what
+        interrupted += 1
+        if "nothing was written" in lines[0]:
+            assert not any(work.iterdir()), f"{sorted(work.rglob('*'))} left; {what}"
+    assert interrupted, f"{app}: no try was interrupted before the run ended"
+
+
+APPS = ["dataset", "reproduce", "loop", "train", "predict"]
+
+
+@pytest.mark.parametrize("app", APPS)
+def test_ctrl_c_and_sigterm_at_random_moments(app, inputs, tmp_path):
+    check_tries(app, inputs, tmp_path, 3)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("app", APPS)
+def test_ctrl_c_and_sigterm_ten_times_in_a_row(app, inputs, tmp_path):
+    check_tries(app, inputs, tmp_path, 10)
+
+
+def test_ctrl_c_during_training_names_the_checkpoints_and_exits_130(inputs, tmp_path):
+    """Lightning catches KeyboardInterrupt in its fit loop ("graceful shutdown", exit 1): the
+    app still ends with its one line and 130."""
+    cmd, _ = argv("train", inputs)
+    subprocess.run([*cmd[:2], *[a.replace("3000", "1") for a in cmd[2:]],
+                    f"hydra.run.dir={tmp_path / 'build'}"], cwd=tmp_path,
+                   capture_output=True, timeout=300, check=True)  # the dataset, built once
+    proc = subprocess.Popen([*cmd, "hydra.run.dir=run"], cwd=tmp_path, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+    for line in proc.stdout:  # Hydra logs to stdout: wait for the fit loop to run
+        if "training on" in line:
+            break
+    deadline = time.monotonic() + 60
+    while not list(tmp_path.glob("run/checkpoints/*.ckpt")):
+        assert time.monotonic() < deadline, "no checkpoint written"
+        time.sleep(0.2)
+    os.killpg(proc.pid, signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    lines = [ln for ln in err.splitlines() if ln.startswith("interrupted:")]
+    assert proc.returncode == 130 and "Traceback" not in err, err[-3000:]
+    assert len(lines) == 1 and "the checkpoints so far are in" in lines[0], err[-3000:]
+    assert not (tmp_path / "run" / "wear_surrogate.pt").exists()
