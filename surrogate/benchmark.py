@@ -52,7 +52,10 @@ referenced to each gearbox's unworn record [%] (:func:`referenced`), batch throu
 and single-row latency [us] on the CPU. Writes ``benchmark.csv``, ``parity.png`` and the
 trained models into ``--out`` (default ``logs/benchmark/<time>``), and ``labelled_counts.csv``:
 how many labelled gearboxes of the independent simulator a network trained on them needs to
-beat the estimator refitted on the same (:func:`labelled_counts`).
+beat the estimator refitted on the same (:func:`labelled_counts`); and ``one_rig.csv``: a
+user's table of one rig of the independent simulator, two speeds and 32 wear stages, the
+acceleration RMS and one other feature, trained at one speed and tested at the other, and
+with stages left out, beside the linear model and the estimator (:func:`one_rig`).
 """
 
 from __future__ import annotations
@@ -60,6 +63,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import itertools
+import json
 import logging
 import math
 import time
@@ -361,6 +365,66 @@ def labelled_counts(root: Path, out: Path, fleet: pd.DataFrame, extra: list[str]
     return pd.DataFrame(rows)
 
 
+#: the one-rig table: shaft speeds [rev/s], torque [N m], wear stages up to a root depth [mm]
+ONE_RIG_SPEEDS, ONE_RIG_TORQUE, ONE_RIG_STAGES, ONE_RIG_WEAR_MM = (15, 45), 200.0, 32, 0.03
+#: its splits: name -> train.py overrides (train at 15 rev/s and test at 45; six stages held
+#: out and four validating, drawn by the seed, at both speeds)
+ONE_RIG_SPLITS = {
+    "by_speed": ["data.group=stage", "data.group_by=speed", "data.test_groups=[45]",
+                 "data.val_replicates=4"],
+    "stages_out": ["data.group=stage", "data.test_replicates=6", "data.val_replicates=4"]}
+#: its network's inputs, the acceleration RMS and one other feature, with their units
+ONE_RIG_INPUTS = ["data.inputs=[acc_rms,dte_peak_to_peak]", "data.target=root_wear_mm"]
+
+
+def one_rig_table(stages: int = ONE_RIG_STAGES, seed: int = 0) -> pd.DataFrame:
+    """A user's table of one rig: one gearbox of the independent simulator
+    (:mod:`physics.testbeds.independent_simulator`, another model form than ours) at two shaft
+    speeds, ``stages`` wear stages from new to :data:`ONE_RIG_WEAR_MM` of root wear, one
+    record per stage and speed: the acceleration RMS and the DTE peak-to-peak value (the
+    network's inputs), the DTE kurtosis and a cycle count (the thesis's estimator's; the
+    Archard depth of one operating point grows in proportion to the cycles, 1 um per 1e6, as
+    in :func:`fit_fleet_estimator`) and the root wear."""
+    pair, rows = IndependentPair(), []
+    for speed in ONE_RIG_SPEEDS:
+        for stage in range(stages):
+            wear = ONE_RIG_WEAR_MM * stage / (stages - 1)
+            rng = np.random.default_rng([seed, speed, stage])
+            rec = {q: simulate_record(pair, n1_rpm=60.0 * speed, torque_Nm=ONE_RIG_TORQUE,
+                                      wear_mm=wear, quantity=q, rng=rng, duration_s=0.25)[None]
+                   for q in ("dte_m", "accel_m_s2")}
+            f_dte, f_acc = features(rec["dte_m"]), features(rec["accel_m_s2"])
+            rows.append({"rig": "independent", "speed": speed, "stage": stage,
+                         "cycles": wear * 1e9, "acc_rms": float(f_acc["rms"][0]),
+                         "dte_peak_to_peak": float(f_dte["peak_to_peak"][0]),
+                         "dte_kurtosis": float(f_dte["kurtosis"][0]), "root_wear_mm": wear})
+    return pd.DataFrame(rows)
+
+
+def one_rig(root: Path, out: Path, extra: list[str], seed: int = 0) -> list[dict]:
+    """The one-rig table (:func:`one_rig_table`) written to ``out`` and trained on as a user
+    would, once per split of :data:`ONE_RIG_SPLITS`; per split a row of the network's, the
+    linear model's and the estimator's test errors (their ``metrics.json``), the interval's
+    coverage, the flagged share and the share missed and not flagged."""
+    table = out / "one_rig.csv"
+    frame = one_rig_table()
+    atomic_write(table, lambda p: frame.to_csv(p, index=False))
+    rows = []
+    for split, overrides in ONE_RIG_SPLITS.items():
+        folder = out / "models" / f"one_rig_{split}"
+        train(train_config(root, folder, f"data.table={table}", *ONE_RIG_INPUTS, *overrides,
+                           *extra, f"seed={seed}"))
+        m = json.loads((folder / "metrics.json").read_text())
+        rows.append({"scenario": f"one_rig/{split}", "seed": seed,
+                     **{f"{who}_mre_pct": m.get(f"test_{p}mean_relative_error_pct", math.nan)
+                        for who, p in (("network", ""), ("linear", "linear_"),
+                                       ("estimator", "estimator_"), ("median", "median_"))},
+                     "interval_coverage": m["test_interval_coverage"],
+                     "flag_rate": m["test_flagged_share"],
+                     "missed_not_flagged": m["test_missed_not_flagged_share"]})
+    return rows
+
+
 def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5
         ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Train the models of :data:`MODELS` (those of :data:`SEEDED` once per training seed: the
@@ -457,6 +521,8 @@ def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5
     plt.close(fig)
     counts = labelled_counts(root, out, fleet, extra)
     atomic_write(out / "labelled_counts.csv", lambda p: counts.to_csv(p, index=False))
+    rig = pd.DataFrame(one_rig(root, out, extra))
+    atomic_write(out / "one_rig.csv", lambda p: rig.to_csv(p, index=False))
     return table, counts
 
 
@@ -494,6 +560,7 @@ def main(argv: list[str] | None = None) -> None:
     if args.seeds < 1:
         parser.error(f"--seeds {args.seeds}: give at least 1")
     table, counts = run(out.resolve(), Path.cwd(), args.max_epochs, args.seeds)
+    rig = pd.read_csv(out.resolve() / "one_rig.csv")
     cols = ["scenario", "estimator", "seed", "rmse", "r2", "mean_relative_error_pct",
             "max_relative_error_pct", "interval_coverage", "flag_rate", "missed_not_flagged",
             "unworn_reading", "referenced_mre_pct", "rows_per_s", "latency_us"]
@@ -504,6 +571,9 @@ def main(argv: list[str] | None = None) -> None:
         print("\nlabelled gearboxes of the independent simulator, over the draws:")
         print(counts.drop(columns=["draw", "heldout_rows"]).groupby("labelled_gearboxes").agg(
             ["mean", "min", "max"]).to_string())
+        print("\none rig of the independent simulator (a user's table, acc_rms and "
+              "dte_peak_to_peak):")
+        print(rig.to_string(index=False))
     print(f"\n-> {out / 'benchmark.csv'}, {out / 'labelled_counts.csv'}, {out / 'parity.png'}")
 
 
