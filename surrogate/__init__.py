@@ -7,6 +7,8 @@
 - :mod:`surrogate.model`: a deep ensemble of Gaussian MLPs as one Lightning module;
 - :mod:`surrogate.training`: ``train(cfg)``, called by ``train.py``;
 - :mod:`surrogate.inference`: export, safe loading, CPU prediction with intervals and flags;
+- :mod:`surrogate.novelty`: the novelty score against the training rows, the flag's threshold
+  and the interval's difficulty;
 - :mod:`surrogate.predict`, :mod:`surrogate.summarise`, :mod:`surrogate.benchmark`: commands.
 """
 
@@ -26,8 +28,10 @@ _SOURCES = {
     "surrogate.inference": (
         "Surrogate", "ScaledEnsemble", "export", "conformal_scale", "torch_predict"),
     "surrogate.predict": ("predict_file", "gearbox_columns"),
+    "surrogate.novelty": ("Novelty", "difficulty", "envelope_report"),
     "surrogate.benchmark": (
-        "Novelty", "DRY_LAW", "INDEPENDENT_WEAR_MM", "fit_estimator", "fit_fleet_estimator",
-        "independent_fleet", "referenced", "seed_summary", "typical_wear"),
+        "DRY_LAW", "MODEL_FORM_OFF", "one_rig_table", "one_rig", "INDEPENDENT_WEAR_MM",
+        "fit_estimator", "fit_fleet_estimator", "independent_fleet", "referenced",
+        "seed_summary", "typical_wear"),
 }
 __all__, __getattr__, __dir__ = lazy_exports(__name__, _SOURCES)

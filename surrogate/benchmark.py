@@ -18,6 +18,9 @@ Every model and estimator is scored on its own target (root wear unless named). 
 - ``nuisance_shifted``: a dataset drawn with another seed from the upper 40 % of every documented
   nuisance range (:func:`shifted_ranges`): a gearbox inside the ranges, away from most training
   trajectories;
+- ``model_form_off``: case-3 gearboxes of our model whose mesh stiffness, stiffness ratio and
+  mesh resonance lie off the declared model's (:data:`MODEL_FORM_OFF`), for every network
+  that does not draw the model's form (``case3_form`` does);
 - ``dry_wear_law``: gearboxes of our model worn by the thesis's dry Archard law instead of the
   lubricated one (``boundary_share`` 0.99, :data:`DRY_LAW`; another seed, the documented
   nuisance ranges otherwise): the same dynamics, another wear profile (root about 5 times the
@@ -42,14 +45,17 @@ training trajectories as the network; so is the null model ``training_median``
 (:func:`typical_wear`); beside a network trained on the fleet they are refitted on the fleet's
 labelled gearboxes it trained on (:func:`fit_fleet_estimator`). Columns: RMSE [mm], R2, mean
 and maximum relative error [%], the conformal interval's coverage (surrogate), out-of-range
-(surrogate) or invalid (estimator) flag rate, the share of rows farther from the physics
-training rows than 99 % of the validation rows (:class:`Novelty`, physics-trained networks),
+(surrogate: the network's own flag, :mod:`surrogate.novelty`) or invalid (estimator) flag
+rate, the share of rows missed by the interval and not flagged (``missed_not_flagged``),
 the median reading of the unworn rows [mm] and the mean relative error of the readings
 referenced to each gearbox's unworn record [%] (:func:`referenced`), batch throughput [rows/s]
 and single-row latency [us] on the CPU. Writes ``benchmark.csv``, ``parity.png`` and the
 trained models into ``--out`` (default ``logs/benchmark/<time>``), and ``labelled_counts.csv``:
 how many labelled gearboxes of the independent simulator a network trained on them needs to
-beat the estimator refitted on the same (:func:`labelled_counts`).
+beat the estimator refitted on the same (:func:`labelled_counts`); and ``one_rig.csv``: a
+user's table of one rig of the independent simulator, two speeds and 32 wear stages, the
+acceleration RMS and one other feature, trained at one speed and tested at the other, and
+with stages left out, beside the linear model and the estimator (:func:`one_rig`).
 """
 
 from __future__ import annotations
@@ -57,6 +63,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import itertools
+import json
 import logging
 import math
 import time
@@ -67,7 +74,6 @@ import numpy as np
 import pandas as pd
 from hydra import compose, initialize_config_module
 from hydra.utils import instantiate
-from scipy import spatial
 
 from physics.dataset.generation import NuisanceRanges
 from physics.estimators.empirical_inverse import EmpiricalInverse, wear_errors
@@ -150,33 +156,11 @@ def referenced(test: pd.DataFrame, wear: np.ndarray, target: str) -> tuple[float
     return float(np.median(wear[unworn])), mre
 
 
-class Novelty:
-    """Whether a row lies where the training rows do: its distance to the nearest training row
-    in the network's standardised inputs, against the same distance of the validation rows
-    (gearboxes of the training distribution the network did not train on). ``rate`` is the
-    share of rows farther than all but ``1 - level`` of the validation rows: ``1 - level``
-    (about) on the training distribution, near 1 on inputs nobody trained on."""
-
-    def __init__(self, schema: FeatureSchema, train: pd.DataFrame, val: pd.DataFrame,
-                 level: float = 0.99) -> None:
-        self.schema = schema
-        self.tree = spatial.cKDTree(self._scaled(train))
-        self.radius = float(np.quantile(self.tree.query(self._scaled(val))[0], level))
-
-    def _scaled(self, df: pd.DataFrame) -> np.ndarray:
-        rows = self.schema.network_rows(network_columns(self.schema, df), gearbox_keys(df))
-        return self.schema.scale(rows[list(self.schema.inputs)].to_numpy(float))
-
-    def rate(self, test: pd.DataFrame) -> float:
-        return float(np.mean(self.tree.query(self._scaled(test))[0] > self.radius))
-
-
 def evaluate(name: str, surrogate: Surrogate, est: EmpiricalInverse, typical: float,
-             test: pd.DataFrame, speed: bool, novelty: Novelty | None
-             ) -> tuple[list[dict], dict]:
+             test: pd.DataFrame, speed: bool) -> tuple[list[dict], dict]:
     """The network, the estimator and the null model (both fitted by the caller on the
     network's target) on ``test``: one row each of :func:`wear_errors` and the columns of the
-    module text (``novel_rate`` NaN without a ``novelty`` test), and the parity plot's data."""
+    module text, and the parity plot's data."""
     schema, keys = surrogate.schema, gearbox_keys(test)
     target, true = schema.target, test[schema.target].to_numpy()
     readings = schema.readings(test, keys)
@@ -186,12 +170,15 @@ def evaluate(name: str, surrogate: Surrogate, est: EmpiricalInverse, typical: fl
     pred = surrogate.predict(network_columns(schema, test), gearbox=keys)
     e = est.predict(test.dte_peak_to_peak.to_numpy(), test.dte_kurtosis.to_numpy())
     inside = surrogate.coverage(pred, test, keys)
+    flagged = pred.out_of_range.to_numpy()
+    missed = ~((true >= pred[f"{target}_lower"].to_numpy())
+               & (true <= pred[f"{target}_upper"].to_numpy()))
     net_unworn, net_ref = referenced(test, pred[f"{target}_pred"].to_numpy(), target)
     est_unworn, est_ref = referenced(test, e.wear, target)
     rows = [{"scenario": name, "estimator": "surrogate", "test_rows": len(test),
              **wear_errors(pred[f"{target}_pred"], true), "interval_coverage": inside,
-             "flag_rate": float(pred.out_of_range.mean()),
-             "novel_rate": novelty.rate(test) if novelty else math.nan,
+             "flag_rate": float(flagged[readings].mean()),
+             "missed_not_flagged": float((missed & ~flagged)[readings].mean()),
              "unworn_reading": net_unworn, "referenced_mre_pct": net_ref},
             {"scenario": name, "estimator": "empirical_inverse", "test_rows": len(test),
              **wear_errors(e.wear, true), "interval_coverage": np.nan,
@@ -231,6 +218,16 @@ MODELS = {
 }
 #: the dry-law test set: the dataset spec's values (8 gearboxes per case)
 DRY_LAW = {"seed": 2, "replicates": 8, "nuisance": {"boundary_share": [0.99, 0.99]}}
+#: the model-form-off test set: case-3 gearboxes of our physics whose mesh stiffness level,
+#: double/single stiffness ratio and mesh resonance (:mod:`physics.dynamics.model_form`) lie
+#: off the declared model's, 8 above it and 8 below (the dataset spec's values of each half)
+MODEL_FORM_OFF = {
+    "high": {"cases": [3], "seed": 3, "replicates": 8, "nuisance": {
+        "stiffness_factor": [1.25, 1.5], "double_contact_factor": [1.15, 1.4],
+        "resonance_factor": [1.25, 1.5]}},
+    "low": {"cases": [3], "seed": 3, "replicates": 8, "nuisance": {
+        "stiffness_factor": [0.7, 0.8], "double_contact_factor": [0.75, 0.85],
+        "resonance_factor": [0.7, 0.8]}}}
 #: models trained once per seed of ``--seeds``; the others train with seed 0
 SEEDED = ("case3", "case3_mean", "case3_baseline", "all_baseline")
 #: the independent simulator's operating points and wear states
@@ -263,6 +260,15 @@ def shifted_ranges(share: float = 0.4, base: NuisanceRanges | None = None) -> di
         lo, hi = getattr(base, name)
         out[name] = [lo + (1 - share) * (hi - lo), hi]
     return out
+
+
+def model_form_off(root: Path) -> pd.DataFrame:
+    """The model-form-off test set (:data:`MODEL_FORM_OFF`), built into ``root/data`` once;
+    the low half's replicates numbered after the high half's."""
+    parts = [load_dataset(root / "data" / f"dataset_model_form_{k}.parquet", spec)
+             for k, spec in MODEL_FORM_OFF.items()]
+    parts[1] = parts[1].assign(replicate=parts[1].replicate + parts[0].replicate.max() + 1)
+    return pd.concat(parts, ignore_index=True)
 
 
 def independent_rows(seed: int = 0, pair: IndependentPair | None = None) -> pd.DataFrame:
@@ -349,7 +355,7 @@ def labelled_counts(root: Path, out: Path, fleet: pd.DataFrame, extra: list[str]
         target = net.schema.target
         (mine_net, mine_est, _), _ = evaluate(
             f"dte_scratch_{n}_{draw}", net, fit_fleet_estimator(labelled, target),
-            typical_wear(labelled, target), held, speed=False, novelty=None)
+            typical_wear(labelled, target), held, speed=False)
         rows.append({"labelled_gearboxes": n, "draw": draw, "heldout_rows": len(held),
                      "network_mre_pct": mine_net["mean_relative_error_pct"],
                      "network_rmse": mine_net["rmse"],
@@ -357,6 +363,66 @@ def labelled_counts(root: Path, out: Path, fleet: pd.DataFrame, extra: list[str]
                      "estimator_mre_pct": mine_est["mean_relative_error_pct"],
                      "estimator_rmse": mine_est["rmse"]})
     return pd.DataFrame(rows)
+
+
+#: the one-rig table: shaft speeds [rev/s], torque [N m], wear stages up to a root depth [mm]
+ONE_RIG_SPEEDS, ONE_RIG_TORQUE, ONE_RIG_STAGES, ONE_RIG_WEAR_MM = (15, 45), 200.0, 32, 0.03
+#: its splits: name -> train.py overrides (train at 15 rev/s and test at 45; six stages held
+#: out and four validating, drawn by the seed, at both speeds)
+ONE_RIG_SPLITS = {
+    "by_speed": ["data.group=stage", "data.group_by=speed", "data.test_groups=[45]",
+                 "data.val_replicates=4"],
+    "stages_out": ["data.group=stage", "data.test_replicates=6", "data.val_replicates=4"]}
+#: its network's inputs, the acceleration RMS and one other feature, with their units
+ONE_RIG_INPUTS = ["data.inputs=[acc_rms,dte_peak_to_peak]", "data.target=root_wear_mm"]
+
+
+def one_rig_table(stages: int = ONE_RIG_STAGES, seed: int = 0) -> pd.DataFrame:
+    """A user's table of one rig: one gearbox of the independent simulator
+    (:mod:`physics.testbeds.independent_simulator`, another model form than ours) at two shaft
+    speeds, ``stages`` wear stages from new to :data:`ONE_RIG_WEAR_MM` of root wear, one
+    record per stage and speed: the acceleration RMS and the DTE peak-to-peak value (the
+    network's inputs), the DTE kurtosis and a cycle count (the thesis's estimator's; the
+    Archard depth of one operating point grows in proportion to the cycles, 1 um per 1e6, as
+    in :func:`fit_fleet_estimator`) and the root wear."""
+    pair, rows = IndependentPair(), []
+    for speed in ONE_RIG_SPEEDS:
+        for stage in range(stages):
+            wear = ONE_RIG_WEAR_MM * stage / (stages - 1)
+            rng = np.random.default_rng([seed, speed, stage])
+            rec = {q: simulate_record(pair, n1_rpm=60.0 * speed, torque_Nm=ONE_RIG_TORQUE,
+                                      wear_mm=wear, quantity=q, rng=rng, duration_s=0.25)[None]
+                   for q in ("dte_m", "accel_m_s2")}
+            f_dte, f_acc = features(rec["dte_m"]), features(rec["accel_m_s2"])
+            rows.append({"rig": "independent", "speed": speed, "stage": stage,
+                         "cycles": wear * 1e9, "acc_rms": float(f_acc["rms"][0]),
+                         "dte_peak_to_peak": float(f_dte["peak_to_peak"][0]),
+                         "dte_kurtosis": float(f_dte["kurtosis"][0]), "root_wear_mm": wear})
+    return pd.DataFrame(rows)
+
+
+def one_rig(root: Path, out: Path, extra: list[str], seed: int = 0) -> list[dict]:
+    """The one-rig table (:func:`one_rig_table`) written to ``out`` and trained on as a user
+    would, once per split of :data:`ONE_RIG_SPLITS`; per split a row of the network's, the
+    linear model's and the estimator's test errors (their ``metrics.json``), the interval's
+    coverage, the flagged share and the share missed and not flagged."""
+    table = out / "one_rig.csv"
+    frame = one_rig_table()
+    atomic_write(table, lambda p: frame.to_csv(p, index=False))
+    rows = []
+    for split, overrides in ONE_RIG_SPLITS.items():
+        folder = out / "models" / f"one_rig_{split}"
+        train(train_config(root, folder, f"data.table={table}", *ONE_RIG_INPUTS, *overrides,
+                           *extra, f"seed={seed}"))
+        m = json.loads((folder / "metrics.json").read_text())
+        rows.append({"scenario": f"one_rig/{split}", "seed": seed,
+                     **{f"{who}_mre_pct": m.get(f"test_{p}mean_relative_error_pct", math.nan)
+                        for who, p in (("network", ""), ("linear", "linear_"),
+                                       ("estimator", "estimator_"), ("median", "median_"))},
+                     "interval_coverage": m["test_interval_coverage"],
+                     "flag_rate": m["test_flagged_share"],
+                     "missed_not_flagged": m["test_missed_not_flagged_share"]})
+    return rows
 
 
 def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5
@@ -371,6 +437,7 @@ def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5
     shifted = load_dataset(root / "data" / "dataset_shifted.parquet",
                            {"seed": 1, "replicates": 8, "nuisance": shifted_ranges()})
     dry = load_dataset(root / "data" / "dataset_dry_law.parquet", DRY_LAW)
+    form_off = model_form_off(root)
     foreign = independent_rows()
     fleet = independent_fleet(sum(FLEET_SPLIT.values()))
     rows, plots = [], {}
@@ -385,7 +452,6 @@ def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5
         target = surrogate.schema.target
         est = fit_estimator(dm.frames["train"], target)
         typical = typical_wear(dm.frames["train"], target)
-        novelty = Novelty(surrogate.schema, dm.frames["train"], dm.frames["val"])
         cases = set(dm.cases)
         loco = name.startswith("loco")
         sets = {"heldout_trajectories" if not loco else
@@ -399,6 +465,8 @@ def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5
                  "nuisance": shifted_ranges(base=ranges)})
         elif not loco:
             sets["nuisance_shifted"] = shifted[shifted.case.isin(cases)]
+        if not loco and name != "case3_form" and 3 in cases:  # that one draws the form
+            sets["model_form_off"] = form_off
         if not loco:
             sets["dry_wear_law"] = dry[dry.case.isin(cases)]
             sets["independent_simulator"] = foreign[foreign.case.isin(cases)]
@@ -406,8 +474,7 @@ def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5
         for set_name, test in sets.items():
             r, plot = evaluate(f"{name}/{set_name}", surrogate, est, typical, test,
                                speed=(name, seed, set_name) == ("case3", 0,
-                                                                "heldout_trajectories"),
-                               novelty=novelty)
+                                                                "heldout_trajectories"))
             rows += [{**row, "seed": seed} for row in r]
             if seed == 0:
                 plots[(name, set_name)] = plot
@@ -425,15 +492,14 @@ def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5
                 raise RuntimeError(f"the fleet networks of {name} (seed {seed}) were split "
                                    "differently; their scores would not be comparable")
             # a network trained on the fleet against the estimator and null model given the
-            # same labelled gearboxes (and without the physics rows' novelty test); the
-            # physics-trained one against those fitted on its rows
+            # same labelled gearboxes; the physics-trained one against those fitted on its rows
             refit = {m: (fit_fleet_estimator(labelled, m), typical_wear(labelled, m))
                      for m in {n.schema.target for label, n in nets.items() if label != name}}
             for label, net in nets.items():
                 own = label == name
                 e, t = (est, typical) if own else refit[net.schema.target]
                 r, plot = evaluate(f"{label}/independent_fleet_heldout", net, e, t, held,
-                                   speed=False, novelty=novelty if own else None)
+                                   speed=False)
                 rows += [{**row, "seed": seed} for row in r]
                 if seed == 0:
                     plots[(label, "independent_fleet_heldout")] = plot
@@ -455,6 +521,8 @@ def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5
     plt.close(fig)
     counts = labelled_counts(root, out, fleet, extra)
     atomic_write(out / "labelled_counts.csv", lambda p: counts.to_csv(p, index=False))
+    rig = pd.DataFrame(one_rig(root, out, extra))
+    atomic_write(out / "one_rig.csv", lambda p: rig.to_csv(p, index=False))
     return table, counts
 
 
@@ -492,8 +560,9 @@ def main(argv: list[str] | None = None) -> None:
     if args.seeds < 1:
         parser.error(f"--seeds {args.seeds}: give at least 1")
     table, counts = run(out.resolve(), Path.cwd(), args.max_epochs, args.seeds)
+    rig = pd.read_csv(out.resolve() / "one_rig.csv")
     cols = ["scenario", "estimator", "seed", "rmse", "r2", "mean_relative_error_pct",
-            "max_relative_error_pct", "interval_coverage", "flag_rate", "novel_rate",
+            "max_relative_error_pct", "interval_coverage", "flag_rate", "missed_not_flagged",
             "unworn_reading", "referenced_mre_pct", "rows_per_s", "latency_us"]
     with pd.option_context("display.width", 200, "display.float_format", "{:.4g}".format):
         print(table[[c for c in cols if c in table.columns]].to_string(index=False))
@@ -502,6 +571,9 @@ def main(argv: list[str] | None = None) -> None:
         print("\nlabelled gearboxes of the independent simulator, over the draws:")
         print(counts.drop(columns=["draw", "heldout_rows"]).groupby("labelled_gearboxes").agg(
             ["mean", "min", "max"]).to_string())
+        print("\none rig of the independent simulator (a user's table, acc_rms and "
+              "dte_peak_to_peak):")
+        print(rig.to_string(index=False))
     print(f"\n-> {out / 'benchmark.csv'}, {out / 'labelled_counts.csv'}, {out / 'parity.png'}")
 
 

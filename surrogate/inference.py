@@ -1,7 +1,8 @@
 """CPU inference: export a trained ensemble to a pickle-free file, load it, predict wear.
 
 The exported file (``wear_surrogate.pt``) holds only tensors and plain values: the weights, the
-hyperparameters and the :class:`~surrogate.schema.FeatureSchema`; it is read with
+hyperparameters, the :class:`~surrogate.schema.FeatureSchema`, the conformal interval's scale
+and the :class:`~surrogate.novelty.Novelty` (training rows and threshold); it is read with
 ``torch.load(weights_only=True)``, so loading it runs no code.
 
 Predictions run in ONNX Runtime (:func:`onnx_session`): the input scaling, the five members and
@@ -28,18 +29,23 @@ from omegaconf import OmegaConf
 
 from physics.files import atomic_write
 from surrogate.model import WearRegressor, mixture
+from surrogate.novelty import Novelty, difficulty
 from surrogate.schema import FeatureSchema
 
-FORMAT = "gearwear-wear-surrogate-2"  # 2: with the conformal interval scale
+# 2: with the conformal interval scale; 3: with the novelty (normalised conformal interval)
+FORMAT = "gearwear-wear-surrogate-3"
 
 
-def export(model: WearRegressor, path: str | Path, interval_scale: float) -> Path:
-    """Write the model's weights, hyperparameters, schema and the calibrated interval scale
-    (:func:`conformal_scale`) to ``path`` (atomically)."""
+def export(model: WearRegressor, path: str | Path, interval_scale: float,
+           novelty: Novelty) -> Path:
+    """Write the model's weights, hyperparameters, schema, the calibrated interval scale
+    (:func:`conformal_scale` of the :func:`~surrogate.novelty.difficulty`) and the novelty
+    reference to ``path`` (atomically)."""
     if not (math.isfinite(interval_scale) and interval_scale > 0):
         raise ValueError(f"interval_scale = {interval_scale!r} must be a finite number > 0")
     hparams = OmegaConf.to_container(OmegaConf.create(dict(model.hparams)))  # plain values only
     payload = {"format": FORMAT, "hparams": hparams, "interval_scale": float(interval_scale),
+               "novelty": novelty.payload(),
                "state_dict": {k: v.detach().cpu() for k, v in model.state_dict().items()}}
     return atomic_write(path, lambda p: torch.save(payload, p))
 
@@ -49,7 +55,9 @@ def conformal_scale(mean: np.ndarray, std: np.ndarray, true: np.ndarray, level: 
     normalised residuals ``|y - mu| / sigma`` on data the network did not train on (the
     validation trajectories), so that ``mu +- scale sigma`` covers a share ``level`` of new rows
     (Papadopoulos et al. 2002; Angelopoulos & Bates, "A gentle introduction to conformal
-    prediction", 2021, sec. 2.3)."""
+    prediction", 2021, sec. 2.3). ``std`` is the rows' difficulty: the ensemble's deviation
+    widened by the novelty (:func:`surrogate.novelty.difficulty`; normalised conformal
+    prediction, Papadopoulos, Vovk & Gammerman 2011)."""
     scores = np.sort(np.abs(true - mean) / np.maximum(std, 1e-300))
     n = scores.size
     if n == 0:
@@ -176,10 +184,15 @@ def check_gearboxes(df: pd.DataFrame, gearbox: list[str], target: str | None = N
 class Surrogate:
     """A loaded ensemble: ``predict(df)`` returns wear with its interval and flags."""
 
-    def __init__(self, model: WearRegressor, interval_scale: float) -> None:
+    def __init__(self, model: WearRegressor, interval_scale: float,
+                 novelty: Novelty | None = None) -> None:
         self.model = model.eval()
         self.schema = FeatureSchema.from_dict(model.hparams["schema"])
-        self.interval_scale = interval_scale  # conformal: mu +- scale sigma at the trained level
+        # conformal: mu +- scale difficulty at the trained level
+        self.interval_scale = interval_scale
+        #: the training rows and the flag's threshold (None: a network not yet calibrated,
+        #: whose rows get no novelty score and whose interval is of the ensemble's spread)
+        self.novelty = novelty
 
     @classmethod
     def load(cls, path: str | Path) -> Surrogate:
@@ -203,6 +216,9 @@ class Surrogate:
             if len(schema.inputs) != int(payload["hparams"]["n_inputs"]):
                 raise ValueError(f"its schema names {len(schema.inputs)} inputs, its network "
                                  f"takes {payload['hparams']['n_inputs']}")
+            novelty = Novelty.from_payload(payload["novelty"])
+            if novelty.reference.shape[1] != len(model.hparams["schema"]["inputs"]):
+                raise ValueError("its novelty reference has another number of inputs")
         except (KeyError, TypeError, RuntimeError, ValueError) as err:
             raise ValueError(f"{path} is incomplete or from another model ({err}); pass the "
                              "wear_surrogate.pt a training run exported") from None
@@ -210,7 +226,7 @@ class Surrogate:
         if bad:
             raise ValueError(f"{path} has non-finite weights ({bad[0]}, ...): the training "
                              "diverged; retrain (e.g. with a smaller model.lr)")
-        return cls(model, scale)
+        return cls(model, scale, novelty)
 
     @cached_property
     def session(self) -> ort.InferenceSession:
@@ -251,10 +267,14 @@ class Surrogate:
         each gearbox's first row: ``gearbox`` names the columns that tell the gearboxes apart
         (:meth:`FeatureSchema.network_rows`); other models ignore it.
 
-        Columns: ``<target>_pred`` (clipped at 0: wear depth is not negative), ``<target>_std``,
-        ``<target>_lower`` / ``_upper`` (the conformal interval of the trained level, clipped at
-        0) and
-        ``out_of_range`` (an input outside the training envelope: extrapolation).
+        Columns: ``<target>_pred`` (clipped at 0: wear depth is not negative), ``<target>_std``
+        (the ensemble's), ``<target>_lower`` / ``_upper`` (the normalised conformal interval of
+        the trained level, its half width the interval scale times the row's
+        :func:`~surrogate.novelty.difficulty`; clipped at 0), ``novelty`` (the row's score,
+        :class:`~surrogate.novelty.Novelty`: above 1 farther from the training rows than all
+        but 5 % of the validation rows) and ``out_of_range``, the flag: a novelty above 1 or an
+        input outside the training range widened by 5 % (:meth:`FeatureSchema.in_envelope`):
+        the reading is an extrapolation.
         """
         if self.schema.baseline:
             check_gearboxes(df, list(gearbox or []), self.schema.target)
@@ -264,9 +284,32 @@ class Surrogate:
         if bad.any():
             raise ValueError(f"the model gives a non-finite wear for row {int(np.argmax(bad))} "
                              f"({int(bad.sum())} of {len(bad)} rows); nothing is written")
-        half = self.interval_scale * std
+        score, flagged = self.flags(x)
+        half = self.interval_scale * self.difficulty(std, score)
         t = self.schema.target
         return pd.DataFrame({f"{t}_pred": np.maximum(mean, 0.0), f"{t}_std": std,
                              f"{t}_lower": np.maximum(mean - half, 0.0),
                              f"{t}_upper": np.maximum(mean + half, 0.0),
-                             "out_of_range": ~self.schema.in_envelope(x)}, index=df.index)
+                             "novelty": score,
+                             "out_of_range": flagged}, index=df.index)
+
+    def flags(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The novelty scores of the unscaled input rows ``x`` and the flag ``out_of_range``:
+        a score above 1 or an input outside the training range widened by 5 %."""
+        score = self.novelty_score(x)
+        return score, (score > 1) | ~self.schema.in_envelope(x)
+
+    def novelty_score(self, x: np.ndarray) -> np.ndarray:
+        """The novelty scores of the unscaled input rows ``x`` (NaN without a novelty
+        reference: a NaN is never above 1)."""
+        if self.novelty is None:
+            return np.full(len(x), np.nan)
+        return self.novelty.score(self.schema.scale(np.asarray(x, float)))
+
+    def difficulty(self, std: np.ndarray, score: np.ndarray) -> np.ndarray:
+        """The rows' interval scale before the conformal factor
+        (:func:`~surrogate.novelty.difficulty`; the ensemble's deviation alone without a
+        novelty reference)."""
+        if self.novelty is None:
+            return np.asarray(std, float)
+        return difficulty(std, score, self.novelty.gamma)

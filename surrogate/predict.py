@@ -5,7 +5,10 @@ names and units are in the checkpoint; a missing one is refused, naming it). Eve
 (labels, ids, the true wear, features the model does not read) passes through: ``output``
 (default: ``wear.csv`` in the run folder) gets them and ``<target>_pred`` (the
 model's wear: ``root_wear_mm`` or ``mean_wear_mm``), its standard deviation, the interval
-bounds and the ``out_of_range`` flag. A model trained with
+bounds, the ``novelty`` score and the ``out_of_range`` flag (:mod:`surrogate.novelty`); where
+more rows are flagged than of the training distribution, or the table's true wear (a column
+of the model's target) lies beyond the trained range, one line in the log says so. A model
+trained with
 ``data.baseline=true`` reads each gearbox's features against its first row: ``gearbox=COLUMN``
 (or ``gearbox=[A,B]``) names the column(s) that tell the gearboxes apart, which the output keeps.
 Each gearbox needs its baseline record first and at least one record after it; where a
@@ -14,6 +17,7 @@ table's row order is taken as the time order (the first row of a gearbox is its 
 From Python::
 
     from surrogate.inference import Surrogate, check_gearboxes
+from surrogate.novelty import envelope_report
     wear = Surrogate.load("wear_surrogate.pt").predict(features_df)
 """
 
@@ -31,6 +35,7 @@ from omegaconf import DictConfig
 from physics.command import entry, run_command
 from physics.files import atomic_write, check_writable
 from surrogate.inference import Surrogate, check_gearboxes
+from surrogate.novelty import envelope_report
 
 log = logging.getLogger(__name__)
 
@@ -94,10 +99,13 @@ def execute(job: PredictJob) -> pd.DataFrame:
             and c not in pred.columns]  # labels, ids, other features: passed through
     result = pd.concat([df[keep], pred], axis=1)
     atomic_write(job.output, lambda p: result.to_csv(p, index=False))
-    n_out = int(result.out_of_range.sum())
-    if n_out:
-        log.warning("%d of %d rows lie outside the training envelope (out_of_range): their "
-                    "wear is an extrapolation", n_out, len(result))
+    schema, novelty = job.surrogate.schema, job.surrogate.novelty
+    true = (pd.to_numeric(df[schema.target], errors="coerce").to_numpy(float)
+            if schema.target in df.columns else None)
+    _, line = envelope_report(result.out_of_range.to_numpy(), novelty, true, "rows",
+                              schema.target_unit)
+    if line:
+        log.warning(line)
     log.info("%d rows -> %s", len(result), job.output)
     return result
 

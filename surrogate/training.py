@@ -24,6 +24,7 @@ from physics.files import atomic_write, check_inside, pyplot
 from surrogate import baselines, settings
 from surrogate.data import WearDataModule
 from surrogate.inference import Surrogate, conformal_scale, export
+from surrogate.novelty import Novelty, envelope_report
 
 log = logging.getLogger(__name__)
 # lightning 2.6 calls a torch pytree API that torch 2.13 deprecates; harmless, and once per step
@@ -156,15 +157,16 @@ def fit_metrics(job: TrainJob) -> dict:
         model.load_state_dict(job.init.model.state_dict())
     log.info("split%s: %s", f" (fold {dm.group_by} = {dm.fold_label})"
              if dm.fold_label is not None else "", dm.split_summary())
+    envelope = job_envelope(job, dm)  # said before training, kept in metrics.json
     try:
-        return _fit_and_export(job, dm, trainer, model, out)
+        return _fit_and_export(job, dm, trainer, model, out, envelope)
     except Exception:
         set_aside_checkpoints(out)
         raise
 
 
-def _fit_and_export(job: TrainJob, dm: WearDataModule, trainer: L.Trainer, model, out: Path
-                    ) -> dict:
+def _fit_and_export(job: TrainJob, dm: WearDataModule, trainer: L.Trainer, model, out: Path,
+                    envelope: dict) -> dict:
     cfg = job.cfg
     trainer.fit(model, dm)
     if trainer.interrupted:
@@ -178,17 +180,24 @@ def _fit_and_export(job: TrainJob, dm: WearDataModule, trainer: L.Trainer, model
             if len(dm.frames["test"]) else {})
     val_rows = dm.network_rows("val")  # the readings (not a baseline model's baselines)
     val_rows = val_rows[dm.schema.readings(val_rows, ["case", "replicate"])]
-    mean, std = Surrogate(model, 1.0).predict_array(val_rows[dm.inputs].to_numpy(float))
-    scale = conformal_scale(mean, std, val_rows[dm.target].to_numpy(float),
+    train_rows = dm.network_rows("train")
+    x_val = val_rows[dm.inputs].to_numpy(float)
+    novelty = Novelty.fit(dm.schema.scale(train_rows[dm.inputs].to_numpy(float)),
+                          dm.schema.scale(x_val), train_rows[dm.target].to_numpy(float))
+    calibrating = Surrogate(model, 1.0, novelty)
+    mean, std = calibrating.predict_array(x_val)
+    sigma = calibrating.difficulty(std, calibrating.novelty_score(x_val))
+    scale = conformal_scale(mean, sigma, val_rows[dm.target].to_numpy(float),
                             float(cfg.model.interval))
     # the exported model gets its name only at the successful end: a run that fails on the
     # way leaves no wear_surrogate.pt that a later command would take for a finished one
     path, staged = out / "wear_surrogate.pt", out / ".wear_surrogate.pt.staged"
     try:
-        export(model, staged, scale)
+        export(model, staged, scale, novelty)
         surrogate = Surrogate.load(staged)
         metrics = {**val, **test, "epochs": trainer.current_epoch,
-                   "train_rows": len(dm.frames["train"]), "interval_scale": scale}
+                   "train_rows": len(dm.frames["train"]), "interval_scale": scale,
+                   "novelty_radius": novelty.radius, **envelope}
         if len(dm.frames["test"]):
             metrics.update(report_test(surrogate, dm, out))
         value = metrics.get(cfg.optimized_metric)
@@ -204,6 +213,24 @@ def _fit_and_export(job: TrainJob, dm: WearDataModule, trainer: L.Trainer, model
         raise
     log.info("model: %s; metrics: %s", path, text)
     return metrics
+
+
+def job_envelope(job: TrainJob, dm: WearDataModule) -> dict:
+    """For a fine-tune (``init_from``): how far this run's training rows, inputs and wear, lie
+    from the data the network to fine-tune was trained on (its novelty, its target range,
+    :func:`~surrogate.novelty.envelope_report`); one line in the log where they lie outside
+    it, and the figures (``init_*``) for ``metrics.json``. Nothing for a run from scratch."""
+    init = job.init
+    if init is None or init.novelty is None:
+        return {}
+    rows = dm.network_rows("train")
+    _, flagged = init.flags(rows[list(init.schema.inputs)].to_numpy(float))
+    figures, line = envelope_report(flagged, init.novelty,
+                                    rows[dm.target].to_numpy(float), "training rows",
+                                    init.schema.target_unit)
+    if line:
+        log.warning("init_from = %s was trained on other data: %s", job.cfg.init_from, line)
+    return {f"init_{k}": v for k, v in figures.items()}
 
 
 def set_aside_checkpoints(out: Path) -> Path | None:
@@ -271,6 +298,13 @@ def report_test(surrogate: Surrogate, dm: WearDataModule, out: Path) -> dict:
     verdict = baselines.not_better_line(errors, others["linear"])
     if verdict:
         log.warning(verdict)
+    flagged = rows.out_of_range.to_numpy()
+    readings_of = surrogate.schema.readings(test, keys)
+    missed = ~((true >= rows[f"{t}_lower"].to_numpy()) & (true <= rows[f"{t}_upper"].to_numpy()))
+    envelope, line = envelope_report(flagged, surrogate.novelty, true, "test rows",
+                                     surrogate.schema.target_unit)
+    if line:
+        log.warning(line)
     fig = parity_figure(true, rows[f"{t}_pred"].to_numpy(),
                         rows[f"{t}_std"].to_numpy() * surrogate.interval_scale,
                         title.replace("; network", ";\nnetwork"), t, name="network")
@@ -281,7 +315,8 @@ def report_test(surrogate: Surrogate, dm: WearDataModule, out: Path) -> dict:
             **{f"test_{b}_{k}": v for b, e in others.items() for k, v in e.items()},
             "test_network_better_than_linear": verdict is None,
             "test_interval_coverage": inside,
-            "test_out_of_range_rows": int(rows.out_of_range.sum())}
+            **{f"test_{k}": v for k, v in envelope.items()},
+            "test_missed_not_flagged_share": float(np.mean((missed & ~flagged)[readings_of]))}
 
 
 #: markers of the baselines in a parity plot
