@@ -209,7 +209,9 @@ class WornContact:
         span[self.solved] = np.maximum(np.abs(self.centre[self.solved]),
                                        np.abs(self.centre[self.solved] + width))
         step = points[1] - points[0]
-        k = int(np.ceil(np.max(span / to_X) / step)) + 1
+        # an unloaded position (no band; b stands at 1 m) presses nothing and sets no reach
+        reach = np.where(self.half_width > 0, span / to_X, 0.0)
+        k = int(np.ceil(np.max(reach) / step)) + 1
         near = np.clip(np.rint((s - points[0]) / step).astype(int)[:, None]
                        + np.arange(-k, k + 1), 0, points.size - 1)
         at = points[near]

@@ -128,3 +128,23 @@ def test_sweep_keeps_the_worn_volume(scale):
     edges = np.concatenate([[s[0]], 0.5 * (s[1:] + s[:-1]), [s[-1]]])
     assert swept.sum() * (grid[1] - grid[0]) == pytest.approx(
         np.sum(weight * w * np.diff(edges)), rel=1e-3)
+
+
+def test_unloaded_positions_press_nothing_and_keep_the_sweep_small():
+    """A pair that loses contact (no load at some positions, as under a large dynamic
+    overshoot) has no band there: the sweep keeps the loaded positions' wear volume and its
+    work stays that of the loaded bands' reach (no matrix spanning the whole flank)."""
+    import tracemalloc
+
+    geom, s, R1, R2, grid, depth, w = _band(20e-6)
+    w = np.where((s > -2e-3) & (s < 1e-3), 0.0, w)
+    c = wc.solve_worn_contact(s, w, R1, R2, geom.rb1, geom.rb2, E_STAR, grid, depth, depth, 20e-6)
+    weight = 1e-3 + np.abs(s)
+    tracemalloc.start()
+    swept = c.sweep(s, grid, R1 / geom.rb1, weight)
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    edges = np.concatenate([[s[0]], 0.5 * (s[1:] + s[:-1]), [s[-1]]])
+    assert swept.sum() * (grid[1] - grid[0]) == pytest.approx(
+        np.sum(weight * w * np.diff(edges)), rel=1e-3)
+    assert peak < 50e6
