@@ -117,24 +117,27 @@ class FeatureSchema:
                                  "baseline record, so a NaN in that record spoils every row "
                                  "of the gearbox; repair it, do not drop it)"
                                  if self.inputs[c] in self.baseline else ""))
+        # a change since the baseline may be near zero in any unit, and a gearbox of another
+        # kind may change more than the training gearboxes did: only a far larger value (a
+        # factor of a unit's size: 1e3, 1e6) is a unit error there
+        factor = np.array([UNIT_FACTOR**2 if n in self.baseline else UNIT_FACTOR
+                           for n in self.inputs])
         for j, name in enumerate(self.inputs):
             lo, hi = self.low[j], self.high[j]
             typical = float(np.median(np.abs(x[:, j])))
             scale = max(abs(lo), abs(hi))
-            # a change since the baseline may be near zero in any unit: only too large a value
-            # is a unit error there
             floor = 0.0 if name in self.baseline else scale / UNIT_FACTOR**2
-            if scale > 0 and typical > 0 and not (floor < typical < scale * UNIT_FACTOR):
+            if scale > 0 and typical > 0 and not (floor < typical < scale * factor[j]):
                 raise ValueError(
                     f"column {name}: typical value {typical:.3g} is far outside the training "
                     f"range [{lo:.3g}, {hi:.3g}] {self.units[j]}; is it in another unit? "
                     f"The model expects {self.units[j]}")
         scale = np.maximum(np.abs(self.low), np.abs(self.high))
-        far = (np.abs(x) > scale * UNIT_FACTOR) & (scale > 0)
+        far = (np.abs(x) > scale * factor) & (scale > 0)
         if far.any():
             r, j = np.argwhere(far)[0]
             raise ValueError(
-                f"row {r} column {self.inputs[j]} is {x[r, j]:.4g}, more than {UNIT_FACTOR:g} "
+                f"row {r} column {self.inputs[j]} is {x[r, j]:.4g}, more than {factor[j]:g} "
                 f"times the training range [{self.low[j]:.3g}, {self.high[j]:.3g}] "
                 f"{self.units[j]}: a unit or transcription error; repair or drop the row")
         return x

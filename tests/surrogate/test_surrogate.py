@@ -663,3 +663,20 @@ def test_a_baseline_table_must_start_each_group_at_its_baseline(dataset, tmp_pat
     for bad in (5, [], [""]):
         with pytest.raises(ValueError, match="must be a column name or a list of them"):
             gearbox_columns(bad)
+
+
+def test_a_change_since_baseline_far_beyond_training_is_read_and_a_unit_error_is_not():
+    """A baseline network's inputs are changes since the gearbox's first record: a gearbox of
+    another kind may change 40 times more than the training gearboxes did (read, and left to
+    the novelty flag), while a factor of a unit's size (1e3) is still refused."""
+    from surrogate.schema import FeatureSchema
+
+    train = pd.DataFrame({"dte_kurtosis": np.linspace(-0.09, 0.08, 50),
+                          "root_wear_mm": np.linspace(0, 1e-3, 50)})
+    schema = FeatureSchema.fit(train, ["dte_kurtosis"], {"dte_kurtosis": "1",
+                                                         "root_wear_mm": "mm"},
+                               "root_wear_mm", baseline=("dte_kurtosis",))
+    wide = pd.DataFrame({"dte_kurtosis": [0.0, 0.05, 3.3]})
+    assert schema.check(wide)[2, 0] == 3.3
+    with pytest.raises(ValueError, match="row 2 column dte_kurtosis .* transcription error"):
+        schema.check(wide.assign(dte_kurtosis=[0.0, 0.05, 3.3e3]))
