@@ -678,5 +678,5 @@ def test_a_change_since_baseline_far_beyond_training_is_read_and_a_unit_error_is
                                "root_wear_mm", baseline=("dte_kurtosis",))
     wide = pd.DataFrame({"dte_kurtosis": [0.0, 0.05, 3.3]})
     assert schema.check(wide)[2, 0] == 3.3
-    with pytest.raises(ValueError, match="row 2 column dte_kurtosis .* transcription error"):
+    with pytest.raises(ValueError, match=r"row 2 column dte_kurtosis .* transcription error"):
         schema.check(wide.assign(dte_kurtosis=[0.0, 0.05, 3.3e3]))
