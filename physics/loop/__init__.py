@@ -26,7 +26,7 @@ _SOURCES = {
     "physics.loop.effects": ("EFFECTS", "Effect", "Param", "effect"),
     "physics.loop.config": ("LoopConfig", "LoopSettings"),
     "physics.loop.declared": (
-        "NUISANCE", "MODEL_FORM", "SUPPORT", "MOUNT", "CHAIN_MODES", "CHAIN", "BOUNDS",
+        "NUISANCE", "MODEL_FORM", "SUPPORT", "MOUNT", "CHAIN_MODES", "CHAIN", "BOUNDS", "TORQUE",
         "SCENARIO_DYNAMIC", "DYNAMIC_NUISANCE", "RUNOUT_MODULATION", "declared_nuisance",
         "declared_model_form", "declared_modes", "modes_of", "completed", "to_unit", "from_unit",
         "with_nuisance"),

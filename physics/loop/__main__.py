@@ -5,7 +5,6 @@
 from __future__ import annotations
 
 import logging
-import signal
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -71,20 +70,10 @@ def prepare(cfg: DictConfig) -> LoopJob:
                    Path(HydraConfig.get().runtime.output_dir), reference)
 
 
-def _stop(signum, frame):
-    """SIGTERM (a batch system's time limit) as Ctrl-C: the loop keeps what it has."""
-    raise KeyboardInterrupt
-
-
 def execute(job: LoopJob) -> None:
-    previous = signal.signal(signal.SIGTERM, _stop)
-    try:
-        _execute(job)
-    finally:
-        signal.signal(signal.SIGTERM, previous)
-
-
-def _execute(job: LoopJob) -> None:
+    """Run the loop and write its report. Ctrl-C or SIGTERM (a batch system's time limit;
+    :mod:`physics.interrupt` raises both as KeyboardInterrupt) in the second round keeps the
+    first round's report, marked partial."""
     if isinstance(job.data, Bundle):
         reference = None
         if job.reference is not None:

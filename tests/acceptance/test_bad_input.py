@@ -38,7 +38,7 @@ def bundle(folder: Path, change: Callable[[pd.DataFrame, dict], None] | None = N
     man = pd.DataFrame({"record": names, "quantity": "dte_m", "fs_hz": FS, "n1_rpm": 2000.0,
                         "torque_Nm": 300.0, "wear_mm": [0.0, 0.005, 0.01], "cycles": "",
                         "split": ""})
-    sig = {n: rng.normal(size=int(0.4 * FS)) * 1e-6 for n in names}
+    sig = {n: rng.normal(size=int(0.6 * FS)) * 1e-6 for n in names}
     if change is not None:
         change(man, sig)
     return write_bundle(folder / "b", man, sig)

@@ -20,6 +20,7 @@ from physics.loop import (
     EFFECTS,
     MODEL_FORM,
     NUISANCE,
+    TORQUE,
     Group,
     LoopSettings,
     Reader,
@@ -116,8 +117,10 @@ def test_a_mixed_bundle_is_accepted_and_grouped(mixed):
 
 def test_one_calibration_shares_the_physical_parameters(mixed):
     rec, nuisance = mixed
-    # a rigid support (the default) declares no support mode to calibrate
-    assert set(nuisance) == set(NUISANCE) | set(MODEL_FORM) == set(BOUNDS) - set(CHAIN)
+    # a rigid support (the default) declares no support mode to calibrate; every torque is
+    # stated, so none is calibrated
+    assert set(nuisance) == set(NUISANCE) | set(MODEL_FORM) == (set(BOUNDS) - set(CHAIN)
+                                                               - set(TORQUE))
     assert all(isinstance(v, float) for v in nuisance.values())  # one value each, all groups
     every = np.arange(len(rec.models))
     acc = rec.bundle.manifest.quantity.to_numpy() == "accel_m_s2"

@@ -138,7 +138,7 @@ def test_ctrl_c_during_training_names_the_checkpoints_and_exits_130(inputs, tmp_
     proc = subprocess.Popen([*cmd, "hydra.run.dir=run"], cwd=tmp_path, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, start_new_session=True)
     for line in proc.stdout:  # Hydra logs to stdout: wait for the fit loop to run
-        if "training on" in line:
+        if "surrogate.training][INFO] - split:" in line:
             break
     deadline = time.monotonic() + 60
     while not list(tmp_path.glob("run/checkpoints/*.ckpt")):
