@@ -128,6 +128,7 @@ from physics.loop.form_error import FormReference
 from physics.loop.records import Records, prepare
 from physics.loop.report import LoopReport
 from physics.loop.simulation import model_signals
+from physics.loop.threads import one_blas_thread
 from physics.loop.usable import check_usable, shown_candidates
 from physics.loop.verdict import closest, group_lines, unexplained_entries, verdict
 from physics.loop.wear_reading import Reader, wear_score
@@ -173,6 +174,7 @@ def assumed(bundle: Bundle, base: Scenario, nuisance: dict) -> dict:
     return out
 
 
+@one_blas_thread
 def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = None,
              progress: bool = False, reference: FormReference | None = None) -> LoopReport:
     """The whole loop on one bundle; returns its report (see the module text). With a

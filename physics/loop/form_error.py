@@ -41,6 +41,7 @@ from physics.loop.declared import declared_modes, declared_nuisance
 from physics.loop.fit import calibrate
 from physics.loop.records import Records, group_keys, group_label, prepare
 from physics.loop.simulation import model_signals
+from physics.loop.threads import one_blas_thread
 from physics.params import Scenario
 
 
@@ -87,6 +88,7 @@ def check_reference(bundle: Bundle, gear: dict, keys: list[tuple]) -> None:
                          "gearbox at each of them, or leave out reference=")
 
 
+@one_blas_thread
 def form_reference(reference: Bundle, base: Scenario, settings: LoopSettings) -> FormReference:
     """Calibrate the declared model on ``reference`` (its train records, as the loop does) and
     average each group's residual over all its records."""
