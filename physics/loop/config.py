@@ -86,7 +86,9 @@ class LoopConfig(PhysicsConfig):
     data: str = MISSING  # a bundle folder (shared/specs/measured-bundle.md) or a feature table
     # a bundle of a sister gearbox without the effects sought, at the same operating points,
     # quantities and sampling rates: the declared model's mean form error is measured on it
-    # and removed (physics.loop.form_error); None: no reference
+    # and removed (physics.loop.form_error); or this bundle's own earliest records, first:N or
+    # before:<cycles or ISO date> (physics.loop.own_history), left out of the analysis; None:
+    # no reference
     reference: str | None = None
     case: int | None = None  # 1-5: operating point and lubricant of Table 11 (feature tables)
     progress: bool = True

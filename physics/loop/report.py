@@ -189,9 +189,9 @@ def markdown(r: dict) -> str:
     if ref:
         per = ", ".join(f"{g}: {ref['records'][g]} records, {v:.2f} dB"
                         for g, v in ref["rms_offset_db"].items())
-        lines.append(f"Read against a reference gearbox: the declared model's mean residual "
-                     f"there (RMS per group: {per}) was removed from the measured signatures "
-                     "before the calibration.")
+        lines.append(f"Read against {ref.get('source', 'a reference gearbox')}: the declared "
+                     f"model's mean residual there (RMS per group: {per}) was removed from the "
+                     "measured signatures before the calibration.")
     for name, why in (r.get("not_searched") or {}).items():
         lines.append(f"Not searched, the records cannot show it: {name} ({why}).")
     known = r.get("assumed") or {}
