@@ -2,7 +2,7 @@
 
     python bench/bench_loop.py [--generator own|independent] [--seeds 3] [--null-seeds 6]
                                [--records 12] [--jobs 2] [--model-form] [--both] [--reference]
-                               [--out DIR]
+                               [--out DIR] [--timing-only]
 
 For every effect of the library (acceleration bundles; ``sensor``, which only DTE records show,
 on DTE bundles) and for bundles without any effect (of both quantities: what a clean bundle of
@@ -35,14 +35,16 @@ transfer-path mode from the mesh) the other's may.
 (:data:`physics.testbeds.SISTER_UNIT`: other errors within their tolerance, another damping and
 mounting), at the bundle's operating points and quantities; its calibration is made once and
 timed apart.
-Also times one bundle alone (:func:`solo_timing`); the per-bundle seconds of the table are
-those of ``--jobs`` bundles sharing the machine.
+Also times one bundle alone (:func:`solo_timing`; ``--timing-only``: that alone), printed
+beside the time before the loop's speed-up (:data:`REFERENCE_S`); the per-bundle seconds of
+the table are those of ``--jobs`` bundles sharing the machine.
 """
 
 from __future__ import annotations
 
 import argparse
 import multiprocessing
+import os
 import tempfile
 import time
 from concurrent.futures import ProcessPoolExecutor
@@ -77,6 +79,11 @@ from physics.testbeds import (
 
 #: effect-to-noise power [dB] below which an effect has not changed the records (round-off)
 ABSENT_DB = -100.0
+#: one bundle alone on 2 cores before the loop's speed-up (one BLAS thread, records integrated
+#: from a few decay times before their start, the chain batched), by (generator, --both,
+#: --reference): the figures of docs/loop.md's time table then
+REFERENCE_S = {("independent", False, False): 102.7, ("independent", False, True): 108.6,
+               ("own", False, False): 242.5}
 
 
 def references(generator: str, both: bool, records: int, tmp: Path
@@ -138,10 +145,15 @@ def solo_timing(generator: str, model_form: bool, tmp: Path, both: bool = False,
         path, _ = make_independent_bundle(tmp / "timing", "tip_relief",
                                           quantities=BOTH if both else ("accel_m_s2",), seed=99)
     bundle = read_bundle(path)
-    t = time.perf_counter()
+    t, cpu = time.perf_counter(), time.process_time()
     run_loop(bundle, base, LoopSettings(model_form=model_form), reference=reference)
-    print(f"one bundle of {len(bundle.records)} records alone: {time.perf_counter() - t:.1f} s "
-          "(target: 12 records of 0.5 s in <= 120 s)")
+    wall, cpu = time.perf_counter() - t, time.process_time() - cpu
+    ref = REFERENCE_S.get((generator, both, reference is not None))
+    print(f"one bundle of {len(bundle.records)} records alone: {wall:.1f} s ({cpu:.1f} s of "
+          f"CPU; load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores)"
+          + (f"; before the loop's speed-up: {ref:.1f} s alone on 2 cores, {ref / wall:.1f} "
+             "times this" if ref else "")
+          + ("; target: 12 records of 0.5 s in <= 30 s" if generator == "independent" else ""))
 
 
 def main() -> None:
@@ -163,6 +175,8 @@ def main() -> None:
                          "(physics.loop.form_error)")
     ap.add_argument("--out", default="bench_loop_out",
                     help="folder for the CSV files and the reports")
+    ap.add_argument("--timing-only", action="store_true",
+                    help="time one bundle alone (solo timing) and stop")
     args = ap.parse_args()
     if args.both and args.generator != "independent":
         ap.error("--both needs --generator independent (the own generator writes one quantity "
@@ -174,6 +188,8 @@ def main() -> None:
                 if args.reference else {})
         solo_timing(args.generator, args.model_form, Path(tmp), args.both,
                     refs.get("both" if args.both else "accel_m_s2"))
+        if args.timing_only:
+            return
         names = EFFECTS if args.generator == "own" else EFFECT_NAMES
         def sensors(name: str | None) -> list[tuple[str, ...]]:
             if args.both:

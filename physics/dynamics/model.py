@@ -279,8 +279,25 @@ def output_samples(dyn: Dynamics) -> int:
     return round(dyn.duration_s * dyn.sample_rate_hz)
 
 
-def simulate(models: Sequence[PairModel] | PairModel, dyn: Dynamics) -> Response:
-    """Integrate a batch of scenarios (parallel over scenarios) and sample their response."""
+def settle_time(models: Sequence[PairModel], decays: float) -> float:
+    """``decays`` decay times ``2 m_e / c`` of the slowest-decaying mesh mode of ``models``
+    [s] (inf without damping): after it a start's free vibration has fallen to ``e^-decays``."""
+    rate = min(m.damping / (2.0 * m.mass) for m in models)
+    return decays / rate if rate > 0 else math.inf
+
+
+def simulate(models: Sequence[PairModel] | PairModel, dyn: Dynamics,
+             settle: float | None = None) -> Response:
+    """Integrate a batch of scenarios (parallel over scenarios) and sample their response.
+
+    The record starts ``dyn.transient_s`` after t = 0. With ``settle`` the integration starts
+    only ``settle`` decay times of the mesh mode (:func:`settle_time`; within the transient)
+    before the record, from the same initial state (the static deflection at rest) with every
+    excitation (mesh phase, errors, run-out, ripple) at its phase of that instant: the record
+    is the same up to ``e^-settle`` of the start's free vibration (the record's start phase,
+    which moves a signature's lines, is kept), at a fraction of the steps (the mesh mode of
+    the thesis pair decays within milliseconds). None: from t = 0.
+    """
     if isinstance(models, PairModel):
         models = [models]
     if not models:
@@ -293,11 +310,16 @@ def simulate(models: Sequence[PairModel] | PairModel, dyn: Dynamics) -> Response
     half = (len(anti_aliasing_filter(n_sub)) - 1) // (2 * n_sub)
     # the filter reaches (L - 1) n_sub steps before the first sample: inside the transient
     n_transient = max(round(dyn.transient_s / dt), (half - 1) * n_sub)
+    # the first integrated step: the settling time before the record's, within the transient
+    lead = math.inf if settle is None else settle_time(models, settle)
+    step0 = 0 if lead >= n_transient * dt else max(
+        0, n_transient - max(math.ceil(lead / dt), (half - 1) * n_sub))
     par = np.stack([kernel_parameters(m) for m in models])
     tables = np.stack([np.stack([m.k_a, m.k_b, m.g_a, m.g_b, *m.force_factors()])
                        for m in models])
     x0 = np.array([m.half_backlash + m.static_force / (m.k_a[0] + m.k_b[0]) for m in models])
-    out = _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, dyn.phase_bins, half)
+    out = _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, dyn.phase_bins, half,
+                     step0)
     dte_steps, force_steps, load_a, load_b, phase_sum, phase_count = out
     with np.errstate(invalid="ignore"):
         by_phase = phase_sum / phase_count
@@ -418,12 +440,14 @@ def _wrap(pos, n):
 
 
 @numba.njit(cache=True, parallel=True, fastmath=True)
-def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins, half):
+def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins, half, step0=0):
     """DTE at every step and the mesh force averaged over every step (the RK4 stages' weights,
     Simpson's rule: a step's record does not alias the force's harmonics above the
     integration rate), from ``(half - 1) n_sub`` steps before the first output instant to
     ``half n_sub`` after the last (for :func:`anti_aliased`); the pairs' loads at the output
-    instants; the drive-flank load by mesh phase over the record."""
+    instants; the drive-flank load by mesh phase over the record. The integration starts at
+    step ``step0`` (time ``step0 dt``, every excitation at its phase then) from ``x0`` at
+    rest."""
     n = par.shape[0]
     k_first = n_sub - half * n_sub  # first and last recorded step, relative to the transient
     k_last = n_out * n_sub + half * n_sub
@@ -442,15 +466,18 @@ def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins, half):
         n_per = p[CELLS_PER_PERIOD]  # table cells per mesh period
         # mesh phase advance per step, in table cells
         inc = p[ROLL_SPEED] * dt / p[BASE_PITCH] * n_per
-        pos = 0.0
+        pos = (inc * step0) % n_tab
         # e''(t) = -E_l w1^2 sin(w1 t) - E_s wm^2 sin(wm t): sines advanced by exact rotations
         a_l, a_s = p[LONG_ERROR] * p[OMEGA1] ** 2, p[SHORT_ERROR] * p[OMEGA_MESH] ** 2
         cl, sl = math.cos(0.5 * p[OMEGA1] * dt), math.sin(0.5 * p[OMEGA1] * dt)
         cs, ss = math.cos(0.5 * p[OMEGA_MESH] * dt), math.sin(0.5 * p[OMEGA_MESH] * dt)
-        s1, c1, s2, c2 = 0.0, 1.0, 0.0, 1.0  # sin, cos of w1 t and wm t
+        t0 = step0 * dt
+        # sin, cos of w1 t and wm t
+        s1, c1 = math.sin(p[OMEGA1] * t0), math.cos(p[OMEGA1] * t0)
+        s2, c2 = math.sin(p[OMEGA_MESH] * t0), math.cos(p[OMEGA_MESH] * t0)
         total = n_transient + k_last + 1  # the last recorded step's force needs its stages
-        _, _, da0, kf0 = _extra(p, 0.0)
-        for step in range(total + 1):
+        _, _, da0, kf0 = _extra(p, t0)
+        for step in range(step0, total + 1):
             # the mesh at (t, x) serves both the record of the state reached and stage 1 of RK4
             l_a, l_b, f_a, f_b = _mesh(p, tab, pos, x, v, da0, kf0)
             k = step - n_transient

@@ -8,8 +8,9 @@ per operating point), ``records`` (records, groups, split), ``simulation`` (the 
 records), ``comparison`` (residuals and errors), ``fit`` (calibration and search),
 ``discrepancy`` (the model discrepancy), ``wear_reading`` (the model-based wear estimate),
 ``attribution`` (candidates, null test, second round), ``form_error`` (a sister gearbox's
-form reference), ``lines`` (spectral lines no declared order explains), ``verdict`` (an
-effect, an unexplained residual or nothing), ``usable`` (what a bundle lets the loop do,
+form reference), ``own_history`` (this unit's earliest records as the reference), ``lines``
+(spectral lines no declared order explains), ``verdict`` (an effect, an unexplained residual
+or nothing), ``usable`` (what a bundle lets the loop do,
 decided before work), ``report``; ``bundle_loop.run_loop`` orchestrates them, ``table_loop`` runs
 the loop on a feature table. Imports every physics subpackage above it except the apps; the
 test rigs that make bundles to try it on are in :mod:`physics.testbeds`."""
@@ -51,6 +52,8 @@ _SOURCES = {
         "Round", "TimeLimit", "attribute", "candidates_for", "stacked", "second_candidates",
         "signature_gain", "free_directions", "separable_share", "bic"),
     "physics.loop.form_error": ("FormReference", "form_reference", "check_reference"),
+    "physics.loop.own_history": (
+        "History", "parse_history", "split_history", "own_reference", "life_order"),
     "physics.loop.report": (
         "LoopReport", "STABLE_KEYS", "write_report", "null_test", "holds", "first_passing",
         "verdict_line"),

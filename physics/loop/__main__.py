@@ -19,6 +19,7 @@ from physics.loop.bundle import Bundle, check_not_own_reference, read_measuremen
 from physics.loop.bundle_loop import run_loop
 from physics.loop.config import LoopConfig, LoopSettings
 from physics.loop.form_error import check_reference, form_reference
+from physics.loop.own_history import parse_history, split_history
 from physics.loop.records import group_keys
 from physics.loop.report import write_report
 from physics.loop.table_loop import run_feature_table
@@ -41,7 +42,8 @@ class LoopJob:
     settings: LoopSettings
     progress: bool
     out: Path
-    reference: Bundle | None  # a sister gearbox's bundle (``reference=``)
+    reference: Bundle | None  # a sister gearbox's bundle, or this one's earliest records
+    history: str | None = None  # ``reference=first:N`` or ``before:X``: the unit's own
 
 
 def prepare(cfg: DictConfig) -> LoopJob:
@@ -49,12 +51,22 @@ def prepare(cfg: DictConfig) -> LoopJob:
     settings = LoopSettings(**opts)
     base = scenario_from_config(cfg)
     data, scn = read_measurements(cfg.data, base)
+    history = parse_history(cfg.reference)
+    reference = None
+    if history is not None:  # the unit's own earliest records: left out of the analysis
+        if not isinstance(data, Bundle):
+            raise ValueError(f"reference={cfg.reference}: a reference serves bundles of "
+                             f"records; data={cfg.data} is a feature table; leave out "
+                             "reference=")
+        reference, data = split_history(data, history)
     if isinstance(data, Bundle):  # what the loop cannot use: refused before work
         check_usable(data, scn, settings)
         shown_candidates(candidates_for(set(data.manifest.quantity), settings), data, scn,
                          settings)
-    reference = None
-    if cfg.reference is not None:
+    if history is not None:
+        check_usable(reference, scn, settings)
+        check_reference(data, reference.gear, group_keys(reference.manifest)[0])
+    elif cfg.reference is not None:
         check_not_own_reference(cfg.data, cfg.reference)
         if not isinstance(data, Bundle):
             raise ValueError(f"reference={cfg.reference}: a reference serves bundles of "
@@ -67,7 +79,8 @@ def prepare(cfg: DictConfig) -> LoopJob:
         check_usable(reference, scn, settings)
         check_reference(data, reference.gear, group_keys(reference.manifest)[0])
     return LoopJob(data, scn, settings, bool(cfg.progress),
-                   Path(HydraConfig.get().runtime.output_dir), reference)
+                   Path(HydraConfig.get().runtime.output_dir), reference,
+                   history.spec if history is not None else None)
 
 
 def execute(job: LoopJob) -> None:
@@ -77,9 +90,12 @@ def execute(job: LoopJob) -> None:
     if isinstance(job.data, Bundle):
         reference = None
         if job.reference is not None:
-            log.info("calibrating the declared model on the reference gearbox's %d records",
+            log.info("calibrating the declared model on the reference's %d records",
                      len(job.reference.records))
-            reference = form_reference(job.reference, job.scenario, job.settings)
+            reference = form_reference(
+                job.reference, job.scenario, job.settings,
+                **({"source": f"this unit's own earliest records ({job.history})"}
+                   if job.history else {}))
         report = run_loop(job.data, job.scenario, job.settings, progress=job.progress,
                           reference=reference)
     else:

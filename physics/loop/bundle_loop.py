@@ -122,12 +122,14 @@ from physics.loop.comparison import (
 )
 from physics.loop.config import LoopSettings
 from physics.loop.declared import TORQUE, declared_modes, declared_nuisance
+from physics.loop.detection import detection_limits
 from physics.loop.discrepancy import entry_family, with_discrepancy
 from physics.loop.fit import calibrate, screened
 from physics.loop.form_error import FormReference
 from physics.loop.records import Records, prepare
 from physics.loop.report import LoopReport
 from physics.loop.simulation import model_signals
+from physics.loop.threads import one_blas_thread
 from physics.loop.usable import check_usable, shown_candidates
 from physics.loop.verdict import closest, group_lines, judge, unexplained_entries
 from physics.loop.wear_reading import Reader, wear_score
@@ -173,6 +175,7 @@ def assumed(bundle: Bundle, base: Scenario, nuisance: dict) -> dict:
     return out
 
 
+@one_blas_thread
 def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = None,
              progress: bool = False, reference: FormReference | None = None) -> LoopReport:
     """The whole loop on one bundle; returns its report (see the module text). With a
@@ -229,6 +232,14 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
     lines = {} if last else group_lines(rec, settings.false_add_rate)
     said, unexplained = judge(last is not None, entries, lines,
                                 closest(first.ranking, first.all_checks))
+    limits = (detection_limits(rec, judged, nuisance, candidates,
+                               model_signals(rec, rec.train, nuisance, None, {}), base_test)
+              if said != "effect" and settings.detection_limits else None)
+    ranking = first.table()
+    for row in ranking:
+        row["detection_limit"] = next(
+            (d for d in limits or () if (d["effect"], d["option"]) == (row["effect"],
+                                                                      row["option"])), None)
     rec.cache.clear()  # the report keeps the records, not the simulations
     return LoopReport(
         verdict=said, unexplained=unexplained, partial=partial,
@@ -251,7 +262,7 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
         calibrated_on="the train records",
         nuisance_after=after_nui,
         null_bic=first.null_bic,
-        ranking=first.table(),
+        ranking=ranking,
         decision_rule={"min_gain": settings.min_gain, "min_delta_bic": settings.min_delta_bic,
                        "false_add_rate": settings.false_add_rate, "allowed": first.allowed,
                        "max_wear_loss": settings.max_wear_loss},
@@ -263,6 +274,7 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
             "not_identifiable": [n for n in (*screened(settings), *TORQUE)
                                  if n in nuisance and n not in free_nuisance],
             "not_searched": left_out,
+            "detection_limits": limits,
             "assumed": assumed(bundle, base, nuisance),
             "form_reference": reference.summary() if reference is not None else None,
             "train_records": [bundle.records[i] for i in rec.train],

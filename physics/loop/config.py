@@ -62,11 +62,15 @@ class LoopSettings:
     # seconds of work after which the greedy second round stops and the report of the first
     # round is written, marked partial (0: no limit; the first round always runs to its end)
     time_limit_s: float = bounded(0.0, 0.0, 1e7, "seconds; 0 for no limit", closed=True)
+    # where no effect is named: each candidate's detection limit, the smallest size the rule
+    # would name on these records (physics.loop.detection; a few simulations per candidate)
+    detection_limits: bool = True
 
     def __post_init__(self):
         validate_fields(self, "loop")
-        if not isinstance(self.model_form, bool):
-            raise ValueError(f"loop.model_form = {self.model_form!r} must be true or false")
+        for name in ("model_form", "detection_limits"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f"loop.{name} = {getattr(self, name)!r} must be true or false")
         e = self.explore
         if isinstance(e, bool) or not isinstance(e, int) or e < 0 or e & (e - 1):
             raise ValueError(f"loop.explore = {e!r} must be 0 or a power of 2 (a Sobol "
@@ -86,7 +90,9 @@ class LoopConfig(PhysicsConfig):
     data: str = MISSING  # a bundle folder (shared/specs/measured-bundle.md) or a feature table
     # a bundle of a sister gearbox without the effects sought, at the same operating points,
     # quantities and sampling rates: the declared model's mean form error is measured on it
-    # and removed (physics.loop.form_error); None: no reference
+    # and removed (physics.loop.form_error); or this bundle's own earliest records, first:N or
+    # before:<cycles or ISO date> (physics.loop.own_history), left out of the analysis; None:
+    # no reference
     reference: str | None = None
     case: int | None = None  # 1-5: operating point and lubricant of Table 11 (feature tables)
     progress: bool = True

@@ -41,6 +41,7 @@ from physics.loop.declared import declared_modes, declared_nuisance
 from physics.loop.fit import calibrate
 from physics.loop.records import Records, group_keys, group_label, prepare
 from physics.loop.simulation import model_signals
+from physics.loop.threads import one_blas_thread
 from physics.params import Scenario
 
 
@@ -54,6 +55,10 @@ class FormReference:
     records: dict[tuple, int]  # reference records behind each group's mean
     gear: dict  # the reference bundle's gear overrides (the type both units must share)
     calibration: dict  # the reference's calibrated nuisance
+    # what the reference is: a sister gearbox, or this unit's own earliest records
+    # (:mod:`physics.loop.own_history`), with the records it holds
+    source: str = "a sister gearbox"
+    names: tuple[str, ...] = ()
 
     def check(self, bundle: Bundle) -> None:
         """Refuse a bundle this reference cannot serve (:func:`check_reference`)."""
@@ -66,7 +71,8 @@ class FormReference:
 
     def summary(self) -> dict:
         """For the report: each group's reference records and RMS mean residual [dB]."""
-        return {"records": {group_label(k): n for k, n in self.records.items()},
+        return {"source": self.source, "reference_records": list(self.names),
+                "records": {group_label(k): n for k, n in self.records.items()},
                 "rms_offset_db": {group_label(k): rms(v) for k, v in self.offsets.items()},
                 "calibration": self.calibration}
 
@@ -87,9 +93,12 @@ def check_reference(bundle: Bundle, gear: dict, keys: list[tuple]) -> None:
                          "gearbox at each of them, or leave out reference=")
 
 
-def form_reference(reference: Bundle, base: Scenario, settings: LoopSettings) -> FormReference:
+@one_blas_thread
+def form_reference(reference: Bundle, base: Scenario, settings: LoopSettings,
+                   source: str = "a sister gearbox") -> FormReference:
     """Calibrate the declared model on ``reference`` (its train records, as the loop does) and
-    average each group's residual over all its records."""
+    average each group's residual over all its records; ``source`` says what the reference
+    is (for the report)."""
     rec = prepare(reference, base, settings)
     start = declared_nuisance(base) | declared_modes(base)
     nuisance, _ = calibrate(rec, start)
@@ -98,4 +107,5 @@ def form_reference(reference: Bundle, base: Scenario, settings: LoopSettings) ->
     return FormReference(
         offsets={g.key: np.mean([res[i] for i in g.records], axis=0) for g in rec.groups},
         records={g.key: len(g.records) for g in rec.groups},
-        gear=dict(reference.gear), calibration=nuisance)
+        gear=dict(reference.gear), calibration=nuisance, source=source,
+        names=tuple(reference.records))

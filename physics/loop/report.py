@@ -189,9 +189,9 @@ def markdown(r: dict) -> str:
     if ref:
         per = ", ".join(f"{g}: {ref['records'][g]} records, {v:.2f} dB"
                         for g, v in ref["rms_offset_db"].items())
-        lines.append(f"Read against a reference gearbox: the declared model's mean residual "
-                     f"there (RMS per group: {per}) was removed from the measured signatures "
-                     "before the calibration.")
+        lines.append(f"Read against {ref.get('source', 'a reference gearbox')}: the declared "
+                     f"model's mean residual there (RMS per group: {per}) was removed from the "
+                     "measured signatures before the calibration.")
     for name, why in (r.get("not_searched") or {}).items():
         lines.append(f"Not searched, the records cannot show it: {name} ({why}).")
     known = r.get("assumed") or {}
@@ -222,6 +222,14 @@ def markdown(r: dict) -> str:
                if staged else "")
         lines.append(f"| {c['effect']} | {c['option'] or ''} | {c['heldout_error']:.3f} | "
                      f"{c['delta_bic']:.1f} | {p} |{fit}")
+    limits = r.get("detection_limits")
+    if limits:
+        lines += ["", "## Detection limits (not named: the smallest size the rule would name "
+                  "on these records, injected into the calibrated model, the other parameters "
+                  "at their typical values; physics/loop/detection.py)", "",
+                  "| effect | option | detection limit | typical size |", "|---|---|---|---|"]
+        lines += [f"| {d['effect']} | {d['option'] or ''} | {limit_text(d)} | "
+                  f"{d['typical']:.3g} |" for d in limits]
     rule = r["decision_rule"]
     own = " (in its own signature entries)" if "allowed" in rule else ""
     which = ("the best (by held-out error) of the candidates that cut the held-out error"
@@ -267,6 +275,14 @@ def markdown(r: dict) -> str:
         after = _flat(r["residual_after"])
         lines += [f"- {k}: {v:+.2f} dB (after: {after[k]:+.2f})" for k, v in res]
     return "\n".join(lines) + "\n"
+
+
+def limit_text(d: dict) -> str:
+    """A detection limit in words: the smallest size named, or the largest tried."""
+    unit = "" if d["unit"] == "1" else f" {d['unit']}"
+    if d["limit"] is None:
+        return f"not named up to {d['parameter']} = {d['not_named_at']:.3g}{unit}"
+    return f"{d['parameter']} {'<= ' * (d['not_named_at'] is None)}{d['limit']:.3g}{unit}"
 
 
 def _num(x: float | None) -> str:

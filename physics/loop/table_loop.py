@@ -38,6 +38,8 @@ from physics.loop.config import LoopSettings
 from physics.loop.declared import NUISANCE, declared_nuisance, from_unit, to_unit, with_nuisance
 from physics.loop.effects import EFFECTS, Effect
 from physics.loop.report import LoopReport, holds, null_test
+from physics.loop.simulation import SETTLE_DECAYS
+from physics.loop.threads import one_blas_thread
 from physics.loop.worn_states import cycles_for_wear, worn_models
 from physics.params import Scenario
 from physics.signals.features import FEATURES, features
@@ -108,7 +110,7 @@ def model_features(td: TableData, rows: np.ndarray, nuisance: dict, eff: Effect 
     run = dataclasses.replace(dyn, duration_s=td.settings.segment_s,
                               transient_s=td.settings.transient_s, phase_bins=16,
                               step_factor=td.settings.step_factor)
-    resp = simulate(ms, run)
+    resp = simulate(ms, run, settle=SETTLE_DECAYS)
     x = declared_chain(sensed(resp, td.quantity), td.quantity, nuisance["housing_mass_kg"],
                        fs=dyn.sample_rate_hz, support_hz=dyn.support_hz,
                        support_damping=dyn.support_damping, mount_hz=dyn.mount_hz,
@@ -162,6 +164,7 @@ def _noise_bounds(td: TableData) -> tuple[str, float, float, bool]:
     return ("noise", 1e-3 * scale, 0.5 * scale, True)
 
 
+@one_blas_thread
 def run_feature_table(df: pd.DataFrame, base: Scenario,
                       settings: LoopSettings | None = None) -> LoopReport:
     """The loop on a feature table; returns its report."""

@@ -30,11 +30,16 @@ from physics.signals.measurement import add_noise, declared_chain, sensed
 def make_bundle(path: str | Path, base: Scenario, effect_name: str | None, seed: int,
                 quantity: str = "accel_m_s2", records: int = 10, duration_s: float = 1.0,
                 cycles_max: float = 1.5e7, snr_db: float = 30.0,
-                values: dict | None = None) -> tuple[Path, dict]:
+                values: dict | None = None, onset: float | None = None) -> tuple[Path, dict]:
     """Write a bundle; return its path and the truth (effect, its values, the nuisance).
     ``values`` set some of the effect's values and options beyond the library's: e.g.
     ``{"order": 2.6}`` makes a torque ripple at a non-integer shaft order, which no candidate
-    of the library has."""
+    of the library has. ``onset`` (a share of the records' life, 0-1): the effect appears
+    during the bundle's life, in the records of at least ``onset * cycles_max`` cycles only
+    (the earlier ones are clean; the truth's ``with_effect`` lists which carry it)."""
+    if onset is not None and not 0.0 < onset <= 1.0:
+        raise ValueError(f"onset = {onset!r} must be a share of the life in (0, 1]; e.g. 0.3 "
+                         "leaves the first 30 % of the records' cycles clean")
     given = dict(values or {})
     rng = np.random.default_rng([seed, 7])
     dyn = base.dynamics
@@ -54,9 +59,12 @@ def make_bundle(path: str | Path, base: Scenario, effect_name: str | None, seed:
     ms = mesh_stiffness(base.gear, base.material)
     by_cycles, root = worn_models(base, ms, list(cycles))
     declared = [with_nuisance(by_cycles[float(c)], nuisance, dyn.damping_ratio) for c in cycles]
+    carries = (cycles >= onset * cycles_max if onset is not None
+               else np.ones(records, bool)) if eff is not None else np.zeros(records, bool)
     models = declared
     if eff is not None and eff.model is not None:
-        models = [eff.model(m, values) for m in declared]
+        models = [eff.model(m, values) if on else m
+                  for m, on in zip(declared, carries, strict=True)]
     run = dataclasses.replace(dyn, duration_s=duration_s, transient_s=0.1, phase_bins=16)
     def chain(ms):
         return declared_chain(sensed(simulate(ms, run), quantity), quantity,
@@ -66,7 +74,7 @@ def make_bundle(path: str | Path, base: Scenario, effect_name: str | None, seed:
     clean = chain(models)
     plain = chain(declared) if models is not declared else clean
     if eff is not None and eff.record is not None:
-        clean = eff.record(clean, dyn.sample_rate_hz, values)
+        clean = np.where(carries[:, None], eff.record(clean, dyn.sample_rate_hz, values), clean)
     x = add_noise(clean, snr_db, np.random.default_rng([seed, 8]))
     # the power the effect adds to the records against the noise's (-inf: it adds nothing)
     with np.errstate(divide="ignore"):
@@ -78,5 +86,6 @@ def make_bundle(path: str | Path, base: Scenario, effect_name: str | None, seed:
         "wear_mm": [root[float(c)] for c in cycles], "cycles": cycles, "split": "",
     })
     truth = {"effect": effect_name, "values": values, "nuisance": nuisance, "seed": seed,
-             "f1_hz": shaft_rates(base)[0], "effect_to_noise_db": effect_db}
+             "f1_hz": shaft_rates(base)[0], "effect_to_noise_db": effect_db,
+             "with_effect": [n for n, on in zip(names, carries, strict=True) if on]}
     return write_bundle(path, manifest, dict(zip(names, x, strict=True))), truth

@@ -564,6 +564,9 @@ def test_loop_app_finds_an_undeclared_transfer_path(tmp_path, scn):
     assert report["verdict"] == "effect" and report["unexplained"] is None
     assert report["partial"] is None
     assert report["second_round"] is None
+    # an effect named: no detection limits are sought
+    assert report["detection_limits"] is None
+    assert all(c["detection_limit"] is None for c in report["ranking"])
     verdict = report["verdicts"][0]  # every condition held
     assert verdict["adopted"] and all(c["holds"] for c in verdict["checks"].values())
     assert verdict["also_passing"] == []  # the only candidate

@@ -24,7 +24,9 @@ FS = 40960.0
 F1 = 2000 / 60
 F2 = F1 * 18 / 27
 # the library's torque ripple only: its orders 1/2, 1 and 2 cannot explain a ripple at 2.6
-FAST = LoopSettings(max_nfev=6, explore=8, refine=1, candidates=("torque_ripple",))
+# detection limits have their own tests (test_detection.py)
+FAST = LoopSettings(max_nfev=6, explore=8, refine=1, candidates=("torque_ripple",),
+                    detection_limits=False)
 
 
 def gear_like(seed: int, ripple_order: float | None, seconds: float = 0.5) -> np.ndarray:

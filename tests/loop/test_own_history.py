@@ -1,0 +1,104 @@
+"""The unit's own earliest records as the form reference (``reference=first:N`` /
+``before:X``): how the bundle is cut, what is refused, and an effect that appears over the
+bundle's life named against them."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from physics.loop import (
+    Bundle,
+    LoopSettings,
+    own_reference,
+    parse_history,
+    read_bundle,
+    run_loop,
+    split_history,
+)
+from physics.params import scenario_from_config
+from physics.testbeds import make_bundle
+
+
+def _bundle(cycles, speeds, time=None) -> Bundle:
+    n = len(cycles)
+    names = [f"r{k}" for k in range(n)]
+    man = pd.DataFrame({"record": names, "quantity": "accel_m_s2", "fs_hz": 40960.0,
+                        "n1_rpm": speeds, "torque_Nm": 300.0, "wear_mm": np.nan,
+                        "cycles": cycles, "split": ""})
+    if time is not None:
+        man["time"] = time
+    return Bundle(Path("."), man, {r: np.zeros(4) for r in names}, {})
+
+
+def test_the_forms_are_read_and_a_folder_is_not_one():
+    assert parse_history("first:2").first == 2
+    assert parse_history(" first : 3 ").first == 3
+    assert parse_history("before:2e6").cycles == 2e6
+    assert parse_history("before:2024-03-01").time == pd.Timestamp("2024-03-01")
+    assert parse_history("path/to/sister") is None and parse_history(None) is None
+
+
+@pytest.mark.parametrize("spec, rule", [
+    ("first:0", "whole number N >= 1"), ("first:two", "whole number N >= 1"),
+    ("before:-5", "number of load cycles > 0"), ("before:yesterday", "neither a number")])
+def test_a_malformed_form_is_refused_naming_value_rule_and_fix(spec, rule):
+    with pytest.raises(ValueError, match=rule) as err:
+        parse_history(spec)
+    assert f"reference={spec}" in str(err.value) and "e.g. reference=" in str(err.value)
+
+
+def test_first_n_takes_the_earliest_records_of_each_group_by_cycles():
+    # two operating points, records out of order in the manifest
+    b = _bundle([5e6, 0.0, 3e6, 1e6, 4e6, 2e6, 0.0, 9e6], [2000] * 4 + [1800] * 4)
+    ref, rest = split_history(b, parse_history("first:2"))
+    assert ref.records == ["r1", "r3", "r5", "r6"]
+    assert rest.records == ["r0", "r2", "r4", "r7"]
+    assert set(rest.signals) == set(rest.records) and (ref.manifest.split == "").all()
+
+
+def test_without_cycles_the_time_column_orders_and_dates_the_records():
+    times = ["2024-01-03", "2024-01-01", "2024-01-02", "2024-02-01", "2024-03-01"]
+    b = _bundle([np.nan] * 5, [2000] * 5, times)
+    assert split_history(b, parse_history("first:1")).__getitem__(0).records == ["r1"]
+    ref, rest = split_history(b, parse_history("before:2024-01-15"))
+    assert ref.records == ["r0", "r1", "r2"] and rest.records == ["r3", "r4"]
+
+
+@pytest.mark.parametrize("cycles, time, spec, rule", [
+    ([0, 1, 2], None, "first:2", "leaves 1 record"),
+    ([0, 1, np.nan, 3], None, "first:1", "has no cycles and the manifest no 'time'"),
+    ([0, 1, 2, 3], None, "before:2024-01-01", "no 'time' column"),
+    ([5, 6, 7, 8], None, "before:3", "takes no record of group"),
+    ([0, 1, 2, 3], ["2024-01-01", "soon", "2024-01-03", "2024-01-04"], "before:2024-01-02",
+     "record 'r1': time = 'soon'")])
+def test_a_cut_the_loop_cannot_use_is_refused_before_work(cycles, time, spec, rule):
+    b = _bundle(cycles, [2000] * len(cycles), time)
+    with pytest.raises(ValueError, match=rule) as err:
+        split_history(b, parse_history(spec))
+    assert f"reference={spec}" in str(err.value)
+
+
+def test_an_effect_that_appears_over_the_life_is_named_against_the_first_records(tmp_path):
+    """A torque ripple that appears at a third of the life: the first two records (clean) are
+    the reference, left out of the analysis, and the ripple in the others is named."""
+    scn = scenario_from_config({"case": 3})
+    path, truth = make_bundle(tmp_path / "b", scn, "torque_ripple", seed=4, records=8,
+                              duration_s=0.75, onset=0.3)
+    assert truth["with_effect"] == [f"r{k:02d}" for k in range(3, 8)]
+    settings = LoopSettings(max_nfev=6, explore=8, refine=2,
+                            candidates=("torque_ripple", "friction"))
+    ref, analysed = own_reference(read_bundle(path), "first:2", scn, settings)
+    assert ref.names == ("r00", "r01") and analysed.records == [f"r{k:02d}" for k in
+                                                                 range(2, 8)]
+    report = run_loop(analysed, scn, settings, reference=ref)
+    assert report["verdict"] == "effect" and report["chosen_effect"] == "torque_ripple"
+    assert report["error_after"] < 0.5 * report["error_before"]
+    summary = report.details["form_reference"]
+    assert summary["source"] == "this unit's own earliest records (first:2)"
+    assert summary["reference_records"] == ["r00", "r01"]
+    assert not set(summary["reference_records"]) & set(report.details["train_records"]
+                                                       + report.details["test_records"])
