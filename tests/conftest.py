@@ -72,11 +72,23 @@ def config_store() -> ConfigStore:
     repo.update(saved)
 
 
+def _group(item: pytest.Item) -> str:
+    """A test's group in a parallel run: a README command or snippet with the first command of
+    the chain it starts from (what a chain makes is made once, on one worker; chains run side
+    by side); any other test with the rest of its file (its module fixtures are made once)."""
+    if "readme_folder" not in item.fixturenames:
+        return item.nodeid.split("::")[0]
+    from tests.acceptance.readme import ALL, TRAIN_CASE3
+
+    key = getattr(item, "callspec", None) and item.callspec.params.get("key")
+    key = key if key in ALL else TRAIN_CASE3
+    while ALL[key].start is not None:
+        key = ALL[key].start
+    return f"readme: {key}"
+
+
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     """Keep what a shared fixture makes on one worker of a parallel run (pytest-xdist,
-    ``--dist loadgroup``): every test that reads a README command's folder in one group (each
-    command then runs once), every other test with the rest of its file (its module fixtures
-    are made once)."""
+    ``--dist loadgroup``; :func:`_group`)."""
     for item in items:
-        group = "readme" if "readme_folder" in item.fixturenames else item.nodeid.split("::")[0]
-        item.add_marker(pytest.mark.xdist_group(group))
+        item.add_marker(pytest.mark.xdist_group(_group(item)))
