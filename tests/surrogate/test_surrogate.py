@@ -680,3 +680,16 @@ def test_a_change_since_baseline_far_beyond_training_is_read_and_a_unit_error_is
     assert schema.check(wide)[2, 0] == 3.3
     with pytest.raises(ValueError, match=r"row 2 column dte_kurtosis .* transcription error"):
         schema.check(wide.assign(dte_kurtosis=[0.0, 0.05, 3.3e3]))
+
+
+def test_a_checkpoint_whose_schema_and_network_disagree_is_refused(trained, tmp_path):
+    """A schema of one input fewer than the network's weights take is refused at load, naming
+    both counts, not left to fail inside the network."""
+    payload = torch.load(trained / "wear_surrogate.pt", weights_only=True)
+    schema = payload["hparams"]["schema"]
+    for key in ("inputs", "units", "mean", "std", "low", "high"):
+        schema[key] = list(schema[key])[:-1]
+    torch.save(payload, tmp_path / "short.pt")
+    n = payload["hparams"]["n_inputs"]
+    with pytest.raises(ValueError, match=rf"schema names {n - 1} inputs, its network takes {n}"):
+        Surrogate.load(tmp_path / "short.pt")
