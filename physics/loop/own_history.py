@@ -12,7 +12,7 @@ calibrated as a sister unit's is (:func:`physics.loop.form_error.form_reference`
 - ``first:N``: the first ``N`` records of each group (operating point, quantity, sampling
   rate), in the order of their load cycles, else of a ``time`` column (ISO 8601);
 - ``before:X``: the records before ``X`` load cycles (a number) or before the date or time
-  ``X`` (ISO 8601, e.g. ``2024-03-01`` or ``2024-03-01T12:00``; by the ``time`` column).
+  ``X`` (ISO 8601, ``YYYY-MM-DD`` or ``YYYY-MM-DDThh:mm``; by the ``time`` column).
 """
 
 from __future__ import annotations
@@ -70,7 +70,7 @@ def parse_history(spec: object) -> History | None:
         if not (np.isfinite(cycles) and cycles > 0):
             raise ValueError(f"reference={spec}: before:X takes a number of load cycles > 0 "
                              "or an ISO 8601 date; e.g. reference=before:2e6 or "
-                             "reference=before:2024-03-01")
+                             "reference=before:YYYY-MM-DD")
         return History(spec, cycles=cycles)
     try:
         when = pd.Timestamp(value)
@@ -79,7 +79,7 @@ def parse_history(spec: object) -> History | None:
     if when is None or when is pd.NaT:
         raise ValueError(f"reference={spec}: {value!r} is neither a number of load cycles nor "
                          "an ISO 8601 date; e.g. reference=before:2e6 or "
-                         "reference=before:2024-03-01")
+                         "reference=before:YYYY-MM-DD")
     return History(spec, time=when)
 
 
@@ -87,7 +87,8 @@ def _times(bundle: Bundle, spec: str) -> np.ndarray:
     man = bundle.manifest
     if TIME_COLUMN not in man.columns:
         raise ValueError(f"reference={spec}: the manifest has no {TIME_COLUMN!r} column to "
-                         "date the records by; add one (ISO 8601, e.g. 2024-03-01T12:00), or "
+                         "date the records by; add one (ISO 8601, YYYY-MM-DD or "
+                         "YYYY-MM-DDThh:mm), or "
                          "give the cycles (reference=before:<cycles>) or a sister bundle")
     out = []
     for rec, text in zip(man.record, man[TIME_COLUMN], strict=True):
@@ -97,7 +98,7 @@ def _times(bundle: Bundle, spec: str) -> np.ndarray:
             t = pd.NaT
         if t is pd.NaT:
             raise ValueError(f"reference={spec}: record {rec!r}: {TIME_COLUMN} = {text!r} is "
-                             "not an ISO 8601 date; write e.g. 2024-03-01T12:00")
+                             "not an ISO 8601 date; write YYYY-MM-DD or YYYY-MM-DDThh:mm")
         out.append(t.tz_localize(None) if t.tzinfo is not None else t)
     return np.array([t.value for t in out], float)  # ns since the epoch
 
