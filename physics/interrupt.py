@@ -90,11 +90,6 @@ def install_for_apps() -> None:
         install_signal_handlers()
 
 
-def received() -> int | None:
-    """The signal this process received, None if none."""
-    return _SIGNAL
-
-
 def interrupted(err: BaseException) -> bool:
     """Whether ``err`` ends an interrupted run (a signal came, or it is a KeyboardInterrupt)."""
     return _SIGNAL is not None or isinstance(err, KeyboardInterrupt)

@@ -11,8 +11,6 @@ from __future__ import annotations
 import dataclasses
 import math
 
-import numpy as np
-
 from physics.loop.bundle import Bundle
 from physics.loop.config import LoopSettings
 from physics.loop.effects import Effect, Param
@@ -102,7 +100,3 @@ def shown_candidates(candidates: list[tuple[Effect, dict]], bundle: Bundle, base
                          "loop.candidates or lengthen loop.segment_s")
     return kept, dropped
 
-
-def unknown_torque(bundle: Bundle) -> np.ndarray:
-    """Which records' manifest leaves the torque unknown."""
-    return ~np.isfinite(bundle.manifest.torque_Nm.to_numpy(float))
