@@ -20,6 +20,7 @@ from physics.loop.bundle_loop import run_loop
 from physics.loop.config import LoopConfig, LoopSettings
 from physics.loop.form_error import check_reference, form_reference
 from physics.loop.own_history import parse_history, split_history
+from physics.loop.own_history import source as history_source
 from physics.loop.records import group_keys
 from physics.loop.report import write_report
 from physics.loop.table_loop import run_feature_table
@@ -94,8 +95,7 @@ def execute(job: LoopJob) -> None:
                      len(job.reference.records))
             reference = form_reference(
                 job.reference, job.scenario, job.settings,
-                **({"source": f"this unit's own earliest records ({job.history})"}
-                   if job.history else {}))
+                **({"source": history_source(job.history)} if job.history else {}))
         report = run_loop(job.data, job.scenario, job.settings, progress=job.progress,
                           reference=reference)
     else:

@@ -180,6 +180,9 @@ def own_reference(bundle: Bundle, spec: str | History, base: Scenario,
         raise ValueError(f"reference={spec}: not of the form first:N or before:X (cycles or an "
                          "ISO 8601 date); e.g. reference=first:2")
     reference, analysed = split_history(bundle, history)
-    ref = form_reference(reference, base, settings,
-                         source=f"this unit's own earliest records ({history.spec})")
-    return ref, analysed
+    return form_reference(reference, base, settings, source=source(history.spec)), analysed
+
+
+def source(spec: str) -> str:
+    """How a report names a reference of the unit's own earliest records ``spec``."""
+    return f"this unit's own earliest records ({spec})"
