@@ -16,6 +16,7 @@ Kept free of heavy imports: it runs before numpy, numba, torch or Hydra are load
 
 from __future__ import annotations
 
+import os
 import signal
 import sys
 from collections.abc import Callable
@@ -47,8 +48,9 @@ def _on_signal(signum: int, frame: Any) -> None:
     global _SIGNAL
     if _SIGNAL is None:
         _SIGNAL = signum
-    if _PHASE == "start":  # nothing to clean up yet: end here, wherever the imports were
-        end()
+    if _PHASE == "start":  # nothing to clean up yet: end here, wherever the imports were,
+        _report()          # at once: an exception raised inside a compiled module's import
+        os._exit(EXIT_CODES[signum])  # (torch's) aborts the interpreter instead
     if _PHASE == "done":  # the work is done and written, the app ends: let it (exit code 0)
         return
     raise Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
