@@ -76,12 +76,13 @@ def dynamic_mesh_force(scn: Scenario, stiffness: MeshStiffness | None = None) ->
 
 
 def simulate_dynamic_wear(scn: Scenario, cycles: float, snapshots=(),
-                          stiffness: MeshStiffness | None = None) -> WearResult:
+                          stiffness: MeshStiffness | None = None, until=None) -> WearResult:
     """Wear with the dynamic mesh force fed back at every profile update (thesis 3.5);
-    ``stiffness``: the pair's mesh stiffness if already built (else built here)."""
+    ``stiffness``: the pair's mesh stiffness if already built (else built here); ``snapshots``
+    and ``until`` as in :func:`physics.tribology.wear.simulate_wear`."""
     ms = stiffness or mesh_stiffness(scn.gear, scn.material)
     return simulate_wear(scn, cycles, force=dynamic_mesh_force(scn, ms),
-                         stiffness=ms.pair_function, snapshots=snapshots)
+                         stiffness=ms.pair_function, snapshots=snapshots, until=until)
 
 
 def root_wear_evolution(scn: Scenario, cycles: np.ndarray, dynamic: bool = True,

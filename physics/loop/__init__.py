@@ -32,7 +32,8 @@ _SOURCES = {
         "declared_model_form", "declared_modes", "modes_of", "completed", "to_unit", "from_unit",
         "with_nuisance"),
     "physics.loop.worn_states": (
-        "worn_models", "cycles_for_wear", "wear_grid_cycles", "records_cycles"),
+        "WearHistory", "wear_history", "records_history", "worn_models", "cycles_for_wear",
+        "wear_grid_cycles", "records_cycles"),
     "physics.loop.records": (
         "Group", "Records", "prepare", "group_label", "group_keys", "split_records",
         "entry_scatter", "shaft_rates", "by_group"),

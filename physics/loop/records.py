@@ -21,6 +21,7 @@ from physics.loop.bundle import Bundle, record_scenario
 from physics.loop.config import LoopSettings
 from physics.loop.worn_states import (
     records_cycles,
+    records_history,
     wear_grid_cycles,
     worn_models,
 )
@@ -134,10 +135,15 @@ def prepare(bundle: Bundle, base: Scenario, settings: LoopSettings) -> Records:
     models: list[PairModel | None] = [None] * len(man)
     wear_states: list[list[tuple[float, PairModel]]] = [[] for _ in range(len(man))]
     for idx in keyed.values():
-        scn = scenarios[idx[0]]
-        cycles = dict(zip(idx, records_cycles(scn, man.iloc[idx]), strict=True))
-        grid = wear_grid_cycles(scn, max(cycles.values()), settings.wear_grid)
-        by_cycles, root = worn_models(scn, ms, [*cycles.values(), *grid])
+        scn, rows = scenarios[idx[0]], man.iloc[idx]
+        stated = rows.cycles.to_numpy(float)
+        wear = np.where(np.isnan(stated), rows.wear_mm.to_numpy(float), np.nan)
+        worn = np.nan_to_num(stated).max() > 0 or np.nan_to_num(wear).max() > 0
+        history = records_history(scn, stated, wear) if worn else None
+        cycles = dict(zip(idx, records_cycles(history, rows) if worn else np.zeros(len(idx)),
+                          strict=True))
+        grid = wear_grid_cycles(history, max(cycles.values()), settings.wear_grid)
+        by_cycles, root = worn_models(scn, ms, [*cycles.values(), *grid], history)
         for i in idx:
             models[i] = by_cycles[cycles[i]]
             wear_states[i] = [(root[float(g)], by_cycles[float(g)]) for g in grid]

@@ -1,108 +1,154 @@
-"""The declared model's worn states at the records' operating points: the dynamically coupled
-wear evolution (:mod:`physics.dynamics.evolution`) run once per operating point to the records'
-cycle counts (or, where only a record's wear depth is known, to the cycle count of that depth),
-and the grid of wear states the model-based wear estimate reads a record by
-(:mod:`physics.loop.wear_reading`)."""
+"""The declared model's worn states at the records' operating points: one dynamically coupled
+wear run (:mod:`physics.dynamics.evolution`) per operating point, every profile update kept
+(:class:`WearHistory`), read at the records' cycle counts (or, where only a record's wear depth
+is known, at the cycle count of that depth), and the grid of wear states the model-based wear
+estimate reads a record by (:mod:`physics.loop.wear_reading`)."""
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 
-from physics.dynamics.evolution import root_wear_evolution, simulate_dynamic_wear
+from physics.dynamics.evolution import simulate_dynamic_wear
 from physics.dynamics.model import PairModel, build_model
 from physics.gear.stiffness import MeshStiffness, mesh_stiffness
 from physics.params import Scenario
 
+#: the most pinion cycles a run goes to in search of a wear depth (beyond any gear's life)
+MAX_CYCLES = 1e13
+#: the grid of wear states reaches this many times the most worn record's root wear
+GRID_REACH = 1.2
+#: operating points whose runs are kept (:func:`wear_history`)
+KEPT = 16
 
-def worn_models(scn: Scenario, ms: MeshStiffness, cycles: list[float]
-                ) -> tuple[dict[float, PairModel], dict[float, float]]:
-    """Declared models and pinion root wear [mm] at each cycle count of one operating point."""
-    grid = sorted({0.0, *[float(c) for c in cycles]})
-    models, root = {0.0: build_model(scn, ms)}, {0.0: 0.0}
-    if grid[-1] > 0:
-        res = simulate_dynamic_wear(scn, grid[-1], snapshots=grid[1:],
-                                    stiffness=mesh_stiffness(scn.gear, scn.material))
-        for c in grid[1:]:
-            w1, w2 = res.snapshots[c]
-            models[c] = build_model(scn, ms, res.s, w1, w2)
-            root[c] = float(w1[0]) * 1e3
-    return models, root
+_kept: dict[Scenario, WearHistory] = {}
 
 
-def wear_curve(scn: Scenario, span: float, points: int, power: float,
-               enough: Callable[[np.ndarray, np.ndarray], bool],
-               grow: Callable[[np.ndarray, np.ndarray], float] | None = None
-               ) -> tuple[np.ndarray, np.ndarray, bool]:
-    """The model's pinion root wear [m] on the life grid ``span * u**power`` (``points`` values
-    of u from 0 to 1), the span grown (by ``grow(life, root)``, at least doubled; doubled by
-    default) up to seven times until ``enough(life, root)``; returns the last grid, its wear and
-    whether it was enough."""
-    for _ in range(8):
-        life = span * np.linspace(0.0, 1.0, points) ** power
-        root = root_wear_evolution(scn, life,
-                                   stiffness=mesh_stiffness(scn.gear, scn.material))[0]
-        if enough(life, root):
-            return life, root, True
-        span *= max(2.0, grow(life, root) if grow is not None else 2.0)
-    return life, root, False
+@dataclass(frozen=True)
+class WearHistory:
+    """One operating point's wear run, read at any cycle count: its block ends' cycles
+    ``(k,)`` and pinion and gear wear ``(k, n)`` [m] on the roll coordinate ``s``. Within a
+    block the explicit update wears every point linearly in cycles, so the linear
+    interpolation between block ends is the run's own wear (not an approximation of it)."""
+
+    s: np.ndarray
+    cycles: np.ndarray
+    pinion: np.ndarray
+    gear: np.ndarray
+
+    @property
+    def root_mm(self) -> np.ndarray:
+        """Pinion root wear [mm] at the block ends."""
+        return self.pinion[:, 0] * 1e3
+
+    def root_at(self, cycles: float) -> float:
+        return float(np.interp(cycles, self.cycles, self.root_mm))
+
+    def cycles_at(self, root_mm: np.ndarray) -> np.ndarray:
+        """Cycle counts at which the pinion root wear reaches ``root_mm``."""
+        return np.interp(root_mm, self.root_mm, self.cycles)
+
+    def profiles(self, cycles: float) -> tuple[np.ndarray, np.ndarray]:
+        """Pinion and gear wear [m] at ``cycles`` (within the run)."""
+        k = int(np.clip(np.searchsorted(self.cycles, cycles) - 1, 0, len(self.cycles) - 2))
+        frac = (cycles - self.cycles[k]) / (self.cycles[k + 1] - self.cycles[k])
+        return tuple(w[k] + frac * (w[k + 1] - w[k]) for w in (self.pinion, self.gear))
 
 
-def cycles_for_wear(scn: Scenario, wear_mm: np.ndarray, cycles_max: float = 1.5e7
-                    ) -> np.ndarray:
-    """Cycle counts at which the model's pinion root wear reaches ``wear_mm``. Where a span
-    falls short the next is extrapolated from the wear it reached, by the power law of its
-    second half (``root ~ N^p``: the span times ``(target / reached)^(1/p)``, a fifth to
-    spare), so that one more span usually suffices."""
+def wear_history(scn: Scenario, enough: Callable[[np.ndarray, np.ndarray], bool]
+                 ) -> WearHistory:
+    """The dynamically coupled wear run of ``scn`` until ``enough(cycles, root_mm)`` of its
+    block ends (at most ``MAX_CYCLES``).
+
+    A run without snapshots does not depend on where it ends, so the longest run of each
+    operating point is kept (for the last ``KEPT`` points) and serves every shorter need: a
+    bundle and its sister unit at the same operating points, or a table and its worn models,
+    share one run."""
+    def done(h: WearHistory) -> bool:
+        return len(h.cycles) > 1 and enough(h.cycles, h.root_mm)
+
+    kept = _kept.get(scn)
+    if kept is not None and done(kept):
+        return kept
+    res = simulate_dynamic_wear(scn, MAX_CYCLES, stiffness=mesh_stiffness(scn.gear, scn.material),
+                                until=lambda c, w1: enough(c, w1[:, 0] * 1e3))
+    history = WearHistory(res.s, *res.history)
+    for a in (history.s, history.cycles, history.pinion, history.gear):
+        a.flags.writeable = False
+    _kept.pop(scn, None)
+    if len(_kept) >= KEPT:
+        _kept.pop(next(iter(_kept)))  # the oldest
+    _kept[scn] = history
+    return history
+
+
+def _reached(h: WearHistory, root_mm: float, what: str) -> None:
+    if h.root_mm[-1] < root_mm:
+        raise ValueError(f"the model's root wear reaches only {h.root_mm[-1]:.4g} mm in "
+                         f"{h.cycles[-1]:.3g} cycles, below {root_mm:.4g} mm ({what}): check "
+                         "the operating point and tribology.regime")
+
+
+def records_history(scn: Scenario, cycles: np.ndarray, wear_mm: np.ndarray) -> WearHistory:
+    """The run of one operating point that covers its records (stated ``cycles``, else the
+    stated ``wear_mm``; NaN: not stated) and the grid of wear states beyond the most worn
+    (``GRID_REACH`` times its root wear)."""
+    c_max = float(np.nanmax(cycles, initial=0.0))
+    w_max = float(np.nanmax(np.where(np.isnan(cycles), wear_mm, np.nan), initial=0.0))
+
+    def enough(c: np.ndarray, root: np.ndarray) -> bool:
+        top = max(w_max, float(np.interp(c_max, c, root)))
+        return c[-1] >= c_max and root[-1] >= GRID_REACH * top
+
+    h = wear_history(scn, enough)
+    _reached(h, GRID_REACH * max(w_max, h.root_at(c_max)), "the wear-state grid's top")
+    return h
+
+
+def cycles_for_wear(scn: Scenario, wear_mm: np.ndarray) -> np.ndarray:
+    """Cycle counts at which the model's pinion root wear reaches ``wear_mm``."""
     target = float(np.max(wear_mm))
-
-    def grow(life: np.ndarray, root: np.ndarray) -> float:
-        mid = len(life) // 2
-        if root[-1] <= 0 or root[mid] <= 0:
-            return 2.0
-        p = np.log(root[-1] / root[mid]) / np.log(life[-1] / life[mid])
-        return float(min(8.0, 1.2 * (target / (root[-1] * 1e3)) ** (1 / max(p, 0.2))))
-
-    life, root_m, ok = wear_curve(scn, cycles_max, 16, 1,
-                                  lambda _, root: root[-1] * 1e3 >= target, grow)
-    root = root_m * 1e3
-    if not ok:
-        raise ValueError(f"the model's root wear reaches only {root[-1]:.4g} mm in "
-                         f"{life[-1]:.3g} cycles, below {target:g} mm: check the "
-                         "operating point and tribology.regime")
-    return np.interp(wear_mm, root, life)
+    h = wear_history(scn, lambda _, root: root[-1] >= target)
+    _reached(h, target, "the most worn state")
+    return h.cycles_at(wear_mm)
 
 
-def wear_grid_cycles(scn: Scenario, cycles_max: float, n: int) -> list[float]:
-    """Cycle counts of ``n`` wear states of one operating point whose pinion root wear is
-    spread evenly from 0 to 1.2 times the model's at ``cycles_max`` (the most worn record);
-    none if no record is worn. Even in wear, not in cycles: the lubricated law wears the root
-    fastest while it runs in (case 3: 6.9 of 15.7 um in the first ninth of its cycles), so states
-    even in cycles leave the records below that without a state to read them by."""
-    if cycles_max <= 0:
-        return []
-
-    def top(life: np.ndarray, root: np.ndarray) -> float:
-        return 1.2 * float(np.interp(cycles_max, life, root))
-
-    # the life grid dense where the wear rises fastest
-    life, root, ok = wear_curve(scn, 2.0 * cycles_max, 33, 2,
-                                lambda life, root: root[-1] >= top(life, root))
-    if not ok:
-        raise ValueError(f"the model's root wear does not grow by a fifth beyond its value at "
-                         f"{cycles_max:.3g} cycles within {life[-1]:.3g}: check the operating "
-                         "point and tribology.regime")
-    return [float(c) for c in np.interp(np.linspace(0.0, top(life, root), n), root, life)]
-
-
-def records_cycles(scn: Scenario, rows: pd.DataFrame) -> np.ndarray:
+def records_cycles(h: WearHistory, rows: pd.DataFrame) -> np.ndarray:
     """Load cycles of records of one operating point: stated, else those at which the model
-    reaches their wear (one wear simulation for them all), else 0."""
+    reaches their wear, else 0."""
     cycles = rows.cycles.to_numpy(float).copy()
     wear = rows.wear_mm.to_numpy(float)
     find = np.isnan(cycles) & (np.nan_to_num(wear) > 0)
-    if find.any():
-        cycles[find] = cycles_for_wear(scn, wear[find])
+    cycles[find] = h.cycles_at(wear[find])
     return np.nan_to_num(cycles)
+
+
+def wear_grid_cycles(h: WearHistory, cycles_max: float, n: int) -> list[float]:
+    """Cycle counts of ``n`` wear states of one operating point whose pinion root wear is
+    spread evenly from 0 to ``GRID_REACH`` times the model's at ``cycles_max`` (the most worn
+    record); none if no record is worn. Even in wear, not in cycles: the lubricated law wears
+    the root fastest while it runs in, so states even in cycles leave the records below that
+    without a state to read them by."""
+    if cycles_max <= 0:
+        return []
+    top = GRID_REACH * h.root_at(cycles_max)
+    return [float(c) for c in h.cycles_at(np.linspace(0.0, top, n))]
+
+
+def worn_models(scn: Scenario, ms: MeshStiffness, cycles: list[float],
+                history: WearHistory | None = None
+                ) -> tuple[dict[float, PairModel], dict[float, float]]:
+    """Declared models and pinion root wear [mm] at each cycle count of one operating point,
+    read off ``history`` (by default the run to the last of ``cycles``)."""
+    last = max([float(c) for c in cycles], default=0.0)
+    if history is None and last > 0:
+        history = wear_history(scn, lambda c, _: c[-1] >= last)
+    models, root = {0.0: build_model(scn, ms)}, {0.0: 0.0}
+    for c in sorted({float(c) for c in cycles} - {0.0}):
+        w1, w2 = history.profiles(c)
+        models[c] = build_model(scn, ms, history.s, w1, w2)
+        root[c] = float(w1[0]) * 1e3
+    return models, root

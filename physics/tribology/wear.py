@@ -195,6 +195,10 @@ class WearResult:
     first_rate: WearRate  # rate and contact state of the unworn profile
     last_rate: WearRate  # rate and contact state of the final profile
     snapshots: dict[float, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+    #: every block's end (and the start): cycles ``(k,)``, pinion and gear wear ``(k, n)`` [m].
+    #: Within a block the explicit update wears every point linearly in cycles, so linear
+    #: interpolation between these rows is the run's own wear at any cycle count
+    history: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
     @property
     def double(self) -> np.ndarray:
@@ -260,6 +264,7 @@ def simulate_wear(
     force: MeshForce | None = None,
     stiffness: StiffnessModel | None = None,
     snapshots: Sequence[float] = (),
+    until: Callable[[np.ndarray, np.ndarray], bool] | None = None,
 ) -> WearResult:
     """Integrate flank wear over ``cycles`` pinion cycles (thesis 2.6).
 
@@ -272,6 +277,10 @@ def simulate_wear(
         energy stiffness of the worn teeth, recomputed at every profile update.
     snapshots : cycle counts at which the wear profiles are also recorded (block ends land on
         them exactly).
+    until : ``until(cycles, pinion)`` of the block ends so far (``(k,)`` and ``(k, n)`` [m]);
+        the run ends after the first block at which it is true (``cycles`` is then the most
+        it may run). Without snapshots, the blocks do not depend on where the run ends: a
+        longer run's history begins with a shorter one's.
 
     Each block wears the fastest point by at most ``solver.update_um``; a block after which some
     band's peak pressure rose by more than ``PRESSURE_STEP`` of its Hertz pressure is redone at
@@ -314,10 +323,12 @@ def simulate_wear(
     rate = first = rate_at(f1, f2)
     check_shakedown(rate.contact.p_max, s, limit, f1[path], f2[path], done)
     allowed = step
+    ends, wear1, wear2 = [done], [f1[path].copy()], [f2[path].copy()]
     while True:
         while pending and pending[0] <= done:
             taken[pending.pop(0)] = (f1[path].copy(), f2[path].copy())
-        if done >= cycles:
+        if done >= cycles or (blocks and until is not None
+                              and until(np.array(ends), np.array(wear1))):
             break
         peak = max(rate.flank1.max(), rate.flank2.max())
         block = cycles - done if peak <= 0 else min(cycles - done, allowed / peak)
@@ -333,5 +344,9 @@ def simulate_wear(
         check_shakedown(rate.contact.p_max, s, limit, f1[path], f2[path], done)
         allowed = min(step, 1.5 * allowed)
         blocks += 1
+        ends.append(done)
+        wear1.append(f1[path].copy())
+        wear2.append(f2[path].copy())
     w1, w2 = f1[path], f2[path]
-    return WearResult(geom, s, w1, w2, float(cycles), blocks, first, rate, taken)
+    return WearResult(geom, s, w1, w2, float(done), blocks, first, rate, taken,
+                      (np.array(ends), np.array(wear1), np.array(wear2)))

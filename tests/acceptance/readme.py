@@ -13,7 +13,6 @@ folder that command left (:attr:`Case.start`); that command runs once per test s
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import os
 import re
@@ -95,13 +94,6 @@ SMALL_LOOP = ("loop.max_nfev=4", "loop.explore=4", "loop.candidates=[friction,ti
 SMALL_BUNDLE = {"records=10, duration_s=1.0": "records=6, duration_s=0.5",
                 "effect=\"friction\", seed=1)": "effect=\"friction\", seed=1, wear_mm=(0, 0.012))",
                 "seed=2,\n": "seed=2, wear_mm=(0, 0.012),\n"}
-#: where the README already names the modules the bundle makers are moving to, and this
-#: checkout still has them at their old place, the snippets import them from there
-MOVED = {"from physics.testbeds import IndependentPair, make_bundle, make_independent_bundle":
-         "from physics.loop.synthetic import make_bundle\n"
-         "from physics.loop.independent_simulator import IndependentPair, "
-         "make_independent_bundle"}
-
 TRAIN_CASE3 = "python train.py case=3"
 TRAIN_BASELINE = "python train.py case=3 experiment=baseline"
 SWEEP = "python train.py -m model.width=16,32"
@@ -325,16 +317,12 @@ def run(argv: list[str], folder: Path, timeout: float = 900) -> subprocess.Compl
 
 
 def snippet_code(key: str) -> str:
-    """A snippet's code as the test runs it: its size changes, and the bundle makers imported
-    from where this checkout has them."""
+    """A snippet's code as the test runs it: with its size changes."""
     case = ALL[key]
     code = case.code if case.code is not None else snippets()[key]
     for old, new in case.replace.items():
         assert old in code, f"size override {old!r} no longer matches the snippet"
         code = code.replace(old, new)
-    if importlib.util.find_spec("physics.testbeds") is None:
-        for old, new in MOVED.items():
-            code = code.replace(old, new)
     return code
 
 

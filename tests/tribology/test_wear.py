@@ -240,6 +240,24 @@ def test_profile_converges_under_update_refinement(baseline):
     assert peaks[0] == pytest.approx(limit, rel=0.01)
 
 
+def test_the_history_is_the_runs_own_wear_and_does_not_depend_on_where_it_ends(baseline):
+    """Every block end is kept (the last is the result); a run told to stop once the root has
+    worn 1 um stops at the first block past it, and its history is the start of a longer run's
+    (without snapshots the blocks do not depend on the end): one run serves every shorter need."""
+    long = simulate_wear(baseline, 1.5e7)
+    cycles, pinion, gear = long.history
+    assert cycles[0] == 0.0 and cycles[-1] == long.cycles == 1.5e7
+    assert len(cycles) == long.blocks + 1 and np.all(np.diff(cycles) > 0)
+    np.testing.assert_array_equal(pinion[-1], long.pinion)
+    np.testing.assert_array_equal(gear[-1], long.gear)
+    short = simulate_wear(baseline, 1.5e7, until=lambda c, w1: w1[-1, 0] >= 1e-6)
+    c_short, p_short, g_short = short.history
+    assert p_short[-1, 0] >= 1e-6 > p_short[-2, 0] and short.cycles == c_short[-1] < 1.5e7
+    np.testing.assert_array_equal(c_short, cycles[:len(c_short)])
+    np.testing.assert_array_equal(p_short, pinion[:len(c_short)])
+    np.testing.assert_array_equal(g_short, gear[:len(c_short)])
+
+
 def test_updates_whenever_wear_changes_by_the_threshold(baseline):
     dry = _with(baseline, "tribology", regime="dry")
     res = simulate_wear(dry, 1.5e7)
