@@ -3,13 +3,14 @@ at any cycle count, kept for the next need of the same operating point."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pandas as pd
 import pytest
 
 from physics.dynamics.evolution import root_wear_evolution
 from physics.gear.stiffness import mesh_stiffness
-from physics.loop import worn_states
 from physics.loop.worn_states import (
     GRID_REACH,
     records_cycles,
@@ -27,7 +28,8 @@ def scn():
 
 
 def test_a_shorter_need_reuses_the_run_and_a_longer_one_extends_it(scn):
-    worn_states._kept.pop(scn, None)
+    scn = dataclasses.replace(scn, operating=dataclasses.replace(  # a point no other test runs
+        scn.operating, torque_Nm=scn.operating.torque_Nm + 1.0))
     first = wear_history(scn, lambda c, root: root[-1] >= 1e-3)
     assert first.root_mm[-1] >= 1e-3 > first.root_mm[-2]
     assert wear_history(scn, lambda c, root: root[-1] >= 0.5e-3) is first
