@@ -390,12 +390,27 @@ def test_export_is_atomic_and_loadable_without_pickle(trained, tmp_path):
     assert not list(tmp_path.glob("*.tmp"))
 
 
-def test_the_benchmarks_fleet_is_labelled_gearboxes_that_differ():
+@pytest.fixture(scope="module")
+def fleet() -> pd.DataFrame:
+    """The benchmark's fleet of ten gearboxes of the independent simulator; its first ``n``
+    gearboxes are ``independent_fleet(n)`` (each gearbox is drawn from its own seed)."""
+    from surrogate.benchmark import independent_fleet
+
+    return independent_fleet(10)
+
+
+def _first(fleet: pd.DataFrame, n: int) -> pd.DataFrame:
+    return fleet[fleet.gearbox < n].reset_index(drop=True)
+
+
+def test_the_benchmarks_fleet_is_labelled_gearboxes_that_differ(fleet):
     """The fleet used for fine-tuning in the benchmark: every gearbox its own drawn pair (so
     their DTE differ at equal wear), six wear labels per operating point, a group column."""
     from surrogate.benchmark import INDEPENDENT_WEAR_MM, independent_fleet
 
-    fleet = independent_fleet(2)
+    np.testing.assert_array_equal(_first(fleet, 2).to_numpy(float),
+                                  independent_fleet(2).to_numpy(float))
+    fleet = _first(fleet, 2)
     assert len(fleet) == 2 * 2 * len(INDEPENDENT_WEAR_MM)
     assert fleet.groupby("gearbox").root_wear_mm.apply(sorted).map(tuple).nunique() == 1
     new = fleet[fleet.root_wear_mm == 0].groupby("gearbox").dte_peak_to_peak.mean()
@@ -408,13 +423,14 @@ def test_the_benchmarks_fleet_is_labelled_gearboxes_that_differ():
     assert shape.max() - shape.min() < 1e-9 and 0 < shape.iloc[0] < 1
 
 
-def test_the_estimator_refitted_on_a_fleet_ignores_the_cycle_unit_and_reads_its_gearboxes():
+def test_the_estimator_refitted_on_a_fleet_ignores_the_cycle_unit_and_reads_its_gearboxes(
+        fleet):
     """Beside a fine-tuned network the estimator gets the same labelled gearboxes, the wear
     depth standing in for the cycle count: its readings do not depend on that stand-in's unit,
     and on a gearbox it did not see they rise with the wear."""
-    from surrogate.benchmark import fit_estimator, fit_fleet_estimator, independent_fleet
+    from surrogate.benchmark import fit_estimator, fit_fleet_estimator
 
-    fleet = independent_fleet(3)
+    fleet = _first(fleet, 3)
     fleet = fleet[fleet.case == 3]
     labelled, held = fleet[fleet.gearbox < 2], fleet[fleet.gearbox == 2]
     p2p, kurt = held.dte_peak_to_peak.to_numpy(), held.dte_kurtosis.to_numpy()
@@ -426,7 +442,8 @@ def test_the_estimator_refitted_on_a_fleet_ignores_the_cycle_unit_and_reads_its_
     assert abs(read[true == true.max()][0] - true.max()) < 0.5 * true.max()
 
 
-def test_the_labelled_count_study_trains_on_the_drawn_gearboxes_alone(tmp_path, monkeypatch):
+def test_the_labelled_count_study_trains_on_the_drawn_gearboxes_alone(tmp_path, monkeypatch,
+                                                                     fleet):
     """One draw of two labelled gearboxes: the network and the refitted estimator are scored
     on the draw's four held-out gearboxes (24 rows at 2000 r/min), from a table that holds the
     drawn eight gearboxes and nothing else."""
@@ -434,7 +451,6 @@ def test_the_labelled_count_study_trains_on_the_drawn_gearboxes_alone(tmp_path, 
 
     monkeypatch.setattr(benchmark, "LABEL_COUNTS", (2,))
     monkeypatch.setattr(benchmark, "LABEL_DRAWS", 1)
-    fleet = benchmark.independent_fleet(10)
     out = benchmark.labelled_counts(ROOT, tmp_path, fleet, [
         "trainer.max_epochs=2", "trainer.min_epochs=1", "model.members=2"])
     assert out[["labelled_gearboxes", "draw", "heldout_rows"]].values.tolist() == [[2, 0, 24]]
@@ -444,12 +460,12 @@ def test_the_labelled_count_study_trains_on_the_drawn_gearboxes_alone(tmp_path, 
     assert table.gearbox.nunique() == 2 + 2 + 4 and set(table.case) == {3}
 
 
-def test_a_mean_wear_network_is_scored_with_estimators_of_its_own_target(tmp_path):
+def test_a_mean_wear_network_is_scored_with_estimators_of_its_own_target(tmp_path, fleet):
     """The benchmark's mean-wear model trained on fleet rows: it, the estimator and the null
     model are all scored against the mean depth, not the root depth."""
     from surrogate import benchmark
 
-    fleet = benchmark.independent_fleet(8)
+    fleet = _first(fleet, 8)
     fleet = fleet[fleet.case == 3]
     table = tmp_path / "fleet.csv"
     fleet.to_csv(table, index=False)
