@@ -136,12 +136,8 @@ def prepare(bundle: Bundle, base: Scenario, settings: LoopSettings) -> Records:
     wear_states: list[list[tuple[float, PairModel]]] = [[] for _ in range(len(man))]
     for idx in keyed.values():
         scn, rows = scenarios[idx[0]], man.iloc[idx]
-        stated = rows.cycles.to_numpy(float)
-        wear = np.where(np.isnan(stated), rows.wear_mm.to_numpy(float), np.nan)
-        worn = np.nan_to_num(stated).max() > 0 or np.nan_to_num(wear).max() > 0
-        history = records_history(scn, stated, wear) if worn else None
-        cycles = dict(zip(idx, records_cycles(history, rows) if worn else np.zeros(len(idx)),
-                          strict=True))
+        history = records_history(scn, rows)
+        cycles = dict(zip(idx, records_cycles(history, rows), strict=True))
         grid = wear_grid_cycles(history, max(cycles.values()), settings.wear_grid)
         by_cycles, root = worn_models(scn, ms, [*cycles.values(), *grid], history)
         for i in idx:

@@ -92,12 +92,15 @@ def _reached(h: WearHistory, root_mm: float, what: str) -> None:
                          "the operating point and tribology.regime")
 
 
-def records_history(scn: Scenario, cycles: np.ndarray, wear_mm: np.ndarray) -> WearHistory:
-    """The run of one operating point that covers its records (stated ``cycles``, else the
-    stated ``wear_mm``; NaN: not stated) and the grid of wear states beyond the most worn
-    (``GRID_REACH`` times its root wear)."""
-    c_max = float(np.nanmax(cycles, initial=0.0))
-    w_max = float(np.nanmax(np.where(np.isnan(cycles), wear_mm, np.nan), initial=0.0))
+def records_history(scn: Scenario, rows: pd.DataFrame) -> WearHistory | None:
+    """The run of one operating point that covers its records (their stated cycles, else
+    their stated wear) and the grid of wear states beyond the most worn (``GRID_REACH`` times
+    its root wear); None where no record is worn."""
+    stated = rows.cycles.to_numpy(float)
+    c_max = float(np.nanmax(stated, initial=0.0))
+    w_max = float(np.nanmax(rows.wear_mm.to_numpy(float)[np.isnan(stated)], initial=0.0))
+    if c_max <= 0 and w_max <= 0:
+        return None
 
     def enough(c: np.ndarray, root: np.ndarray) -> bool:
         top = max(w_max, float(np.interp(c_max, c, root)))
@@ -116,17 +119,18 @@ def cycles_for_wear(scn: Scenario, wear_mm: np.ndarray) -> np.ndarray:
     return h.cycles_at(wear_mm)
 
 
-def records_cycles(h: WearHistory, rows: pd.DataFrame) -> np.ndarray:
+def records_cycles(h: WearHistory | None, rows: pd.DataFrame) -> np.ndarray:
     """Load cycles of records of one operating point: stated, else those at which the model
-    reaches their wear, else 0."""
+    (its run ``h``, :func:`records_history`) reaches their wear, else 0."""
     cycles = rows.cycles.to_numpy(float).copy()
     wear = rows.wear_mm.to_numpy(float)
     find = np.isnan(cycles) & (np.nan_to_num(wear) > 0)
-    cycles[find] = h.cycles_at(wear[find])
+    if find.any():
+        cycles[find] = h.cycles_at(wear[find])
     return np.nan_to_num(cycles)
 
 
-def wear_grid_cycles(h: WearHistory, cycles_max: float, n: int) -> list[float]:
+def wear_grid_cycles(h: WearHistory | None, cycles_max: float, n: int) -> list[float]:
     """Cycle counts of ``n`` wear states of one operating point whose pinion root wear is
     spread evenly from 0 to ``GRID_REACH`` times the model's at ``cycles_max`` (the most worn
     record); none if no record is worn. Even in wear, not in cycles: the lubricated law wears

@@ -53,8 +53,7 @@ def test_the_teeth_read_off_the_run_agree_with_a_run_ending_its_blocks_there(scn
 
 def test_records_of_known_wear_sit_at_their_wear_and_the_grid_reaches_beyond(scn):
     rows = pd.DataFrame({"cycles": [np.nan, np.nan, 2e6], "wear_mm": [0.0, 2e-3, np.nan]})
-    h = records_history(scn, rows.cycles.to_numpy(float),
-                        np.where(rows.cycles.isna(), rows.wear_mm, np.nan))
+    h = records_history(scn, rows)
     cycles = records_cycles(h, rows)
     assert cycles[0] == 0.0 and cycles[2] == 2e6
     assert h.root_at(cycles[1]) == pytest.approx(2e-3, rel=1e-9)
@@ -64,3 +63,5 @@ def test_records_of_known_wear_sit_at_their_wear_and_the_grid_reaches_beyond(scn
     models, root = worn_models(scn, mesh_stiffness(scn.gear, scn.material), grid, h)
     assert root[grid[-1]] == pytest.approx(GRID_REACH * 2e-3, rel=1e-9)
     assert not np.allclose(models[grid[-1]].k_a, models[0.0].k_a)  # worn teeth, other mesh
+    new = pd.DataFrame({"cycles": [0.0, np.nan], "wear_mm": [np.nan, 0.0]})
+    assert records_history(scn, new) is None and list(records_cycles(None, new)) == [0.0, 0.0]
