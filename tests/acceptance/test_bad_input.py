@@ -205,7 +205,7 @@ def _folders(tmp_path: Path, make) -> tuple[str | None, Path]:
     return (str(made) if made is not None else None), work
 
 
-def _composed(app: App, overrides: list[str], out: Path) -> DictConfig:
+def composed(app: App, overrides: list[str], out: Path) -> DictConfig:
     """The app's config as Hydra gives it to the app's main, with ``out`` as the run folder
     (not made: ``prepare`` writes nothing)."""
     with initialize_config_module(f"gearwear_conf.{app.config}", version_base="1.3"):
@@ -232,7 +232,7 @@ def test_bad_input_is_refused_before_work(tmp_path, monkeypatch, config_store, a
     spec = APPS[app]
     prepare = spec.prepare()  # registers the app's config schema, as its process does
     with pytest.raises(Exception) as refused:  # Hydra's refusal or the app's ValueError
-        prepare(_composed(spec, overrides, work / "logs" / "run"))
+        prepare(composed(spec, overrides, work / "logs" / "run"))
     text = _chain(refused.value)
     assert message in text, text
     if not isinstance(refused.value, ValueError):  # then Hydra refused it while composing

@@ -102,3 +102,20 @@ def test_an_effect_that_appears_over_the_life_is_named_against_the_first_records
     assert summary["reference_records"] == ["r00", "r01"]
     assert not set(summary["reference_records"]) & set(report.details["train_records"]
                                                        + report.details["test_records"])
+
+
+def test_the_app_cuts_the_units_first_records_off_as_its_reference(tmp_path, monkeypatch,
+                                                                   config_store):
+    """``python -m physics.loop data=B reference=first:2`` as the app prepares it: the first two
+    records of the group are the reference, the rest the analysed bundle."""
+    from tests.acceptance.test_bad_input import APPS, composed
+
+    scn = scenario_from_config({"case": 3})
+    path, _ = make_bundle(tmp_path / "b", scn, None, seed=3, records=6, duration_s=0.5)
+    monkeypatch.chdir(tmp_path)
+    spec = APPS["loop"]
+    job = spec.prepare()(composed(spec, [f"data={path}", "reference=first:2", "case=3"],
+                                  tmp_path / "run"))
+    assert job.history == "first:2"
+    assert job.reference.records == ["r00", "r01"]
+    assert job.data.records == ["r02", "r03", "r04", "r05"]
