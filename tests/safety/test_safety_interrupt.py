@@ -135,9 +135,12 @@ def test_ctrl_c_during_training_names_the_checkpoints_and_exits_130(inputs, tmp_
     """Lightning catches KeyboardInterrupt in its fit loop ("graceful shutdown", exit 1): the
     app still ends with its one line and 130."""
     cmd, _ = argv("train", inputs)
+    subprocess.run([*cmd[:2], *[a.replace("3000", "1") for a in cmd[2:]],
+                    f"hydra.run.dir={tmp_path / 'build'}"], cwd=tmp_path,
+                   capture_output=True, timeout=300, check=True)  # the dataset, built once
     proc = subprocess.Popen([*cmd, "hydra.run.dir=run"], cwd=tmp_path, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, start_new_session=True)
-    for line in proc.stdout:  # Hydra logs to stdout: the dataset is built, the fit starts
+    for line in proc.stdout:  # Hydra logs to stdout: wait for the fit loop to run
         if "surrogate.training][INFO] - split:" in line:
             break
     deadline = time.monotonic() + 60
