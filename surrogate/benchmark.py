@@ -5,11 +5,10 @@ pinion's mean wear depth over the path of contact, ``data.target=mean_wear_mm``)
 once per seed of ``--seeds`` (the seed draws the trajectory split and the start, and one seed's
 figures can mislead); ``all`` (``case=all``) and ``all_mean`` (its mean-wear twin),
 ``all_acc`` (all cases, housing acceleration only), ``loco2`` / ``loco5`` (all cases but one),
-``case3_form`` (case 3 over the declared model's form uncertainty as well,
-``experiment=model_form``; its shifted set shifts the model form too) and the baseline
-networks ``case3_baseline`` and ``all_baseline`` (once per seed), ``loco2_baseline`` and
-``loco5_baseline`` (``experiment=baseline``: the mean wear depth from the features' changes
-since each gearbox's first, unworn record, which every test set has: :func:`gearbox_keys`).
+and the baseline networks ``case3_baseline`` and ``all_baseline`` (once per seed),
+``loco2_baseline`` and ``loco5_baseline`` (``experiment=baseline``: the mean wear depth from
+the features' changes since each gearbox's first, unworn record, which every test set has:
+:func:`gearbox_keys`).
 Every model and estimator is scored on its own target (root wear unless named). Test sets:
 
 - ``heldout_trajectories``: the model's own test trajectories (never seen in training);
@@ -18,13 +17,17 @@ Every model and estimator is scored on its own target (root wear unless named). 
 - ``nuisance_shifted``: a dataset drawn with another seed from the upper 40 % of every documented
   nuisance range (:func:`shifted_ranges`): a gearbox inside the ranges, away from most training
   trajectories;
+- ``beyond_ranges``: gearboxes drawn with another seed just beyond every documented nuisance
+  range, ``[high, high + 0.25 (high - low)]`` (:func:`beyond_ranges`; a range that reaches
+  its physical limit stays as it is): inputs the network never trained on, which its flag
+  should catch;
 - ``model_form_off``: case-3 gearboxes of our model whose mesh stiffness, stiffness ratio and
-  mesh resonance lie off the declared model's (:data:`MODEL_FORM_OFF`), for every network
-  that does not draw the model's form (``case3_form`` does);
-- ``dry_wear_law``: gearboxes of our model worn by the thesis's dry Archard law instead of the
-  lubricated one (``boundary_share`` 0.99, :data:`DRY_LAW`; another seed, the documented
-  nuisance ranges otherwise): the same dynamics, another wear profile (root about 5 times the
-  mean depth where the lubricated law's is 9-23 times) and three times its mean depth;
+  mesh resonance lie well off the declared model's, 25-50 % above it or 15-30 % below
+  (:data:`MODEL_FORM_OFF`; inside the drawn form ranges of :class:`NuisanceRanges`, at their
+  far ends for the declared model's own stated uncertainty);
+- ``dry_wear_law``: gearboxes of our model worn by the thesis's dry Archard law
+  (``boundary_share`` 0.99, :data:`DRY_LAW`; another seed, the documented nuisance ranges
+  otherwise): one end member of the drawn wear-law share;
 - ``independent_simulator``: features of records of the independent spur-pair simulator
   (:mod:`physics.testbeds.independent_simulator`, another model form) at 2000/300 and 1800/290;
 - ``independent_fleet``: the same for all ten gearboxes of a fleet of the independent simulator
@@ -76,6 +79,7 @@ from hydra import compose, initialize_config_module
 from hydra.utils import instantiate
 
 from physics.dataset.generation import NuisanceRanges
+from physics.dynamics.model_form import FACTORS
 from physics.estimators.empirical_inverse import EmpiricalInverse, wear_errors
 from physics.files import atomic_write, pyplot
 from physics.signals.features import features
@@ -210,7 +214,6 @@ MODELS = {
     "all_acc": ["case=all", "data.sensors=[acc]"],
     "loco2": ["case=all", "data.holdout_case=2"],
     "loco5": ["case=all", "data.holdout_case=5"],
-    "case3_form": ["case=3", "experiment=model_form"],
     "case3_baseline": ["case=3", "experiment=baseline"],
     "all_baseline": ["case=all", "experiment=baseline"],
     "loco2_baseline": ["case=all", "experiment=baseline", "data.holdout_case=2"],
@@ -218,6 +221,8 @@ MODELS = {
 }
 #: the dry-law test set: the dataset spec's values (8 gearboxes per case)
 DRY_LAW = {"seed": 2, "replicates": 8, "nuisance": {"boundary_share": [0.99, 0.99]}}
+#: the beyond-the-ranges test set: the dataset spec's values (8 gearboxes per case)
+BEYOND = {"seed": 4, "replicates": 8}
 #: the model-form-off test set: case-3 gearboxes of our physics whose mesh stiffness level,
 #: double/single stiffness ratio and mesh resonance (:mod:`physics.dynamics.model_form`) lie
 #: off the declared model's, 8 above it and 8 below (the dataset spec's values of each half)
@@ -259,6 +264,19 @@ def shifted_ranges(share: float = 0.4, base: NuisanceRanges | None = None) -> di
     for name in NuisanceRanges.LIMITS:
         lo, hi = getattr(base, name)
         out[name] = [lo + (1 - share) * (hi - lo), hi]
+    return out
+
+
+def beyond_ranges(share: float = 0.25, base: NuisanceRanges | None = None) -> dict:
+    """The nuisance ranges ``base`` (default: the documented ones) moved just beyond their
+    upper ends, ``[high, high + share (high - low)]``: gearboxes of a kind the network never
+    saw. A range whose upper end is its physical limit (:attr:`NuisanceRanges.LIMITS`, the
+    wear-law share's 1) stays as it is."""
+    base = base or NuisanceRanges()
+    out = {}
+    for name, (_, limit) in NuisanceRanges.LIMITS.items():
+        lo, hi = getattr(base, name)
+        out[name] = [lo, hi] if hi >= limit else [hi, min(hi + share * (hi - lo), limit)]
     return out
 
 
@@ -437,6 +455,8 @@ def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5
     shifted = load_dataset(root / "data" / "dataset_shifted.parquet",
                            {"seed": 1, "replicates": 8, "nuisance": shifted_ranges()})
     dry = load_dataset(root / "data" / "dataset_dry_law.parquet", DRY_LAW)
+    beyond = load_dataset(root / "data" / "dataset_beyond.parquet",
+                          {**BEYOND, "nuisance": beyond_ranges()})
     form_off = model_form_off(root)
     foreign = independent_rows()
     fleet = independent_fleet(sum(FLEET_SPLIT.values()))
@@ -457,15 +477,10 @@ def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5
         sets = {"heldout_trajectories" if not loco else
                 f"heldout_operating_point_{'inside' if name[:5] == 'loco2' else 'outside'}":
                 dm.frames["test"]}
-        if name == "case3_form":  # its shifted gearboxes: the model form shifted as well
-            ranges = NuisanceRanges(**cfg.data.generate.nuisance)
-            sets["nuisance_shifted"] = load_dataset(
-                root / "data" / "dataset_shifted_model_form.parquet",
-                {"cases": [3], "seed": 1, "replicates": 8,
-                 "nuisance": shifted_ranges(base=ranges)})
-        elif not loco:
+        if not loco:
             sets["nuisance_shifted"] = shifted[shifted.case.isin(cases)]
-        if not loco and name != "case3_form" and 3 in cases:  # that one draws the form
+            sets["beyond_ranges"] = beyond[beyond.case.isin(cases)]
+        if not loco and 3 in cases:
             sets["model_form_off"] = form_off
         if not loco:
             sets["dry_wear_law"] = dry[dry.case.isin(cases)]
@@ -526,6 +541,68 @@ def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5
     return table, counts
 
 
+#: the default nuisance ranges of earlier versions where they differ from today's
+#: (:class:`NuisanceRanges`): a middle part of each source's span, the lubricated wear law
+#: alone and the declared model's form
+PREVIOUS_RANGES = {"damping_ratio": [0.03, 0.12], "eccentricity1_um": [5.0, 15.0],
+                   "profile_error_um": [1.5, 4.5], "half_backlash_um": [30.0, 70.0],
+                   "boundary_share": [0.0, 0.0], **{f: [1.0, 1.0] for f in FACTORS}}
+#: the training ranges :func:`previous_ranges` compares, each as its changes to today's
+#: defaults: the previous ones, today's tolerances (damping, run-out, profile, backlash) with
+#: the previous wear law and form, those with today's wear-law share too, and today's
+RANGE_VARIANTS = {
+    "previous": PREVIOUS_RANGES,
+    "tolerances": {k: PREVIOUS_RANGES[k] for k in ("boundary_share", *FACTORS)},
+    "tolerances_wear_law": {f: PREVIOUS_RANGES[f] for f in FACTORS},
+    "today": {}}
+#: the held-out gearboxes of :func:`previous_ranges`: case 3, a seed no training set uses,
+#: drawn inside the previous ranges and inside today's (the dataset spec's values)
+RANGE_TESTS = {"inside_previous_ranges": {"cases": [3], "seed": 6, "replicates": 16,
+                                          "nuisance": PREVIOUS_RANGES},
+               "inside_todays_ranges": {"cases": [3], "seed": 6, "replicates": 16}}
+
+
+def previous_ranges(root: Path, out: Path, extra: list[str], seeds: int) -> pd.DataFrame:
+    """What training over today's nuisance ranges costs on gearboxes inside the narrower ones
+    of earlier versions, and what it buys on gearboxes of today's: per training seed, a case-3
+    network per training ranges of :data:`RANGE_VARIANTS` (each but today's its own dataset
+    file), all scored on the same held-out gearboxes of :data:`RANGE_TESTS` (one row per
+    network, seed, test set and estimator: :func:`evaluate`'s columns)."""
+    tests = {k: load_dataset(root / "data" / f"dataset_{k}.parquet", spec)
+             for k, spec in RANGE_TESTS.items()}
+    rows = []
+    for seed, (label, ranges) in itertools.product(range(seeds), RANGE_VARIANTS.items()):
+        nuisance = ",".join(f"{k}:[{lo},{hi}]" for k, (lo, hi) in ranges.items())
+        overrides = [f"data.dataset={root / 'data' / f'dataset_case3_{label}.parquet'}",
+                     f"+data.generate.nuisance={{{nuisance}}}"] if ranges else []
+        folder = out / "models" / f"case3_{label}_seed{seed}"
+        cfg = train_config(root, folder, "case=3", *overrides, *extra, f"seed={seed}")
+        log.info("case 3 over the %s ranges: training (seed %d)", label, seed)
+        train(cfg)
+        dm = instantiate(cfg.data)
+        dm.setup()
+        net = Surrogate.load(folder / "wear_surrogate.pt")
+        target = net.schema.target
+        est, typical = fit_estimator(dm.frames["train"], target), typical_wear(
+            dm.frames["train"], target)
+        for test_name, test in tests.items():
+            r, _ = evaluate(f"case3_{label}/{test_name}", net, est, typical, test, speed=False)
+            rows += [{**row, "trained_on": label, "test": test_name, "seed": seed}
+                     for row in r]
+    return pd.DataFrame(rows)
+
+
+def range_summary(table: pd.DataFrame) -> pd.DataFrame:
+    """:func:`previous_ranges`' networks per training ranges and test set, over the seeds:
+    mean relative error [%], R2, coverage, flagged share and share missed and not flagged
+    (mean, min, max)."""
+    net = table[table.estimator == "surrogate"]
+    cols = ["mean_relative_error_pct", "r2", "interval_coverage", "flag_rate",
+            "missed_not_flagged"]
+    return net.groupby(["trained_on", "test"], sort=False)[cols].agg(
+        ["mean", "min", "max"]).round(3)
+
+
 def seed_summary(table: pd.DataFrame) -> pd.DataFrame:
     """Per model, test set and estimator: the seeds, the mean and largest mean relative
     error [%] and the smallest interval coverage over the training seeds."""
@@ -539,9 +616,10 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m surrogate.benchmark",
                                      description=__doc__.split("\n\n")[0],
                                      epilog="Takes about 12 minutes on 2 cores the first "
-                                            "time (the case-3, all-case, model-form, shifted "
-                                            "and dry-law datasets are generated once into "
-                                            "data/), 10 minutes after (28 trainings on the "
+                                            "time (the case-3, all-case, shifted, beyond-range, "
+                                            "dry-law and model-form-off datasets are generated "
+                                            "once into data/), 10 minutes after (27 trainings "
+                                            "on the "
                                             "physics, 18 on the fleet's labelled gearboxes and "
                                             "20 on draws of them).")
     parser.add_argument("--out", type=Path, default=None,
@@ -554,11 +632,25 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--max-epochs", type=int, default=None,
                         help="cap the training epochs (quick looks; the default config's "
                              "early stopping otherwise)")
+    parser.add_argument("--previous-ranges", action="store_true",
+                        help="instead: case-3 networks of today's nuisance ranges, of the "
+                             "narrower ones of earlier versions and of two steps between, "
+                             "--seeds each, scored on held-out gearboxes inside the previous "
+                             "and today's ranges (previous_ranges.csv)")
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s: %(message)s")
     out = args.out or Path("logs/benchmark") / datetime.now().strftime("%Y-%m-%d_%H-%M-%S")
     if args.seeds < 1:
         parser.error(f"--seeds {args.seeds}: give at least 1")
+    if args.previous_ranges:
+        extra = [f"trainer.max_epochs={args.max_epochs}"] if args.max_epochs else []
+        table = previous_ranges(Path.cwd(), out.resolve(), extra, args.seeds)
+        atomic_write(out.resolve() / "previous_ranges.csv",
+                     lambda p: table.to_csv(p, index=False))
+        with pd.option_context("display.width", 200, "display.float_format", "{:.4g}".format):
+            print(range_summary(table).to_string())
+        print(f"\n-> {out / 'previous_ranges.csv'}")
+        return
     table, counts = run(out.resolve(), Path.cwd(), args.max_epochs, args.seeds)
     rig = pd.read_csv(out.resolve() / "one_rig.csv")
     cols = ["scenario", "estimator", "seed", "rmse", "r2", "mean_relative_error_pct",

@@ -1,6 +1,7 @@
 """Gear geometry and elasticity (thesis 2.1-2.3, 3.1-3.2): line of action, kinematics, the
 rack-generated tooth, Hertz line contact, potential-energy mesh stiffness of worn teeth, its
-finite-element check, and double-tooth load sharing. Imports numpy/scipy and ``physics.params``."""
+finite-element check, double-tooth load sharing, and the manufacturing tolerances of an
+accuracy grade. Imports numpy/scipy and ``physics.params``."""
 
 from __future__ import annotations
 
@@ -8,6 +9,10 @@ from physics.exports import lazy_exports
 
 #: the public names, by the module that defines each (imported on first use: physics.exports)
 _SOURCES = {
+    "physics.gear.accuracy": (
+        "runout_tolerance_um", "profile_form_tolerance_um", "cumulative_pitch_tolerance_um",
+        "minimum_backlash_um", "maximum_backlash_um", "tooth_thickness_tolerance_um",
+        "it_tolerance_um"),
     "physics.gear.contact": (
         "reduced_modulus", "equivalent_radius", "hertz_half_width", "hertz_max_pressure",
         "hertz_mean_pressure"),

@@ -241,8 +241,6 @@ DOCS: dict[str, Case] = {
     "python train.py experiment=all_cases": Case(
         ("+data.generate.replicates=3", "+data.generate.wear_states=2", *TINY_DATA[2:],
          *FAST_TRAIN), check=files("logs/train/runs/caseall_*")),
-    "python train.py experiment=model_form": Case(TINY_DATA + FAST_TRAIN, check=files(
-        "data/dataset_case3_model_form.parquet", "logs/train/runs/case3_*/wear_surrogate.pt")),
     TRAIN_BASELINE: Case(TINY_DATA + FAST_TRAIN, start=TRAIN_CASE3, only=("data",),
                          check=mean_wear),
     "python -m surrogate.predict ckpt=logs/train/runs/<run>/wear_surrogate.pt "

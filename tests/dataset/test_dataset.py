@@ -85,7 +85,8 @@ def test_a_trajectorys_draws_reach_its_physics():
     scn = unit_scenario(BASE, spec, 3, 1)
     assert 0.6 <= scn.dynamics.stiffness_factor == d["stiffness_factor"] <= 1.6
     assert scn.dynamics.resonance_factor == pytest.approx(0.9)
-    assert scn.dynamics.double_contact_factor == 1.0  # its default range: the declared model
+    low, high = NuisanceRanges().double_contact_factor  # its default range
+    assert low <= scn.dynamics.double_contact_factor == d["double_contact_factor"] <= high
     assert scn.dynamics.damping_ratio == d["damping_ratio"]
     assert scn.dynamics.housing_mass_kg == d["housing_mass_kg"]
     assert scn.tribology.dry_wear_coeff == pytest.approx(
@@ -198,3 +199,51 @@ def test_a_gearbox_worn_through_is_recorded_not_a_row(tmp_path, caplog):
     assert all("worn through" in u["reason"] or "table" in u["reason"]
                or "shakedown" in u["reason"] for u in side["left_scope"])
     assert "4 of 4 trajectories left the model's scope" in caplog.text
+
+
+def test_default_ranges_are_those_of_their_sources():
+    """Run-out and profile form: ISO 1328 grades 4 to 9 of the thesis's pinion, halved;
+    backlash: ISO/TR 10064-2's minimum to a grade-9 pair's maximum, halved; damping: Kasuba &
+    Evans's 0.03-0.17 (NuisanceRanges)."""
+    from physics.gear.accuracy import (
+        maximum_backlash_um,
+        minimum_backlash_um,
+        profile_form_tolerance_um,
+        runout_tolerance_um,
+    )
+    from physics.params import GearPair
+
+    g, r = GearPair(), NuisanceRanges()
+    d1, d2 = g.module_mm * g.z1, g.module_mm * g.z2
+    a = g.standard_center_distance_mm
+    assert r.eccentricity1_um == [runout_tolerance_um(q, g.module_mm, d1) / 2 for q in (4, 9)]
+    assert r.profile_error_um == [profile_form_tolerance_um(q, g.module_mm, d1) / 2
+                                  for q in (4, 9)]
+    assert r.half_backlash_um[0] == pytest.approx(minimum_backlash_um(a, g.module_mm) / 2)
+    assert r.half_backlash_um[1] == pytest.approx(maximum_backlash_um(
+        9, g.module_mm, d1, d2, a, g.pressure_angle_deg) / 2, abs=0.5)
+    assert r.damping_ratio == [0.03, 0.17]
+    # the declared (thesis) gearbox lies inside every range
+    dyn = Dynamics()
+    for name in ("damping_ratio", "eccentricity1_um", "profile_error_um", "half_backlash_um"):
+        low, high = getattr(r, name)
+        assert low <= getattr(dyn, name) <= high, name
+
+
+def test_a_default_dataset_draws_the_model_form_and_the_wear_law_across_their_ranges():
+    """By default every trajectory draws the form factors around the declared model (1) and
+    the share of dry-law running between the lubricated (0) and the dry (1) law; a few dozen
+    trajectories reach both ends of each range."""
+    spec = DatasetSpec()
+    draws = pd.DataFrame([unit_draw(spec, c, r) for c in spec.cases for r in range(12)])
+    for name in ("stiffness_factor", "double_contact_factor", "resonance_factor",
+                 "boundary_share"):
+        low, high = getattr(spec.nuisance, name)
+        width = high - low
+        assert draws[name].between(low, high).all(), name
+        assert draws[name].min() < low + 0.2 * width and draws[name].max() > high - 0.2 * width
+    assert (draws.stiffness_factor < 1).any() and (draws.stiffness_factor > 1).any()
+    scn = unit_scenario(BASE, spec, 3, 0)
+    d = unit_draw(spec, 3, 0)
+    assert scn.tribology.boundary_share == d["boundary_share"]
+    assert scn.dynamics.resonance_factor == d["resonance_factor"]

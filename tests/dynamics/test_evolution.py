@@ -97,5 +97,10 @@ def test_feedback_adds_revolutions_where_one_misses_phase_bins():
     turns = run.duration_s / revolution
     assert turns == pytest.approx(round(turns)) and round(turns) >= 2
     assert np.all(np.isfinite(simulate(model, run).force_by_phase))  # every bin visited
+    short = dataclasses.replace(scn.dynamics, duration_s=revolution)
     with pytest.raises(ValueError, match="too short to visit every"):
-        simulate(model, dataclasses.replace(scn.dynamics, duration_s=revolution))
+        simulate(model, short)
+    # a record read for its signals (the dataset's) needs no phase bins: the same record, its
+    # missed bins NaN
+    record = simulate(model, short, every_phase=False)
+    assert np.all(np.isfinite(record.dte)) and np.isnan(record.force_by_phase).any()

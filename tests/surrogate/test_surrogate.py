@@ -54,7 +54,8 @@ ONE_GEARBOX = NuisanceRanges(
     speed_pct=1.0, torque_pct=2.0, damping_ratio=[0.07, 0.07], eccentricity1_um=[7.5, 7.5],
     profile_error_um=[3.0, 3.0], half_backlash_um=[47.5, 47.5], housing_mass_kg=[20.0, 20.0],
     transfer_fn_hz=[4000.0, 4000.0], transfer_zeta=[0.05, 0.05], snr_db=[30.0, 30.0],
-    wear_coeff_factor=[1.0, 1.0], boundary_share=[0.0, 0.0])
+    wear_coeff_factor=[1.0, 1.0], boundary_share=[0.0, 0.0], stiffness_factor=[1.0, 1.0],
+    double_contact_factor=[1.0, 1.0], resonance_factor=[1.0, 1.0])
 TINY = DatasetSpec(cases=(3, 4), wear_states=5, replicates=4, chunks=1, nuisance=ONE_GEARBOX)
 
 
@@ -110,13 +111,17 @@ def test_experiments_compose(tmp_path, experiment):
     instantiate(cfg.data)  # checks the build's settings (cases, nuisance ranges) before work
 
 
-def test_the_model_form_experiment_draws_the_form_factors_around_the_declared_model(tmp_path):
-    cfg = train_cfg(tmp_path, tmp_path / "x.parquet", "experiment=model_form")
-    spec = spec_from_config(cfg.data.generate)
+def test_the_main_job_trains_over_the_model_form_and_both_wear_laws(tmp_path):
+    """``python train.py case=3`` builds its dataset over the declared model's form uncertainty
+    and the wear-law share (docs/dataset.md): each range straddles the declared model (1) or
+    spans the lubricated (0) to the dry (1) law."""
+    cfg = train_cfg(tmp_path, tmp_path / "x.parquet")
+    spec = spec_from_config(dict(cfg.data.generate))
     for name in FACTORS:
         low, high = getattr(spec.nuisance, name)
         assert low < 1.0 < high, name
-    assert spec.nuisance.damping_ratio == NuisanceRanges().damping_ratio  # the rest as default
+    assert spec.nuisance.boundary_share == [0.0, 1.0]
+    assert "model_form" not in groups("experiment")  # the defaults do what it did
 
 
 def test_optuna_search_composes_with_a_failure_budget(tmp_path):
@@ -509,6 +514,34 @@ def test_the_dry_law_test_set_wears_a_flatter_deeper_profile():
     a, b = a.iloc[-1], b.iloc[-1]
     assert a.root_wear_mm / a.mean_wear_mm < 0.6 * b.root_wear_mm / b.mean_wear_mm
     assert a.mean_wear_mm > 1.5 * b.mean_wear_mm
+
+
+def test_the_beyond_range_set_lies_past_every_range_the_network_trained_on():
+    """``beyond_ranges``: each range starts at today's upper end and reaches a quarter of its
+    width past it; one whose upper end is its physical limit stays as it is."""
+    from surrogate.benchmark import beyond_ranges
+
+    today, beyond = NuisanceRanges(), NuisanceRanges(**beyond_ranges())
+    for name, (_, limit) in NuisanceRanges.LIMITS.items():
+        (lo, hi), (b_lo, b_hi) = getattr(today, name), getattr(beyond, name)
+        if hi < limit:
+            assert b_lo == hi and b_hi == pytest.approx(min(hi + 0.25 * (hi - lo), limit)), name
+        else:
+            assert [b_lo, b_hi] == [lo, hi], name
+
+
+def test_todays_ranges_are_at_least_as_wide_as_the_previous_ones():
+    """The comparison of ``--previous-ranges``: every training range it tries is valid, and
+    today's defaults span at least the previous ones' width and upper end."""
+    from surrogate.benchmark import PREVIOUS_RANGES, RANGE_VARIANTS
+
+    today, previous = NuisanceRanges(), NuisanceRanges(**PREVIOUS_RANGES)
+    for name in PREVIOUS_RANGES:
+        (lo, hi), (p_lo, p_hi) = getattr(today, name), getattr(previous, name)
+        assert hi - lo > p_hi - p_lo and hi >= p_hi, name
+    for ranges in RANGE_VARIANTS.values():
+        NuisanceRanges(**ranges)  # valid
+    assert RANGE_VARIANTS["today"] == {} and RANGE_VARIANTS["previous"] == PREVIOUS_RANGES
 
 
 def test_the_benchmark_summarises_seeds_and_scores_a_null_model():

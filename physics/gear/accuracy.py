@@ -1,0 +1,135 @@
+"""Manufacturing tolerances of a spur pair from its accuracy grade: radial run-out, profile form,
+and the normal backlash between its minimum and its maximum. They set the spread of real
+gearboxes of one design (:class:`physics.dataset.generation.NuisanceRanges`).
+
+Sources (the formulas; no tabulated values are copied):
+
+- ISO 1328-1:1995, clause 6 and 5.2: tolerances of accuracy grade 5 by formula, in um, with ``m``
+  and ``d`` in mm taken as the geometric means of the standard's size bands the gear falls in;
+  each grade multiplies the grade-5 value by ``sqrt(2)`` (grade ``Q``: ``2^((Q - 5)/2)``); values
+  rounded to 1 um above 10 um, to 0.5 um from 5 to 10 um and to 0.1 um below 5 um.
+  Profile form ``f_f_alpha = 2.5 sqrt(m) + 0.17 sqrt(d) + 0.5``; total cumulative pitch
+  ``F_p = 0.3 m + 1.25 sqrt(d) + 7``.
+- ISO 1328-2:1997, annex B: radial run-out ``F_r = 0.8 F_p``.
+- ISO/TR 10064-2:1996: minimum normal backlash ``j_bn,min = (2/3)(0.06 + 0.0005 a + 0.03 m)``
+  mm (ferrous gears in a ferrous housing, pitch-line speed below 15 m/s); the tooth thickness
+  tolerance ``T_sn = 2 tan(alpha_n) sqrt(F_r^2 + b_r^2)``, ``b_r`` the cutting-feed tolerance of
+  the grade (grade 4: 1.26 IT7, 5: IT8, 6: 1.26 IT8, 7: IT9, 8: 1.26 IT9, 9: IT10, of the
+  reference diameter).
+- Centre-distance allowance ``+-f_a`` of the grade: half of IT6 (grades 3-4), IT7 (5-6), IT8
+  (7-8), IT9 (9-10) of the centre distance (the allowances tabulated beside the ISO 1328 grades
+  in DIN 3964 and GB/T 10095-1988).
+- ISO 286-1:2010: the standard tolerance ``IT = k i``, ``i = 0.45 D^(1/3) + 0.001 D`` um
+  (``D`` the geometric mean of the size band in mm; ``k`` 10, 16, 25, 40, 64 for IT6-IT10).
+
+The largest backlash of a pair is the minimum one with both teeth at their thinnest and the
+centre distance at its largest: ``j_bn,max = j_bn,min + (T_sn1 + T_sn2) cos(alpha) + 2 (2 f_a)
+sin(alpha)`` (a thinner tooth opens the backlash by its thickness reduction times ``cos alpha``
+along the line of action, a centre distance ``da`` larger by ``2 da sin alpha``).
+
+>>> runout_tolerance_um(6, 2.0, 36.0), profile_form_tolerance_um(6, 2.0, 36.0)
+(16.0, 5.5)
+>>> round(minimum_backlash_um(45.0, 2.0), 1)
+95.0
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+#: ISO 1328-1:1995 size bands [mm]: reference diameter and normal module
+DIAMETER_BANDS = (5.0, 20.0, 50.0, 125.0, 280.0, 560.0, 1000.0, 1600.0, 2500.0, 4000.0,
+                  6000.0, 8000.0, 10000.0)
+MODULE_BANDS = (0.5, 2.0, 3.5, 6.0, 10.0, 16.0, 25.0, 40.0, 70.0)
+#: ISO 286-1 nominal size bands [mm] up to 500 mm, and the factor k of each IT grade
+IT_BANDS = (0.0, 3.0, 6.0, 10.0, 18.0, 30.0, 50.0, 80.0, 120.0, 180.0, 250.0, 315.0, 400.0,
+            500.0)
+IT_FACTOR = {6: 10, 7: 16, 8: 25, 9: 40, 10: 64}
+#: ISO/TR 10064-2 cutting-feed tolerance b_r per accuracy grade: (IT grade, factor)
+FEED_TOLERANCE = {4: (7, 1.26), 5: (8, 1.0), 6: (8, 1.26), 7: (9, 1.0), 8: (9, 1.26),
+                  9: (10, 1.0)}
+#: centre-distance allowance f_a per accuracy grade: the IT grade of which it is half
+CENTRE_ALLOWANCE_IT = {3: 6, 4: 6, 5: 7, 6: 7, 7: 8, 8: 8, 9: 9, 10: 9}
+
+
+def band_mean(x: float, edges: tuple[float, ...], what: str) -> float:
+    """The geometric mean of the band ``(lo, hi]`` of ``edges`` that holds ``x`` (the first
+    band closed below); ``ValueError`` outside the bands."""
+    for lo, hi in itertools.pairwise(edges):
+        if lo < x <= hi or x == lo == edges[0]:
+            return math.sqrt(lo * hi) if lo > 0 else math.sqrt(1.0 * hi)
+    raise ValueError(f"{what} = {x:g} mm lies outside [{edges[0]:g}, {edges[-1]:g}] mm")
+
+
+def iso_round(value_um: float) -> float:
+    """ISO 1328-1:1995 rounding: to 1 um above 10 um, 0.5 um from 5 to 10, 0.1 um below 5."""
+    if value_um > 10.0:
+        return float(math.floor(value_um + 0.5))
+    if value_um >= 5.0:
+        return math.floor(value_um * 2 + 0.5) / 2
+    return math.floor(value_um * 10 + 0.5) / 10
+
+
+def _grade_factor(grade: int) -> float:
+    if not 0 <= grade <= 12:
+        raise ValueError(f"accuracy grade = {grade} must lie in [0, 12] (ISO 1328-1:1995)")
+    return 2.0 ** ((grade - 5) / 2)
+
+
+def cumulative_pitch_tolerance_um(grade: int, module_mm: float, d_mm: float,
+                                  rounded: bool = True) -> float:
+    """Total cumulative pitch tolerance ``F_p`` [um] (ISO 1328-1:1995)."""
+    m = band_mean(module_mm, MODULE_BANDS, "module")
+    d = band_mean(d_mm, DIAMETER_BANDS, "reference diameter")
+    v = (0.3 * m + 1.25 * math.sqrt(d) + 7.0) * _grade_factor(grade)
+    return iso_round(v) if rounded else v
+
+
+def runout_tolerance_um(grade: int, module_mm: float, d_mm: float, rounded: bool = True) -> float:
+    """Radial run-out tolerance ``F_r = 0.8 F_p`` [um] (ISO 1328-2:1997, annex B)."""
+    v = 0.8 * cumulative_pitch_tolerance_um(grade, module_mm, d_mm, rounded=False)
+    return iso_round(v) if rounded else v
+
+
+def profile_form_tolerance_um(grade: int, module_mm: float, d_mm: float,
+                              rounded: bool = True) -> float:
+    """Profile form tolerance ``f_f_alpha`` [um] (ISO 1328-1:1995)."""
+    m = band_mean(module_mm, MODULE_BANDS, "module")
+    d = band_mean(d_mm, DIAMETER_BANDS, "reference diameter")
+    v = (2.5 * math.sqrt(m) + 0.17 * math.sqrt(d) + 0.5) * _grade_factor(grade)
+    return iso_round(v) if rounded else v
+
+
+def it_tolerance_um(it_grade: int, size_mm: float) -> float:
+    """The standard tolerance IT6-IT10 of a nominal size up to 500 mm [um] (ISO 286-1)."""
+    big_d = band_mean(size_mm, IT_BANDS, "nominal size")
+    return IT_FACTOR[it_grade] * (0.45 * big_d ** (1 / 3) + 0.001 * big_d)
+
+
+def minimum_backlash_um(centre_distance_mm: float, module_mm: float) -> float:
+    """Minimum normal backlash ``j_bn,min`` [um] (ISO/TR 10064-2:1996)."""
+    return 2.0 / 3.0 * (0.06 + 0.0005 * centre_distance_mm + 0.03 * module_mm) * 1000.0
+
+
+def tooth_thickness_tolerance_um(grade: int, module_mm: float, d_mm: float,
+                                 pressure_angle_deg: float) -> float:
+    """Tooth thickness tolerance ``T_sn = 2 tan(alpha) sqrt(F_r^2 + b_r^2)`` [um]
+    (ISO/TR 10064-2:1996)."""
+    it, factor = FEED_TOLERANCE[grade]
+    b_r = factor * it_tolerance_um(it, d_mm)
+    f_r = runout_tolerance_um(grade, module_mm, d_mm, rounded=False)
+    return 2 * math.tan(math.radians(pressure_angle_deg)) * math.hypot(f_r, b_r)
+
+
+def maximum_backlash_um(grade: int, module_mm: float, d1_mm: float, d2_mm: float,
+                        centre_distance_mm: float, pressure_angle_deg: float) -> float:
+    """Largest normal backlash [um] of a pair of accuracy ``grade`` built for the minimum
+    backlash: both teeth at their thinnest and the centre distance at its largest (module
+    text)."""
+    alpha = math.radians(pressure_angle_deg)
+    thinner = sum(tooth_thickness_tolerance_um(grade, module_mm, d, pressure_angle_deg)
+                  for d in (d1_mm, d2_mm))
+    f_a = it_tolerance_um(CENTRE_ALLOWANCE_IT[grade], centre_distance_mm) / 2
+    return (minimum_backlash_um(centre_distance_mm, module_mm) + thinner * math.cos(alpha)
+            + 2 * (2 * f_a) * math.sin(alpha))

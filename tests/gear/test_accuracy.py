@@ -1,0 +1,69 @@
+"""Manufacturing tolerances by accuracy grade (physics.gear.accuracy): the ISO formulas' hand
+values, their step per grade, and the backlash between its minimum and its maximum."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from physics.gear.accuracy import (
+    cumulative_pitch_tolerance_um,
+    iso_round,
+    it_tolerance_um,
+    maximum_backlash_um,
+    minimum_backlash_um,
+    profile_form_tolerance_um,
+    runout_tolerance_um,
+    tooth_thickness_tolerance_um,
+)
+
+
+def test_grade_5_by_hand_for_the_thesis_pinion():
+    """m 2 mm lies in the band 0.5-2 mm (mean 1), d 36 mm in 20-50 mm (mean sqrt(1000))."""
+    d = math.sqrt(20 * 50)
+    assert cumulative_pitch_tolerance_um(5, 2.0, 36.0, rounded=False) == pytest.approx(
+        0.3 * 1 + 1.25 * math.sqrt(d) + 7)
+    assert profile_form_tolerance_um(5, 2.0, 36.0, rounded=False) == pytest.approx(
+        2.5 * 1 + 0.17 * math.sqrt(d) + 0.5)
+
+
+@pytest.mark.parametrize("grade", range(1, 12))
+def test_each_grade_is_sqrt2_the_one_before_and_runout_is_four_fifths_of_pitch(grade):
+    for f in (runout_tolerance_um, profile_form_tolerance_um, cumulative_pitch_tolerance_um):
+        assert f(grade + 1, 2.0, 36.0, rounded=False) == pytest.approx(
+            math.sqrt(2) * f(grade, 2.0, 36.0, rounded=False))
+    assert runout_tolerance_um(grade, 3.0, 120.0, rounded=False) == pytest.approx(
+        0.8 * cumulative_pitch_tolerance_um(grade, 3.0, 120.0, rounded=False))
+
+
+def test_rounding_steps_of_the_standard():
+    assert (iso_round(4.26), iso_round(7.74), iso_round(7.76), iso_round(45.5)) == (
+        4.3, 7.5, 8.0, 46.0)
+
+
+def test_standard_tolerances_match_iso_286_for_30_to_50_mm():
+    """The published IT values of the band 30-50 mm follow from IT = k i."""
+    assert [round(it_tolerance_um(k, 36.0)) for k in (6, 7, 8, 9, 10)] == [16, 25, 39, 62, 100]
+
+
+def test_minimum_backlash_by_hand():
+    assert minimum_backlash_um(45.0, 2.0) == pytest.approx(2 / 3 * 0.1425 * 1000)
+
+
+def test_maximum_backlash_grows_with_the_grade_from_the_minimum():
+    top = [maximum_backlash_um(g, 2.0, 36.0, 54.0, 45.0, 20.0) for g in range(4, 10)]
+    assert all(np.diff(top) > 0)
+    assert top[0] > minimum_backlash_um(45.0, 2.0)
+    # the thinner teeth open it by their tolerances times cos(alpha); a wider grade's
+    # thickness tolerance is larger and at least its run-out's 2 tan(alpha) share
+    t = tooth_thickness_tolerance_um(9, 2.0, 36.0, 20.0)
+    assert t > 2 * math.tan(math.radians(20)) * runout_tolerance_um(9, 2.0, 36.0, rounded=False)
+
+
+def test_outside_the_bands_is_refused():
+    with pytest.raises(ValueError, match="module"):
+        profile_form_tolerance_um(6, 0.3, 36.0)
+    with pytest.raises(ValueError, match="accuracy grade"):
+        runout_tolerance_um(13, 2.0, 36.0)
