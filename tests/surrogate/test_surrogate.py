@@ -124,6 +124,19 @@ def test_the_main_job_trains_over_the_model_form_and_both_wear_laws(tmp_path):
     assert "model_form" not in groups("experiment")  # the defaults do what it did
 
 
+def test_the_declared_form_experiment_holds_the_form_and_the_lubricated_law(tmp_path):
+    """``experiment=declared_form``: the form factors at the declared model's (1) and the
+    lubricated law alone, the tolerance ranges as by default."""
+    default = spec_from_config(dict(train_cfg(tmp_path, tmp_path / "x.parquet").data.generate))
+    cfg = train_cfg(tmp_path, tmp_path / "x.parquet", "experiment=declared_form")
+    spec = spec_from_config(dict(cfg.data.generate))
+    for name in FACTORS:
+        assert getattr(spec.nuisance, name) == [1.0, 1.0], name
+    assert spec.nuisance.boundary_share == [0.0, 0.0]
+    for name in ("damping_ratio", "eccentricity1_um", "profile_error_um", "half_backlash_um"):
+        assert getattr(spec.nuisance, name) == getattr(default.nuisance, name), name
+
+
 def test_optuna_search_composes_with_a_failure_budget(tmp_path):
     settings.register()
     with initialize_config_module("gearwear_conf.train", version_base="1.3"):
