@@ -16,10 +16,11 @@ Kept free of heavy imports: it runs before numpy, numba, torch or Hydra are load
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import Any
 
 
@@ -42,6 +43,8 @@ _NOTE: Callable[[], str] | None = None
 #: where the app is: "start" (its imports, before :func:`guard`), "run" (inside it), "done"
 #: (the app's entry returned: its work is written, and a signal then is let be)
 _PHASE = "start"
+#: inside :func:`deferred`: a signal is noted and raised at the next :func:`check` instead
+_DEFERRED = False
 
 
 def _on_signal(signum: int, frame: Any) -> None:
@@ -51,9 +54,35 @@ def _on_signal(signum: int, frame: Any) -> None:
     if _PHASE == "start":  # nothing to clean up yet: end here, wherever the imports were,
         _report()          # at once: an exception raised inside a compiled module's import
         os._exit(EXIT_CODES[signum])  # (torch's) aborts the interpreter instead
-    if _PHASE == "done":  # the work is done and written, the app ends: let it (exit code 0)
+    if _PHASE == "done" or _DEFERRED:  # done (exit 0), or raised at the next check()
         return
+    _raise(signum)
+
+
+def _raise(signum: int) -> None:
     raise Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
+
+
+@contextlib.contextmanager
+def deferred() -> Iterator[None]:
+    """Within it a signal is noted and raised at the next :func:`check` (code that calls it at
+    safe points, e.g. between training batches), not wherever the program is: an exception
+    raised inside a thread's queue operation (TensorBoard's event writer) leaves the writer
+    thread waiting for ever, and the shutdown that joins it hangs. A signal already noted is
+    raised on entry."""
+    global _DEFERRED
+    check()
+    _DEFERRED = True
+    try:
+        yield
+    finally:
+        _DEFERRED = False
+
+
+def check() -> None:
+    """Raise the interruption a signal asked for, if one came (:func:`deferred`)."""
+    if _SIGNAL is not None and _PHASE == "run":
+        _raise(_SIGNAL)
 
 
 def install_signal_handlers() -> None:

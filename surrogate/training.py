@@ -19,6 +19,7 @@ from hydra.errors import InstantiationException
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
+from physics import interrupt
 from physics.estimators.empirical_inverse import wear_errors
 from physics.files import atomic_write, check_inside, pyplot
 from surrogate import baselines, settings
@@ -115,10 +116,29 @@ def prepare(cfg: DictConfig) -> TrainJob:
     return TrainJob(cfg, data, trainer, Path(cfg.paths.output_dir), init)
 
 
+class InterruptBetweenBatches(L.Callback):
+    """Raises a Ctrl-C or SIGTERM that came while Lightning ran (:func:`physics.interrupt.deferred`)
+    at the next batch or epoch boundary, where its graceful shutdown (the loggers' closing, the
+    checkpoints) finds no operation cut in half."""
+
+    def on_train_batch_end(self, *args, **kwargs) -> None:
+        interrupt.check()
+
+    def on_validation_batch_end(self, *args, **kwargs) -> None:
+        interrupt.check()
+
+    def on_test_batch_end(self, *args, **kwargs) -> None:
+        interrupt.check()
+
+    def on_train_epoch_start(self, *args, **kwargs) -> None:
+        interrupt.check()
+
+
 def make_trainer(cfg: DictConfig) -> L.Trainer:
     """The Lightning trainer of ``cfg`` with its callbacks and loggers (into
     ``cfg.paths.output_dir``)."""
     callbacks = [_instantiate(c, "callbacks") for c in (cfg.get("callbacks") or {}).values()]
+    callbacks.append(InterruptBetweenBatches())
     loggers = [_instantiate(c, "logger") for c in (cfg.get("logger") or {}).values()]
     return _instantiate(cfg.trainer, "trainer", callbacks=callbacks, logger=loggers or False)
 
@@ -168,16 +188,18 @@ def fit_metrics(job: TrainJob) -> dict:
 def _fit_and_export(job: TrainJob, dm: WearDataModule, trainer: L.Trainer, model, out: Path,
                     envelope: dict) -> dict:
     cfg = job.cfg
-    trainer.fit(model, dm)
-    if trainer.interrupted:
-        raise KeyboardInterrupt
-    has_best = any(getattr(c, "best_model_path", "") for c in trainer.callbacks)
-    ckpt = "best" if has_best and not trainer.fast_dev_run else None
-    val = {k: float(v) for k, v in
-           trainer.validate(model, dm, ckpt_path=ckpt, verbose=False)[0].items()}
-    test = ({k: float(v) for k, v in
-             trainer.test(model, dm, ckpt_path=ckpt, verbose=False)[0].items()}
-            if len(dm.frames["test"]) else {})
+    with interrupt.deferred():  # a signal is raised between batches (InterruptBetweenBatches)
+        trainer.fit(model, dm)
+        if trainer.interrupted:
+            raise KeyboardInterrupt
+        has_best = any(getattr(c, "best_model_path", "") for c in trainer.callbacks)
+        ckpt = "best" if has_best and not trainer.fast_dev_run else None
+        val = {k: float(v) for k, v in
+               trainer.validate(model, dm, ckpt_path=ckpt, verbose=False)[0].items()}
+        test = ({k: float(v) for k, v in
+                 trainer.test(model, dm, ckpt_path=ckpt, verbose=False)[0].items()}
+                if len(dm.frames["test"]) else {})
+    interrupt.check()
     val_rows = dm.network_rows("val")  # the readings (not a baseline model's baselines)
     val_rows = val_rows[dm.schema.readings(val_rows, ["case", "replicate"])]
     train_rows = dm.network_rows("train")

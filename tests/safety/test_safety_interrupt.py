@@ -153,3 +153,19 @@ def test_ctrl_c_during_training_names_the_checkpoints_and_exits_130(inputs, tmp_
     assert proc.returncode == 130 and "Traceback" not in err, err[-3000:]
     assert len(lines) == 1 and "the checkpoints so far are in" in lines[0], err[-3000:]
     assert not (tmp_path / "run" / "wear_surrogate.pt").exists()
+
+
+def test_a_signal_during_a_deferred_stretch_is_raised_at_the_next_check(monkeypatch):
+    """Inside ``deferred()`` (the training's fit) a signal is noted, not raised where the
+    program is; ``check()`` (between batches) raises it, SIGTERM as Terminated."""
+    from physics import interrupt
+
+    monkeypatch.setattr(interrupt, "_PHASE", "run")
+    monkeypatch.setattr(interrupt, "_SIGNAL", None)
+    with interrupt.deferred():
+        interrupt._on_signal(signal.SIGTERM, None)  # as the handler is called: no raise
+        with pytest.raises(interrupt.Terminated):
+            interrupt.check()
+    with pytest.raises(interrupt.Terminated):  # noted before: raised on entering again
+        with interrupt.deferred():
+            pass
