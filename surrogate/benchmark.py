@@ -160,6 +160,17 @@ def referenced(test: pd.DataFrame, wear: np.ndarray, target: str) -> tuple[float
     return float(np.median(wear[unworn])), mre
 
 
+def trained(cfg, folder: Path) -> tuple[Surrogate, object, EmpiricalInverse, float]:
+    """Train ``cfg`` into ``folder``: the network, its data module (set up), and the estimator
+    and the typical wear (:func:`typical_wear`) of its training rows and target."""
+    train(cfg)
+    dm = instantiate(cfg.data)
+    dm.setup()
+    net = Surrogate.load(folder / "wear_surrogate.pt")
+    rows, target = dm.frames["train"], net.schema.target
+    return net, dm, fit_estimator(rows, target), typical_wear(rows, target)
+
+
 def evaluate(name: str, surrogate: Surrogate, est: EmpiricalInverse, typical: float,
              test: pd.DataFrame, speed: bool) -> tuple[list[dict], dict]:
     """The network, the estimator and the null model (both fitted by the caller on the
@@ -465,13 +476,7 @@ def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5
         folder = out / "models" / (name if seed == 0 else f"{name}_seed{seed}")
         cfg = train_config(root, folder, *MODELS[name], *extra, f"seed={seed}")
         log.info("model %s: training (seed %d)", name, seed)
-        train(cfg)
-        dm = instantiate(cfg.data)
-        dm.setup()
-        surrogate = Surrogate.load(folder / "wear_surrogate.pt")
-        target = surrogate.schema.target
-        est = fit_estimator(dm.frames["train"], target)
-        typical = typical_wear(dm.frames["train"], target)
+        surrogate, dm, est, typical = trained(cfg, folder)
         cases = set(dm.cases)
         loco = name.startswith("loco")
         sets = {"heldout_trajectories" if not loco else
@@ -578,13 +583,7 @@ def previous_ranges(root: Path, out: Path, extra: list[str], seeds: int) -> pd.D
         folder = out / "models" / f"case3_{label}_seed{seed}"
         cfg = train_config(root, folder, "case=3", *overrides, *extra, f"seed={seed}")
         log.info("case 3 over the %s ranges: training (seed %d)", label, seed)
-        train(cfg)
-        dm = instantiate(cfg.data)
-        dm.setup()
-        net = Surrogate.load(folder / "wear_surrogate.pt")
-        target = net.schema.target
-        est, typical = fit_estimator(dm.frames["train"], target), typical_wear(
-            dm.frames["train"], target)
+        net, _, est, typical = trained(cfg, folder)
         for test_name, test in tests.items():
             r, _ = evaluate(f"case3_{label}/{test_name}", net, est, typical, test, speed=False)
             rows += [{**row, "trained_on": label, "test": test_name, "seed": seed}
