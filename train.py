@@ -6,7 +6,7 @@ case of thesis Table 11, ``all`` for one network of the five.
 
 from __future__ import annotations
 
-from physics.interrupt import install_signal_handlers
+from physics.interrupt import deferred, install_signal_handlers
 
 install_signal_handlers()  # before the slow imports: Ctrl-C is handled from the start
 
@@ -21,7 +21,8 @@ settings.register()
 
 @hydra.main(version_base="1.3", config_path="pkg://gearwear_conf.train", config_name="train")
 def task(cfg: DictConfig) -> float:
-    from surrogate.training import fit, kept, prepare  # after Hydra parsed the command line
+    with deferred():  # after Hydra parsed the command line; a signal is raised after it
+        from surrogate.training import fit, kept, prepare
 
     return run_command(cfg, prepare, fit, kept)
 

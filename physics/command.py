@@ -315,7 +315,8 @@ def _resolve(check: Callable[[DictConfig], Any] | str) -> Callable[[DictConfig],
     import importlib
 
     module, name = check.split(":")
-    return getattr(importlib.import_module(module), name)
+    with interrupt.deferred():  # a slow import: a signal is raised after it
+        return getattr(importlib.import_module(module), name)
 
 
 def _sweep_jobs(config: DictConfig) -> list[SweepJob] | None:

@@ -66,10 +66,11 @@ def _raise(signum: int) -> None:
 @contextlib.contextmanager
 def deferred() -> Iterator[None]:
     """Within it a signal is noted and raised at the next :func:`check` (code that calls it at
-    safe points, e.g. between training batches), not wherever the program is: an exception
-    raised inside a thread's queue operation (TensorBoard's event writer) leaves the writer
-    thread waiting for ever, and the shutdown that joins it hangs. A signal already noted is
-    raised on entry."""
+    safe points, e.g. between training batches) or at its end, not wherever the program is: an
+    exception raised inside a thread's queue operation (TensorBoard's event writer) leaves the
+    writer thread waiting for ever, and the shutdown that joins it hangs; one raised inside a
+    compiled module's import prints that import's traceback. A signal already noted is raised
+    on entry."""
     global _DEFERRED
     check()
     _DEFERRED = True
@@ -77,6 +78,7 @@ def deferred() -> Iterator[None]:
         yield
     finally:
         _DEFERRED = False
+    check()
 
 
 def check() -> None:

@@ -199,7 +199,6 @@ def _fit_and_export(job: TrainJob, dm: WearDataModule, trainer: L.Trainer, model
         test = ({k: float(v) for k, v in
                  trainer.test(model, dm, ckpt_path=ckpt, verbose=False)[0].items()}
                 if len(dm.frames["test"]) else {})
-    interrupt.check()
     val_rows = dm.network_rows("val")  # the readings (not a baseline model's baselines)
     val_rows = val_rows[dm.schema.readings(val_rows, ["case", "replicate"])]
     train_rows = dm.network_rows("train")

@@ -156,16 +156,22 @@ def test_ctrl_c_during_training_names_the_checkpoints_and_exits_130(inputs, tmp_
 
 
 def test_a_signal_during_a_deferred_stretch_is_raised_at_the_next_check(monkeypatch):
-    """Inside ``deferred()`` (the training's fit) a signal is noted, not raised where the
-    program is; ``check()`` (between batches) raises it, SIGTERM as Terminated."""
+    """Inside ``deferred()`` (the training's fit, a slow import) a signal is noted, not raised
+    where the program is; ``check()`` (between batches) or the stretch's end raises it, SIGTERM
+    as Terminated; one noted before is raised on entering."""
     from physics import interrupt
 
     monkeypatch.setattr(interrupt, "_PHASE", "run")
     monkeypatch.setattr(interrupt, "_SIGNAL", None)
-    with interrupt.deferred():
-        interrupt._on_signal(signal.SIGTERM, None)  # as the handler is called: no raise
-        with pytest.raises(interrupt.Terminated):
-            interrupt.check()
-    with pytest.raises(interrupt.Terminated):  # noted before: raised on entering again
+    reached = []
+    with pytest.raises(interrupt.Terminated):
         with interrupt.deferred():
-            pass
+            interrupt._on_signal(signal.SIGTERM, None)  # as the handler is called: no raise
+            reached.append("after the signal")
+    assert reached == ["after the signal"]
+    with pytest.raises(interrupt.Terminated):
+        interrupt.check()
+    with pytest.raises(interrupt.Terminated):
+        with interrupt.deferred():
+            reached.append("entered")
+    assert reached == ["after the signal"]
