@@ -546,32 +546,32 @@ def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5
     return table, counts
 
 
-#: the default nuisance ranges of earlier versions where they differ from today's
-#: (:class:`NuisanceRanges`): a middle part of each source's span, the lubricated wear law
-#: alone and the declared model's form
-PREVIOUS_RANGES = {"damping_ratio": [0.03, 0.12], "eccentricity1_um": [5.0, 15.0],
-                   "profile_error_um": [1.5, 4.5], "half_backlash_um": [30.0, 70.0],
-                   "boundary_share": [0.0, 0.0], **{f: [1.0, 1.0] for f in FACTORS}}
-#: the training ranges :func:`previous_ranges` compares, each as its changes to today's
-#: defaults: the previous ones, today's tolerances (damping, run-out, profile, backlash) with
-#: the previous wear law and form, those with today's wear-law share too, and today's
+#: narrow nuisance ranges where they differ from the defaults (:class:`NuisanceRanges`): a
+#: middle part of each source's span, the lubricated wear law alone and the declared model's
+#: form
+NARROW_RANGES = {"damping_ratio": [0.03, 0.12], "eccentricity1_um": [5.0, 15.0],
+                 "profile_error_um": [1.5, 4.5], "half_backlash_um": [30.0, 70.0],
+                 "boundary_share": [0.0, 0.0], **{f: [1.0, 1.0] for f in FACTORS}}
+#: the training ranges :func:`narrow_ranges` compares, each as its changes to the defaults:
+#: the narrow ones, the default tolerances (damping, run-out, profile, backlash) with the
+#: narrow wear law and form, those with the default wear-law share too, and the defaults
 RANGE_VARIANTS = {
-    "previous": PREVIOUS_RANGES,
-    "tolerances": {k: PREVIOUS_RANGES[k] for k in ("boundary_share", *FACTORS)},
-    "tolerances_wear_law": {f: PREVIOUS_RANGES[f] for f in FACTORS},
-    "today": {}}
-#: the held-out gearboxes of :func:`previous_ranges`: case 3, a seed no training set uses,
-#: drawn inside the previous ranges and inside today's (the dataset spec's values)
-RANGE_TESTS = {"inside_previous_ranges": {"cases": [3], "seed": 6, "replicates": 16,
-                                          "nuisance": PREVIOUS_RANGES},
-               "inside_todays_ranges": {"cases": [3], "seed": 6, "replicates": 16}}
+    "narrow": NARROW_RANGES,
+    "tolerances": {k: NARROW_RANGES[k] for k in ("boundary_share", *FACTORS)},
+    "tolerances_wear_law": {f: NARROW_RANGES[f] for f in FACTORS},
+    "default": {}}
+#: the held-out gearboxes of :func:`narrow_ranges`: case 3, a seed no training set uses,
+#: drawn inside the narrow ranges and inside the defaults (the dataset spec's values)
+RANGE_TESTS = {"inside_narrow_ranges": {"cases": [3], "seed": 6, "replicates": 16,
+                                          "nuisance": NARROW_RANGES},
+               "inside_default_ranges": {"cases": [3], "seed": 6, "replicates": 16}}
 
 
-def previous_ranges(root: Path, out: Path, extra: list[str], seeds: int) -> pd.DataFrame:
-    """What training over today's nuisance ranges costs on gearboxes inside the narrower ones
-    of earlier versions, and what it buys on gearboxes of today's: per training seed, a case-3
-    network per training ranges of :data:`RANGE_VARIANTS` (each but today's its own dataset
-    file), all scored on the same held-out gearboxes of :data:`RANGE_TESTS` (one row per
+def narrow_ranges(root: Path, out: Path, extra: list[str], seeds: int) -> pd.DataFrame:
+    """What training over the default nuisance ranges costs on gearboxes inside narrow ones
+    (:data:`NARROW_RANGES`), and what it buys on gearboxes of the defaults: per training seed, a
+    case-3 network per training ranges of :data:`RANGE_VARIANTS` (each but the defaults its own
+    dataset file), all scored on the same held-out gearboxes of :data:`RANGE_TESTS` (one row per
     network, seed, test set and estimator: :func:`evaluate`'s columns)."""
     tests = {k: load_dataset(root / "data" / f"dataset_{k}.parquet", spec)
              for k, spec in RANGE_TESTS.items()}
@@ -592,7 +592,7 @@ def previous_ranges(root: Path, out: Path, extra: list[str], seeds: int) -> pd.D
 
 
 def range_summary(table: pd.DataFrame) -> pd.DataFrame:
-    """:func:`previous_ranges`' networks per training ranges and test set, over the seeds:
+    """:func:`narrow_ranges`' networks per training ranges and test set, over the seeds:
     mean relative error [%], R2, coverage, flagged share and share missed and not flagged
     (mean, min, max)."""
     net = table[table.estimator == "surrogate"]
@@ -631,24 +631,24 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--max-epochs", type=int, default=None,
                         help="cap the training epochs (quick looks; the default config's "
                              "early stopping otherwise)")
-    parser.add_argument("--previous-ranges", action="store_true",
-                        help="instead: case-3 networks of today's nuisance ranges, of the "
-                             "narrower ones of earlier versions and of two steps between, "
-                             "--seeds each, scored on held-out gearboxes inside the previous "
-                             "and today's ranges (previous_ranges.csv)")
+    parser.add_argument("--narrow-ranges", action="store_true",
+                        help="instead: case-3 networks of the default nuisance ranges, of "
+                             "narrow ones (NARROW_RANGES) and of two steps between, --seeds "
+                             "each, scored on held-out gearboxes inside the narrow and the "
+                             "default ranges (narrow_ranges.csv)")
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s: %(message)s")
     out = args.out or Path("logs/benchmark") / datetime.now().strftime("%Y-%m-%d_%H-%M-%S")
     if args.seeds < 1:
         parser.error(f"--seeds {args.seeds}: give at least 1")
-    if args.previous_ranges:
+    if args.narrow_ranges:
         extra = [f"trainer.max_epochs={args.max_epochs}"] if args.max_epochs else []
-        table = previous_ranges(Path.cwd(), out.resolve(), extra, args.seeds)
-        atomic_write(out.resolve() / "previous_ranges.csv",
+        table = narrow_ranges(Path.cwd(), out.resolve(), extra, args.seeds)
+        atomic_write(out.resolve() / "narrow_ranges.csv",
                      lambda p: table.to_csv(p, index=False))
         with pd.option_context("display.width", 200, "display.float_format", "{:.4g}".format):
             print(range_summary(table).to_string())
-        print(f"\n-> {out / 'previous_ranges.csv'}")
+        print(f"\n-> {out / 'narrow_ranges.csv'}")
         return
     table, counts = run(out.resolve(), Path.cwd(), args.max_epochs, args.seeds)
     rig = pd.read_csv(out.resolve() / "one_rig.csv")

@@ -23,6 +23,11 @@ from physics.params import scenario_from_config
 from physics.testbeds import make_bundle
 
 
+def day(k: int) -> str:
+    """An ISO 8601 date ``k`` days after the Unix epoch: the records' dates of these tests."""
+    return (pd.Timestamp(0) + pd.Timedelta(days=k)).date().isoformat()
+
+
 def _bundle(cycles, speeds, time=None) -> Bundle:
     n = len(cycles)
     names = [f"r{k}" for k in range(n)]
@@ -38,7 +43,7 @@ def test_the_forms_are_read_and_a_folder_is_not_one():
     assert parse_history("first:2").first == 2
     assert parse_history(" first : 3 ").first == 3
     assert parse_history("before:2e6").cycles == 2e6
-    assert parse_history("before:2024-03-01").time == pd.Timestamp("2024-03-01")
+    assert parse_history(f"before:{day(60)}").time == pd.Timestamp(day(60))
     assert parse_history("path/to/sister") is None and parse_history(None) is None
 
 
@@ -61,19 +66,19 @@ def test_first_n_takes_the_earliest_records_of_each_group_by_cycles():
 
 
 def test_without_cycles_the_time_column_orders_and_dates_the_records():
-    times = ["2024-01-03", "2024-01-01", "2024-01-02", "2024-02-01", "2024-03-01"]
+    times = [day(2), day(0), day(1), day(31), day(60)]
     b = _bundle([np.nan] * 5, [2000] * 5, times)
     assert split_history(b, parse_history("first:1")).__getitem__(0).records == ["r1"]
-    ref, rest = split_history(b, parse_history("before:2024-01-15"))
+    ref, rest = split_history(b, parse_history(f"before:{day(14)}"))
     assert ref.records == ["r0", "r1", "r2"] and rest.records == ["r3", "r4"]
 
 
 @pytest.mark.parametrize("cycles, time, spec, rule", [
     ([0, 1, 2], None, "first:2", "leaves 1 record"),
     ([0, 1, np.nan, 3], None, "first:1", "has no cycles and the manifest no 'time'"),
-    ([0, 1, 2, 3], None, "before:2024-01-01", "no 'time' column"),
+    ([0, 1, 2, 3], None, f"before:{day(0)}", "no 'time' column"),
     ([5, 6, 7, 8], None, "before:3", "takes no record of group"),
-    ([0, 1, 2, 3], ["2024-01-01", "soon", "2024-01-03", "2024-01-04"], "before:2024-01-02",
+    ([0, 1, 2, 3], [day(0), "soon", day(2), day(3)], f"before:{day(1)}",
      "record 'r1': time = 'soon'")])
 def test_a_cut_the_loop_cannot_use_is_refused_before_work(cycles, time, spec, rule):
     b = _bundle(cycles, [2000] * len(cycles), time)

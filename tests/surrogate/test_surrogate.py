@@ -530,31 +530,31 @@ def test_the_dry_law_test_set_wears_a_flatter_deeper_profile():
 
 
 def test_the_beyond_range_set_lies_past_every_range_the_network_trained_on():
-    """``beyond_ranges``: each range starts at today's upper end and reaches a quarter of its
+    """``beyond_ranges``: each range starts at the default's upper end and reaches a quarter of its
     width past it; one whose upper end is its physical limit stays as it is."""
     from surrogate.benchmark import beyond_ranges
 
-    today, beyond = NuisanceRanges(), NuisanceRanges(**beyond_ranges())
+    default, beyond = NuisanceRanges(), NuisanceRanges(**beyond_ranges())
     for name, (_, limit) in NuisanceRanges.LIMITS.items():
-        (lo, hi), (b_lo, b_hi) = getattr(today, name), getattr(beyond, name)
+        (lo, hi), (b_lo, b_hi) = getattr(default, name), getattr(beyond, name)
         if hi < limit:
             assert b_lo == hi and b_hi == pytest.approx(min(hi + 0.25 * (hi - lo), limit)), name
         else:
             assert [b_lo, b_hi] == [lo, hi], name
 
 
-def test_todays_ranges_are_at_least_as_wide_as_the_previous_ones():
-    """The comparison of ``--previous-ranges``: every training range it tries is valid, and
-    today's defaults span at least the previous ones' width and upper end."""
-    from surrogate.benchmark import PREVIOUS_RANGES, RANGE_VARIANTS
+def test_the_default_ranges_are_at_least_as_wide_as_the_narrow_ones():
+    """The comparison of ``--narrow-ranges``: every training range it tries is valid, and the
+    defaults span at least the narrow ones' width and upper end."""
+    from surrogate.benchmark import NARROW_RANGES, RANGE_VARIANTS
 
-    today, previous = NuisanceRanges(), NuisanceRanges(**PREVIOUS_RANGES)
-    for name in PREVIOUS_RANGES:
-        (lo, hi), (p_lo, p_hi) = getattr(today, name), getattr(previous, name)
+    default, narrow = NuisanceRanges(), NuisanceRanges(**NARROW_RANGES)
+    for name in NARROW_RANGES:
+        (lo, hi), (p_lo, p_hi) = getattr(default, name), getattr(narrow, name)
         assert hi - lo > p_hi - p_lo and hi >= p_hi, name
     for ranges in RANGE_VARIANTS.values():
         NuisanceRanges(**ranges)  # valid
-    assert RANGE_VARIANTS["today"] == {} and RANGE_VARIANTS["previous"] == PREVIOUS_RANGES
+    assert RANGE_VARIANTS["default"] == {} and RANGE_VARIANTS["narrow"] == NARROW_RANGES
 
 
 def test_the_benchmark_summarises_seeds_and_scores_a_null_model():
