@@ -136,8 +136,8 @@ class NuisanceRanges:
       and couplings (a lower resonance) while lateral modes couple in: about twice that
       scatter either way.
 
-    What training over these spans costs on gearboxes inside the narrower ranges of earlier
-    versions, and buys beyond them: docs/surrogate.md.
+    What training over these spans costs on gearboxes inside narrow ranges, and buys beyond
+    them: docs/surrogate.md (Training ranges).
     """
 
     speed_pct: float = bounded(10.0, 0.0, 50.0, closed=True)
