@@ -98,8 +98,19 @@ def _group(item: pytest.Item) -> str:
     return f"readme: {key}"
 
 
+@pytest.hookimpl(tryfirst=True)  # before pytest-xdist reads the markers
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     """Keep what a shared fixture makes on one worker of a parallel run (pytest-xdist,
     ``--dist loadgroup``; :func:`_group`)."""
     for item in items:
         item.add_marker(pytest.mark.xdist_group(_group(item)))
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """Refuse a parallel run whose workers would not see the groups: pytest-xdist marks a
+    grouped test by a suffix of its node id, which pytest 9 ignores; every worker would then
+    make each shared fixture again (about a minute of the run)."""
+    if config.getoption("dist", "no") == "loadgroup" and pytest.version_tuple[0] >= 9:
+        raise pytest.UsageError(
+            f"pytest {pytest.__version__} ignores pytest-xdist's --dist loadgroup groups; "
+            'install the pinned versions: pip install -e ".[dev]"')
