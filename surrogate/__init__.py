@@ -4,7 +4,9 @@
 - :mod:`surrogate.schema`: the feature schema (names, units, scaling, training envelope) a model
   carries and checks its input against;
 - :mod:`surrogate.data`: the Lightning data module over the physics dataset, split by trajectory;
-- :mod:`surrogate.model`: a deep ensemble of Gaussian MLPs as one Lightning module;
+- :mod:`surrogate.network`: the deep ensemble of Gaussian MLPs in plain torch, and a trained
+  network as inference loads it;
+- :mod:`surrogate.model`: that ensemble as one Lightning module, for training;
 - :mod:`surrogate.training`: ``train(cfg)``, called by ``train.py``;
 - :mod:`surrogate.inference`: export, safe loading, CPU prediction with intervals and flags;
 - :mod:`surrogate.novelty`: the novelty score against the training rows, the flag's threshold
@@ -23,7 +25,8 @@ _SOURCES = {
     "surrogate.data": (
         "WearDataModule", "DEFAULT_INPUTS", "BUILD_CHUNKS", "load_dataset", "input_columns",
         "split_trajectories", "replicates_per_case", "validation_count", "stale_dataset"),
-    "surrogate.model": ("EnsembleMLP", "WearRegressor", "mixture"),
+    "surrogate.network": ("EnsembleMLP", "Network", "mixture"),
+    "surrogate.model": ("WearRegressor",),
     "surrogate.training": ("TrainJob", "train", "fit", "kept"),
     "surrogate.inference": (
         "Surrogate", "ScaledEnsemble", "export", "conformal_scale", "torch_predict"),

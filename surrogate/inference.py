@@ -20,6 +20,7 @@ import math
 import warnings
 from functools import cached_property
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import onnxruntime as ort
@@ -28,15 +29,18 @@ import torch
 from omegaconf import OmegaConf
 
 from physics.files import atomic_write
-from surrogate.model import WearRegressor, mixture
+from surrogate.network import Network, mixture
 from surrogate.novelty import Novelty, difficulty
 from surrogate.schema import FeatureSchema
+
+if TYPE_CHECKING:  # the training module imports Lightning, which inference does without
+    from surrogate.model import WearRegressor
 
 # 2: with the conformal interval scale; 3: with the novelty (normalised conformal interval)
 FORMAT = "gearwear-wear-surrogate-3"
 
 
-def export(model: WearRegressor, path: str | Path, interval_scale: float,
+def export(model: Network | WearRegressor, path: str | Path, interval_scale: float,
            novelty: Novelty) -> Path:
     """Write the model's weights, hyperparameters, schema, the calibrated interval scale
     (:func:`conformal_scale` of the :func:`~surrogate.novelty.difficulty`) and the novelty
@@ -72,7 +76,7 @@ class ScaledEnsemble(torch.nn.Module):
     ``W' = W / std`` and ``b' = b - (shift / std) W`` (one pass over the rows fewer: the
     scaling took 13 % of ONNX Runtime's time)."""
 
-    def __init__(self, model: WearRegressor, schema: FeatureSchema) -> None:
+    def __init__(self, model: Network | WearRegressor, schema: FeatureSchema) -> None:
         super().__init__()
         self.net = copy.deepcopy(model.net).eval()
         inv = 1.0 / torch.tensor(schema.std, dtype=torch.float64)
@@ -99,7 +103,7 @@ def torch_predict(graph: ScaledEnsemble, x: np.ndarray, batch: int = 4096
     return (torch.cat([m for m, _ in parts]).numpy(), torch.cat([s for _, s in parts]).numpy())
 
 
-def onnx_session(model: WearRegressor, schema: FeatureSchema, threads: int
+def onnx_session(model: Network | WearRegressor, schema: FeatureSchema, threads: int
                  ) -> ort.InferenceSession:
     """:class:`ScaledEnsemble` as an ONNX Runtime session on ``threads`` threads.
 
@@ -184,7 +188,7 @@ def check_gearboxes(df: pd.DataFrame, gearbox: list[str], target: str | None = N
 class Surrogate:
     """A loaded ensemble: ``predict(df)`` returns wear with its interval and flags."""
 
-    def __init__(self, model: WearRegressor, interval_scale: float,
+    def __init__(self, model: Network | WearRegressor, interval_scale: float,
                  novelty: Novelty | None = None) -> None:
         self.model = model.eval()
         self.schema = FeatureSchema.from_dict(model.hparams["schema"])
@@ -210,7 +214,7 @@ class Surrogate:
                              "training run exported")
         try:
             schema = FeatureSchema.from_dict(payload["hparams"]["schema"])  # version first
-            model = WearRegressor(**payload["hparams"])
+            model = Network(payload["hparams"])
             model.load_state_dict(payload["state_dict"])
             scale = float(payload["interval_scale"])
             if len(schema.inputs) != int(payload["hparams"]["n_inputs"]):

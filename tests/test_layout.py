@@ -167,3 +167,34 @@ def test_the_loops_orchestrator_is_imported_only_by_its_app():
     none imports it back."""
     users = {m for m, deps in graph().items() if "physics.loop.bundle_loop" in deps}
     assert users <= {"physics.loop.__main__"}, users
+
+
+def loaded_at_import(path: Path) -> set[str]:
+    """What importing ``path`` imports: its module-level imports, not those inside functions
+    (deferred) or under ``if TYPE_CHECKING``."""
+    known = modules()
+    found = set()
+    for node in ast.parse(path.read_text()).body:
+        if isinstance(node, ast.Import):
+            found |= {a.name for a in node.names}
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            subs = {f"{node.module}.{a.name}" for a in node.names}
+            found |= (subs & set(known)) or {node.module}
+    return found
+
+
+def test_prediction_starts_without_lightning():
+    """``surrogate.predict`` and ``Surrogate.load`` import torch, not Lightning (two seconds of
+    every prediction's start): nothing they import at module level reaches it."""
+    known = modules()
+    seen, todo = set(), ["surrogate.predict", "surrogate.inference"]
+    while todo:
+        name = todo.pop()
+        if name in seen:
+            continue
+        seen.add(name)
+        found = loaded_at_import(known[name])
+        assert not {i for i in found if i.split(".")[0] in ("lightning", "pytorch_lightning")}, (
+            f"{name} imports Lightning")
+        parents = {".".join(i.split(".")[:k]) for i in found for k in range(1, i.count(".") + 1)}
+        todo += [i for i in found | parents if i in known]

@@ -41,7 +41,8 @@ from surrogate.inference import (
     export,
     torch_predict,
 )
-from surrogate.model import EnsembleMLP, WearRegressor, mixture
+from surrogate.model import WearRegressor
+from surrogate.network import EnsembleMLP, mixture
 from surrogate.predict import gearbox_columns, predict_file
 from surrogate.schema import FeatureSchema, baseline_changes
 from surrogate.training import train
