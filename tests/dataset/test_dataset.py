@@ -189,16 +189,16 @@ def test_a_gearbox_worn_through_is_recorded_not_a_row(tmp_path, caplog):
     # of every trajectory: each is listed in the sidecar with its reason, none is a row
     worn = dataclasses.replace(BASE, tribology=Tribology(regime="dry", dry_wear_coeff=2e-4),
                                solver=WearSolver(n_points=51, update_um=50.0))
-    spec = spec_from_config({**SMALL, "chunks": 2})
+    spec = spec_from_config({**SMALL, "cases": [3], "chunks": 2})
     with caplog.at_level("WARNING"):
         path = build_dataset(plan_dataset(worn, spec, tmp_path, progress=False))
     side = json.loads(path.with_suffix(".json").read_text())
     assert len(pd.read_parquet(path)) == 0 and side["rows"] == 0
     assert sorted((u["case"], u["replicate"]) for u in side["left_scope"]) == [
-        (c, r) for c in SMALL["cases"] for r in range(SMALL["replicates"])]
+        (3, r) for r in range(SMALL["replicates"])]
     assert all("worn through" in u["reason"] or "table" in u["reason"]
                or "shakedown" in u["reason"] for u in side["left_scope"])
-    assert "4 of 4 trajectories left the model's scope" in caplog.text
+    assert "2 of 2 trajectories left the model's scope" in caplog.text
 
 
 def test_default_ranges_are_those_of_their_sources():
