@@ -78,11 +78,11 @@ BY_CI = {
     'python3.11 -m venv .venv && . .venv/bin/activate && pip install -e ".[dev]"': "the install",
     "pytest": "the test run (this suite)",
 }
-#: train.py's dataset: 4 replicates per case, 3 wear states, 2 chunks; one trajectory each to
-#: validate and test
+#: train.py's dataset: 4 replicates per case, 3 wear states over the first 3e6 cycles, 2 chunks;
+#: one trajectory each to validate and test
 SMALL_SPLIT = ("data.val_replicates=1", "data.test_replicates=1")
 TINY_DATA = ("+data.generate.replicates=4", "+data.generate.wear_states=3",
-             "+data.generate.chunks=2", *SMALL_SPLIT)
+             "+data.generate.cycles_max=3e6", "+data.generate.chunks=2", *SMALL_SPLIT)
 FAST_TRAIN = ("trainer.max_epochs=3", "trainer.min_epochs=1", "model.members=2")
 FAST_REPRO = ("solver.n_points=101", "stiffness.fem_refine=1", "stiffness.fem_refines=[1]",
               "stiffness.positions=40", "evolution.cases=[3]", "evolution.points=9",

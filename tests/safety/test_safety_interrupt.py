@@ -31,7 +31,7 @@ FAST_REPRO = ["solver.n_points=101", "stiffness.fem_refine=1", "stiffness.fem_re
 SMALL_LOOP = ["loop.max_nfev=4", "loop.explore=4", "loop.candidates=[friction,tip_relief]",
               "progress=false"]
 TINY_TRAIN = ["+data.generate.replicates=4", "+data.generate.wear_states=3",
-              "+data.generate.chunks=2", "data.val_replicates=1", "data.test_replicates=1",
+              "+data.generate.cycles_max=3e6", "+data.generate.chunks=2", "data.val_replicates=1", "data.test_replicates=1",
               "trainer.max_epochs=3000", "trainer.min_epochs=3000", "model.members=2",
               "trainer.enable_progress_bar=false"]
 
@@ -63,7 +63,7 @@ def argv(app: str, inputs: Path) -> tuple[list[str], float]:
     if app == "loop":
         return [py, "-m", "physics.loop", f"data={inputs / 'bundle'}", *SMALL_LOOP], 10.0
     if app == "train":
-        return [py, str(ROOT / "train.py"), *TINY_TRAIN], 10.0  # the fit starts at about 7 s
+        return [py, str(ROOT / "train.py"), *TINY_TRAIN], 8.0  # the fit starts at about 6 s
     ckpt = next(inputs.rglob("wear_surrogate.pt"))
     return [py, "-m", "surrogate.predict", f"ckpt={ckpt}",
             f"input={inputs / 'features.csv'}", "output=wear.csv"], 6.0
@@ -135,7 +135,7 @@ def test_ctrl_c_during_training_names_the_checkpoints_and_exits_130(inputs, tmp_
     """Lightning catches KeyboardInterrupt in its fit loop ("graceful shutdown", exit 1): the
     app still ends with its one line and 130 (on a user table: no dataset to build first)."""
     cmd = [sys.executable, str(ROOT / "train.py"), f"data.table={inputs / 'in.csv'}",
-           "data.group=rig", *TINY_TRAIN[3:], "hydra.run.dir=run"]
+           "data.group=rig", *TINY_TRAIN[4:], "hydra.run.dir=run"]
     proc = subprocess.Popen(cmd, cwd=tmp_path, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, start_new_session=True)
     for line in proc.stdout:  # Hydra logs to stdout: wait for the fit loop to run
