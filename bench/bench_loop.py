@@ -2,7 +2,7 @@
 
     python bench/bench_loop.py [--generator own|independent] [--seeds 3] [--null-seeds 6]
                                [--records 12] [--jobs 2] [--model-form] [--both] [--reference]
-                               [--out DIR] [--timing-only]
+                               [--own-history N] [--out DIR] [--timing-only]
 
 For every effect of the library (acceleration bundles; ``sensor``, which only DTE records show,
 on DTE bundles) and for bundles without any effect (of both quantities: what a clean bundle of
@@ -35,6 +35,10 @@ transfer-path mode from the mesh) the other's may.
 (:data:`physics.testbeds.SISTER_UNIT`: other errors within their tolerance, another damping and
 mounting), at the bundle's operating points and quantities; its calibration is made once and
 timed apart.
+``--own-history N`` (own generator): every effect appears during the bundle's life (in the
+records from :data:`ONSET` of the cycles on; the earlier ones are clean) and every bundle is
+read against its own first ``N`` records (``reference=first:N``,
+:func:`physics.loop.own_reference`), the reference a user with records from commissioning has.
 Also times one bundle alone (:func:`solo_timing`; ``--timing-only``: that alone), printed
 beside the time before the loop's speed-up (:data:`REFERENCE_S`); the per-bundle seconds of
 the table are those of ``--jobs`` bundles sharing the machine.
@@ -58,6 +62,7 @@ from physics.loop import (
     FormReference,
     LoopSettings,
     model_signals,
+    own_reference,
     read_bundle,
     residuals,
     rms,
@@ -77,6 +82,8 @@ from physics.testbeds import (
     visibility,
 )
 
+#: ``--own-history``: the share of the life after which the effect is in the records
+ONSET = 0.3
 #: effect-to-noise power [dB] below which an effect has not changed the records (round-off)
 ABSENT_DB = -100.0
 #: one bundle alone on 2 cores before the loop's speed-up (one BLAS thread, records integrated
@@ -100,8 +107,8 @@ def references(generator: str, both: bool, records: int, tmp: Path
 
 
 def one(job: tuple[str, str | None, int, int, bool, str, tuple[str, ...], str,
-                   FormReference | None]) -> dict:
-    generator, name, seed, records, model_form, tmp, quantities, out, reference = job
+                   FormReference | None, int]) -> dict:
+    generator, name, seed, records, model_form, tmp, quantities, out, reference, history = job
     base = base_scenario(generator)
     quantity = "both" if quantities == BOTH else quantities[0]
     label = report_label(generator, name, seed, quantity)
@@ -109,10 +116,14 @@ def one(job: tuple[str, str | None, int, int, bool, str, tuple[str, ...], str,
     if generator == "independent":
         path, truth = make_independent_bundle(folder, name, quantities=quantities, seed=seed)
     else:
-        path, truth = make_bundle(folder, base, name, seed, quantity=quantity, records=records)
+        path, truth = make_bundle(folder, base, name, seed, quantity=quantity, records=records,
+                                  onset=ONSET if history else None)
+    settings = LoopSettings(seed=seed, model_form=model_form)
+    bundle = read_bundle(path)
     t = time.perf_counter()
-    r = run_loop(read_bundle(path), base, LoopSettings(seed=seed, model_form=model_form),
-                 reference=reference)
+    if history:  # the unit's own first records: the reference, left out of the analysis
+        reference, bundle = own_reference(bundle, f"first:{history}", base, settings)
+    r = run_loop(bundle, base, settings, reference=reference)
     seconds = time.perf_counter() - t
     write_report(r, Path(out) / "reports" / label, with_figures=False)
     rec = r.signals["rec"]
@@ -173,11 +184,17 @@ def main() -> None:
     ap.add_argument("--reference", action="store_true",
                     help="read every bundle against a sister unit's clean records "
                          "(physics.loop.form_error)")
+    ap.add_argument("--own-history", type=int, default=0, metavar="N",
+                    help="effects appear during the life; each bundle read against its own "
+                         "first N records (own generator)")
     ap.add_argument("--out", default="bench_loop_out",
                     help="folder for the CSV files and the reports")
     ap.add_argument("--timing-only", action="store_true",
                     help="time one bundle alone (solo timing) and stop")
     args = ap.parse_args()
+    if args.own_history and (args.generator != "own" or args.reference):
+        ap.error("--own-history needs --generator own and no --reference (the bundle's own "
+                 "first records are its reference)")
     if args.both and args.generator != "independent":
         ap.error("--both needs --generator independent (the own generator writes one quantity "
                  "per bundle)")
@@ -186,8 +203,9 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         refs = (references(args.generator, args.both, args.records, Path(tmp))
                 if args.reference else {})
-        solo_timing(args.generator, args.model_form, Path(tmp), args.both,
-                    refs.get("both" if args.both else "accel_m_s2"))
+        if not args.own_history:
+            solo_timing(args.generator, args.model_form, Path(tmp), args.both,
+                        refs.get("both" if args.both else "accel_m_s2"))
         if args.timing_only:
             return
         names = EFFECTS if args.generator == "own" else EFFECT_NAMES
@@ -201,10 +219,11 @@ def main() -> None:
         def ref(q: tuple[str, ...]) -> FormReference | None:
             return refs.get("both" if q == BOTH else q[0])
 
-        jobs = [(args.generator, n, s, args.records, args.model_form, tmp, q, str(out), ref(q))
-                for n in names for s in range(args.seeds) for q in sensors(n)]
+        jobs = [(args.generator, n, s, args.records, args.model_form, tmp, q, str(out), ref(q),
+                 args.own_history) for n in names for s in range(args.seeds) for q in sensors(n)]
         jobs += [(args.generator, None, 100 + s, args.records, args.model_form, tmp, q, str(out),
-                  ref(q)) for s in range(args.null_seeds) for q in sensors(None)]
+                  ref(q), args.own_history)
+                 for s in range(args.null_seeds) for q in sensors(None)]
         spawn = multiprocessing.get_context("spawn")  # numba's OpenMP threads do not survive fork
         with ProcessPoolExecutor(args.jobs, mp_context=spawn) as pool:
             rows = list(pool.map(one, jobs))

@@ -19,11 +19,11 @@ def residuals_db(rec: Records, idx: np.ndarray, signals: list[np.ndarray]
     """Measured minus model signature of each of records ``idx`` (its group's entries) [dB];
     the records of one operating point, quantity and sampling rate analysed in one batch."""
     man = rec.bundle.manifest
+    fs, dte = man.fs_hz.to_numpy(float), man.quantity.to_numpy() == "dte_m"
     batches: dict[tuple, list[int]] = {}
     for k, i in enumerate(idx):
         scn = rec.scenarios[i]
-        key = (float(man.fs_hz.iloc[i]), *shaft_rates(scn), scn.gear.z1,
-               man.quantity.iloc[i] == "dte_m")
+        key = (float(fs[i]), *shaft_rates(scn), scn.gear.z1, bool(dte[i]))
         batches.setdefault(key, []).append(k)
     res: list[np.ndarray] = [np.empty(0)] * len(idx)
     for key, ks in batches.items():

@@ -56,6 +56,7 @@ def responses(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | None,
     ms = [with_modulation(m, nuisance) for m in ms]
     out: list[np.ndarray] = [np.empty(0)] * len(idx)
     fs_all = man.fs_hz.to_numpy(float)[idx]
+    quantity = man.quantity.to_numpy()[idx]
     for fs in np.unique(fs_all):
         sel = np.flatnonzero(fs_all == fs)
         dyn = dataclasses.replace(rec.scenarios[0].dynamics, sample_rate_hz=float(fs),
@@ -64,7 +65,7 @@ def responses(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | None,
                                   step_factor=rec.settings.step_factor)
         resp = simulate([ms[k] for k in sel], dyn, settle=SETTLE_DECAYS)
         for j, k in enumerate(sel):
-            out[k] = sensed(resp, man.quantity.iloc[idx[k]])[j]
+            out[k] = sensed(resp, quantity[k])[j]
     if key is not None:
         for x in out:
             x.flags.writeable = False  # shared by every later call with this key
