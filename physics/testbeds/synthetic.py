@@ -67,9 +67,14 @@ def make_bundle(path: str | Path, base: Scenario, effect_name: str | None, seed:
                   for m, on in zip(declared, carries, strict=True)]
     run = dataclasses.replace(dyn, duration_s=duration_s, transient_s=0.1, phase_bins=16)
     def chain(ms):
-        return declared_chain(sensed(simulate(ms, run), quantity), quantity,
-                              nuisance["housing_mass_kg"], fs=dyn.sample_rate_hz,
-                              **modes_of(nuisance))
+        rows: list[np.ndarray] = [np.empty(0)] * len(ms)
+        for periods in {m.periods for m in ms}:  # a pit's tables span a revolution: apart
+            ks = [k for k, m in enumerate(ms) if m.periods == periods]
+            for k, x in zip(ks, sensed(simulate([ms[k] for k in ks], run), quantity),
+                            strict=True):
+                rows[k] = x
+        return declared_chain(np.stack(rows), quantity, nuisance["housing_mass_kg"],
+                              fs=dyn.sample_rate_hz, **modes_of(nuisance))
 
     clean = chain(models)
     plain = chain(declared) if models is not declared else clean

@@ -124,3 +124,13 @@ def test_the_app_cuts_the_units_first_records_off_as_its_reference(tmp_path, mon
     assert job.history == "first:2"
     assert job.reference.records == ["r00", "r01"]
     assert job.data.records == ["r02", "r03", "r04", "r05"]
+
+
+def test_a_pit_that_appears_during_the_life_is_written(tmp_path):
+    """A pit's tables span a pinion revolution, a clean record's one mesh period: the bundle
+    maker simulates them apart, and only the records after the onset carry the pit."""
+    scn = scenario_from_config({"case": 3})
+    _, truth = make_bundle(tmp_path / "b", scn, "tooth_defect", seed=1, records=4,
+                           duration_s=0.3, onset=0.5)
+    assert truth["with_effect"] == ["r02", "r03"]
+    assert truth["effect_to_noise_db"] > -20

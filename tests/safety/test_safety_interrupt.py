@@ -31,9 +31,9 @@ FAST_REPRO = ["solver.n_points=101", "stiffness.fem_refine=1", "stiffness.fem_re
 SMALL_LOOP = ["loop.max_nfev=4", "loop.explore=4", "loop.candidates=[friction,tip_relief]",
               "progress=false"]
 TINY_TRAIN = ["+data.generate.replicates=4", "+data.generate.wear_states=3",
-              "+data.generate.cycles_max=3e6", "+data.generate.chunks=2", "data.val_replicates=1", "data.test_replicates=1",
-              "trainer.max_epochs=3000", "trainer.min_epochs=3000", "model.members=2",
-              "trainer.enable_progress_bar=false"]
+              "+data.generate.cycles_max=3e6", "+data.generate.chunks=2",
+              "data.val_replicates=1", "data.test_replicates=1", "trainer.max_epochs=3000",
+              "trainer.min_epochs=3000", "model.members=2", "trainer.enable_progress_bar=false"]
 
 
 @pytest.fixture(scope="module")
