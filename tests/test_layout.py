@@ -34,12 +34,14 @@ def modules() -> dict[str, Path]:
     return out
 
 
-def imports(path: Path) -> set[str]:
+def imports(path: Path, at_import: bool = False) -> set[str]:
     """Modules ``path`` imports (absolute names; ``from a import b`` gives a.b if that is a
-    module, else a)."""
+    module, else a). ``at_import``: only those importing it runs, its module-level imports,
+    not those inside functions (deferred) or under ``if TYPE_CHECKING``."""
     known = modules()
     found = set()
-    for node in ast.walk(ast.parse(path.read_text())):
+    tree = ast.parse(path.read_text())
+    for node in tree.body if at_import else ast.walk(tree):
         if isinstance(node, ast.Import):
             found |= {a.name for a in node.names}
         elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
@@ -169,20 +171,6 @@ def test_the_loops_orchestrator_is_imported_only_by_its_app():
     assert users <= {"physics.loop.__main__"}, users
 
 
-def loaded_at_import(path: Path) -> set[str]:
-    """What importing ``path`` imports: its module-level imports, not those inside functions
-    (deferred) or under ``if TYPE_CHECKING``."""
-    known = modules()
-    found = set()
-    for node in ast.parse(path.read_text()).body:
-        if isinstance(node, ast.Import):
-            found |= {a.name for a in node.names}
-        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
-            subs = {f"{node.module}.{a.name}" for a in node.names}
-            found |= (subs & set(known)) or {node.module}
-    return found
-
-
 def test_prediction_starts_without_lightning():
     """``surrogate.predict`` and ``Surrogate.load`` import torch, not Lightning (two seconds of
     every prediction's start): nothing they import at module level reaches it."""
@@ -193,7 +181,7 @@ def test_prediction_starts_without_lightning():
         if name in seen:
             continue
         seen.add(name)
-        found = loaded_at_import(known[name])
+        found = imports(known[name], at_import=True)
         assert not {i for i in found if i.split(".")[0] in ("lightning", "pytorch_lightning")}, (
             f"{name} imports Lightning")
         parents = {".".join(i.split(".")[:k]) for i in found for k in range(1, i.count(".") + 1)}
