@@ -228,7 +228,8 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
     wear_before = first.wear[0] if first.adopted else wear_score(rec, nuisance, None, {})
     wear_after = last.wear[1] if last else wear_before
     entries = ({} if last else
-               unexplained_entries(judged, rec.test, base_test, settings.false_add_rate))
+               unexplained_entries(reference.judging(judged) if reference is not None
+                                   else judged, rec.test, base_test, settings.false_add_rate))
     lines = {} if last else group_lines(rec, settings.false_add_rate)
     said, unexplained = judge(last is not None, entries, lines,
                                 closest(first.ranking, first.all_checks))

@@ -38,6 +38,7 @@ from physics.loop.bundle import Bundle
 from physics.loop.comparison import residuals_db, rms
 from physics.loop.config import LoopSettings
 from physics.loop.declared import declared_modes, declared_nuisance
+from physics.loop.discrepancy import discrepancy_sd
 from physics.loop.fit import calibrate
 from physics.loop.records import Records, group_keys, group_label, prepare
 from physics.loop.simulation import model_signals
@@ -59,6 +60,11 @@ class FormReference:
     # (:mod:`physics.loop.own_history`), with the records it holds
     source: str = "a sister gearbox"
     names: tuple[str, ...] = ()
+    #: per group, the discrepancy sd [dB] of each entry about the reference mean, estimated on
+    #: the reference records themselves (:func:`physics.loop.discrepancy.discrepancy_sd` of
+    #: their centred residuals); None for a sister unit, whose records say nothing of the two
+    #: units' difference
+    spread: dict[tuple, np.ndarray] | None = None
 
     def check(self, bundle: Bundle) -> None:
         """Refuse a bundle this reference cannot serve (:func:`check_reference`)."""
@@ -68,6 +74,15 @@ class FormReference:
         """``rec`` with each record's measured signature less its group's reference mean."""
         measured = [m - self.offsets[rec.group(i).key] for i, m in enumerate(rec.measured)]
         return dataclasses.replace(rec, measured=measured)
+
+    def judging(self, rec: Records) -> Records:
+        """``rec`` with the discrepancy of the unit's own reference records (:attr:`spread`) in
+        place of the one estimated on ``rec``'s train records, which an effect present in all
+        of them inflates; ``rec`` itself for a sister unit's reference."""
+        if self.spread is None:
+            return rec
+        return dataclasses.replace(rec, groups=[
+            dataclasses.replace(g, discrepancy_sd=self.spread[g.key]) for g in rec.groups])
 
     def summary(self) -> dict:
         """For the report: each group's reference records and RMS mean residual [dB]."""
@@ -95,17 +110,26 @@ def check_reference(bundle: Bundle, gear: dict, keys: list[tuple]) -> None:
 
 @one_blas_thread
 def form_reference(reference: Bundle, base: Scenario, settings: LoopSettings,
-                   source: str = "a sister gearbox") -> FormReference:
+                   source: str = "a sister gearbox", same_unit: bool = False) -> FormReference:
     """Calibrate the declared model on ``reference`` (its train records, as the loop does) and
     average each group's residual over all its records; ``source`` says what the reference
-    is (for the report)."""
+    is (for the report). ``same_unit`` (the unit's own earliest records): also the residuals'
+    discrepancy about that mean (:attr:`FormReference.spread`)."""
     rec = prepare(reference, base, settings)
     start = declared_nuisance(base) | declared_modes(base)
     nuisance, _ = calibrate(rec, start)
     idx = np.arange(len(rec.models))
     res = residuals_db(rec, idx, model_signals(rec, idx, nuisance, None, {}))
+    offsets = {g.key: np.mean([res[i] for i in g.records], axis=0) for g in rec.groups}
+    spread = None
+    if same_unit:  # centred: n / (n - 1) restores the variance the mean took
+        centred = [np.array([(res[i] - offsets[g.key]) * np.sqrt(len(g.records)
+                                                                / max(len(g.records) - 1, 1))
+                             for i in g.records]) for g in rec.groups]
+        sds = discrepancy_sd(rec.groups, centred, settings.discrepancy_prior)
+        spread = {g.key: d for g, d in zip(rec.groups, sds, strict=True)}
     return FormReference(
-        offsets={g.key: np.mean([res[i] for i in g.records], axis=0) for g in rec.groups},
+        offsets=offsets, spread=spread,
         records={g.key: len(g.records) for g in rec.groups},
         gear=dict(reference.gear), calibration=nuisance, source=source,
         names=tuple(reference.records))

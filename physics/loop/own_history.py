@@ -180,7 +180,8 @@ def own_reference(bundle: Bundle, spec: str | History, base: Scenario,
         raise ValueError(f"reference={spec}: not of the form first:N or before:X (cycles or an "
                          "ISO 8601 date); e.g. reference=first:2")
     reference, analysed = split_history(bundle, history)
-    return form_reference(reference, base, settings, source=source(history.spec)), analysed
+    return (form_reference(reference, base, settings, source=source(history.spec),
+                           same_unit=True), analysed)
 
 
 def source(spec: str) -> str:

@@ -576,6 +576,9 @@ def test_the_form_reference_moves_each_group_by_its_own_mean(mixed, sister):
     assert set(summary["records"]) == {g.label for g in rec.groups}
     assert all(n == 4 for n in summary["records"].values())  # four wear states per group
     assert all(v > 1.0 for v in summary["rms_offset_db"].values())  # the form error [dB]
+    # a sister unit's records say nothing of the two units' difference: the bundle's own
+    # discrepancy judges the unexplained residual
+    assert sister.spread is None and sister.judging(rec) is rec
 
 
 def test_a_reference_that_cannot_serve_the_bundle_is_refused(mixed, sister):

@@ -99,9 +99,15 @@ def test_an_effect_that_appears_over_the_life_is_named_against_the_first_records
     ref, analysed = own_reference(read_bundle(path), "first:2", scn, settings)
     assert ref.names == ("r00", "r01") and analysed.records == [f"r{k:02d}" for k in
                                                                  range(2, 8)]
+    # the unit's own records also give the discrepancy about their mean, per entry
+    assert set(ref.spread) == set(ref.offsets)
+    assert all(np.all(np.isfinite(d) & (d >= 0)) and d.shape == ref.offsets[k].shape
+               for k, d in ref.spread.items())
     report = run_loop(analysed, scn, settings, reference=ref)
     assert report["verdict"] == "effect" and report["chosen_effect"] == "torque_ripple"
     assert report["error_after"] < 0.5 * report["error_before"]
+    judged = ref.judging(report.signals["rec"])  # the unexplained test's discrepancy
+    assert all(np.array_equal(g.discrepancy_sd, ref.spread[g.key]) for g in judged.groups)
     summary = report.details["form_reference"]
     assert summary["source"] == "this unit's own earliest records (first:2)"
     assert summary["reference_records"] == ["r00", "r01"]
