@@ -11,9 +11,12 @@ What the model cannot explain is looked for in two places:
   entry is unexplained where it exceeds the upper ``rate / (2 N)`` quantile of the normal in
   every held-out record of the group with one sign, ``N`` the entries of all groups
   (Bonferroni; a residual in dB of a line near the noise is heavy-tailed, one record alone can
-  lie far out, so the entry must persist as the lines must). An effect spread over a whole
-  entry family raises that family's discrepancy and is not found here: it cannot be told from
-  form error on these records.
+  lie far out, so the entry must persist as the lines must). The discrepancy is the one
+  estimated on the train records, where an effect present in all of them raises its family's
+  and is not found here (it cannot be told from form error on these records); against the
+  unit's own first records it is theirs, about their mean
+  (:meth:`physics.loop.form_error.FormReference.judging`): the same unit's form error without
+  the effect.
 - **spectral lines** no declared order explains (:mod:`physics.loop.lines`), in every record.
 
 The candidates that came closest are the first three by held-out error, each with the null
