@@ -20,7 +20,9 @@ sampling rate), the mean residual of each signature entry over all reference rec
 removes it from the measured signatures of the bundle
 under study, group by group, before the loop calibrates anything. What remains is the
 residual the declared model does not share with the reference gearbox: an undeclared effect,
-the two units' difference, the noise.
+the two units' difference, the noise. Of the unit's own earliest records it also keeps their
+discrepancy about that mean (:attr:`FormReference.spread`): the same unit's form error without
+the effect, by which the loop judges an unexplained residual.
 
 What it cannot do: remove a form error that depends on parameters in which the two units
 differ strongly (another mounting, another load spectrum), or see an effect that the
