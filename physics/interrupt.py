@@ -88,9 +88,21 @@ def check() -> None:
 
 
 def install_signal_handlers() -> None:
-    """SIGINT raises KeyboardInterrupt and SIGTERM :class:`Terminated`; both note the signal."""
+    """SIGINT raises KeyboardInterrupt and SIGTERM :class:`Terminated`; both note the signal.
+    The interruption raised where Python cannot pass it on (a weakref callback or ``__del__``
+    during garbage collection: matplotlib's transforms) is not printed as "Exception ignored"
+    with its traceback (:func:`_unraisable`): :func:`guard` reports it once."""
     for signum in EXIT_CODES:
         signal.signal(signum, _on_signal)
+    sys.unraisablehook = _unraisable
+
+
+def _unraisable(args: Any) -> None:
+    """``sys.unraisablehook``: a noted signal's interruption is let be; anything else as
+    Python reports it."""
+    if _SIGNAL is not None and isinstance(args.exc_value, KeyboardInterrupt):
+        return
+    sys.__unraisablehook__(args)
 
 
 def quiet_workers() -> None:

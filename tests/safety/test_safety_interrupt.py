@@ -173,3 +173,32 @@ def test_a_signal_during_a_deferred_stretch_is_raised_at_the_next_check(monkeypa
         with interrupt.deferred():
             reached.append("entered")
     assert reached == ["after the signal"]
+
+
+def test_an_interruption_raised_during_garbage_collection_prints_no_traceback(monkeypatch,
+                                                                            capsys):
+    """A signal that lands in a weakref callback (matplotlib's transforms, collected as the
+    loop's figures close) cannot be passed on: Python would print "Exception ignored" and a
+    traceback; the handlers let it be (the guard reports the interruption once), and other
+    errors there are printed as Python prints them."""
+    import weakref
+
+    from physics import interrupt
+
+    monkeypatch.setattr(sys, "unraisablehook", sys.unraisablehook)
+    monkeypatch.setattr(interrupt, "_SIGNAL", signal.SIGTERM)
+    monkeypatch.setattr(signal, "signal", lambda *args: None)  # the test runner's handlers stay
+    interrupt.install_signal_handlers()
+
+    class Node:
+        pass
+
+    def collected(error: BaseException) -> str:
+        node = Node()
+        ref = weakref.ref(node, lambda _: (_ for _ in ()).throw(error))
+        del node  # the callback runs here and raises
+        assert ref() is None
+        return capsys.readouterr().err
+
+    assert "Traceback" not in collected(interrupt.Terminated())
+    assert "ValueError: another error" in collected(ValueError("another error"))
