@@ -618,9 +618,8 @@ def main(argv: list[str] | None = None) -> None:
                                             "time (the case-3, all-case, shifted, beyond-range, "
                                             "dry-law and model-form-off datasets are generated "
                                             "once into data/), 10 minutes after (27 trainings "
-                                            "on the "
-                                            "physics, 18 on the fleet's labelled gearboxes and "
-                                            "20 on draws of them).")
+                                            "on the physics, 18 on the fleet's labelled "
+                                            "gearboxes and 20 on draws of them).")
     parser.add_argument("--out", type=Path, default=None,
                         help="output folder (default: logs/benchmark/<time>)")
     parser.add_argument("--seeds", type=int, default=5,

@@ -123,15 +123,22 @@ def form_reference(reference: Bundle, base: Scenario, settings: LoopSettings,
     idx = np.arange(len(rec.models))
     res = residuals_db(rec, idx, model_signals(rec, idx, nuisance, None, {}))
     offsets = {g.key: np.mean([res[i] for i in g.records], axis=0) for g in rec.groups}
-    spread = None
-    if same_unit:  # centred: n / (n - 1) restores the variance the mean took
-        centred = [np.array([(res[i] - offsets[g.key]) * np.sqrt(len(g.records)
-                                                                / max(len(g.records) - 1, 1))
-                             for i in g.records]) for g in rec.groups]
-        sds = discrepancy_sd(rec.groups, centred, settings.discrepancy_prior)
-        spread = {g.key: d for g, d in zip(rec.groups, sds, strict=True)}
     return FormReference(
-        offsets=offsets, spread=spread,
+        offsets=offsets, spread=_spread(rec, res, offsets) if same_unit else None,
         records={g.key: len(g.records) for g in rec.groups},
         gear=dict(reference.gear), calibration=nuisance, source=source,
         names=tuple(reference.records))
+
+
+def _spread(rec: Records, res: list[np.ndarray], offsets: dict[tuple, np.ndarray]
+            ) -> dict[tuple, np.ndarray]:
+    """Per group, the discrepancy sd [dB] of the reference records' residuals ``res`` about
+    their group's mean ``offsets`` (:func:`physics.loop.discrepancy.discrepancy_sd`); each
+    centred residual scaled by ``sqrt(n / (n - 1))``, the variance the mean of ``n`` took."""
+    centred = []
+    for g in rec.groups:
+        n = len(g.records)
+        centred.append(np.array([res[i] - offsets[g.key] for i in g.records])
+                       * np.sqrt(n / max(n - 1, 1)))
+    sds = discrepancy_sd(rec.groups, centred, rec.settings.discrepancy_prior)
+    return {g.key: d for g, d in zip(rec.groups, sds, strict=True)}
