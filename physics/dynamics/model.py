@@ -368,14 +368,18 @@ def _entry_shift(q, u_in):
     return min(1.0, max(0.0, q + 1.0 - u_in)) - min(1.0, max(0.0, q + 1.0))
 
 
-@numba.njit(cache=True, fastmath=True)
-def _mesh(par, tab, pos, x, v, da, kf):
-    """Force factors and forces of the pairs in contact at table position ``pos``.
+@numba.njit(cache=True, fastmath=True, inline="always")
+def _mesh_state(par, tab, pos, da, kf):
+    """The pairs in contact at table position ``pos``: stiffness, gap and force factor of pair
+    A, pair B and an early-entering pair C (``k_c`` 0 without one), and the inverse of their
+    summed stiffness.
 
     ``pos`` in [0, n) is the mesh phase in table cells; the tables are interpolated linearly and
-    periodically. The mesh damping ``c`` is shared between the pairs by stiffness. ``da`` is the
-    centre-distance change [m] (gear run-out): it moves the ends of the path of contact; ``kf``
-    a factor on every pair's stiffness (the gear run-out's modulation).
+    periodically. ``da`` is the centre-distance change [m] (gear run-out): it moves the ends of
+    the path of contact; ``kf`` a factor on every pair's stiffness (the gear run-out's
+    modulation). It depends on the instant only, not on the state, so an RK4 step evaluates it
+    at its two new instants (``t + dt/2``, shared by stages 2 and 3, and ``t + dt``, also the
+    next step's stage 1).
     """
     n = tab.shape[1]
     i0 = int(pos)
@@ -403,7 +407,16 @@ def _mesh(par, tab, pos, x, v, da, kf):
             k_a = max(k_a + share * tab[0, j] * kf, 0.0)
         elif share > 0.0:  # it comes earlier, beside the pairs of the tables
             k_c, g_c, l_c = share * tab[0, j] * kf, tab[2, j], tab[4, j]
-    c_v = par[DAMPING] * v / (k_a + k_b + k_c)
+    return k_a, k_b, k_c, g_a, g_b, g_c, l_a, l_b, l_c, 1.0 / (k_a + k_b + k_c)
+
+
+@numba.njit(cache=True, fastmath=True, inline="always")
+def _mesh(par, st, x, v):
+    """Force factors and forces of the pairs in contact (``st``: :func:`_mesh_state`) at
+    deflection ``x`` and its rate ``v``. The mesh damping ``c`` is shared between the pairs by
+    stiffness."""
+    k_a, k_b, k_c, g_a, g_b, g_c, l_a, l_b, l_c, k_inv = st
+    c_v = par[DAMPING] * v * k_inv
     f_a = _contact(k_a, x - g_a, par[HALF_BACKLASH], k_a * c_v)
     f_b = _contact(k_b, x - g_b, par[HALF_BACKLASH], k_b * c_v)
     if k_c > 0.0:
@@ -411,14 +424,14 @@ def _mesh(par, tab, pos, x, v, da, kf):
     return l_a, l_b, f_a, f_b
 
 
-@numba.njit(cache=True, fastmath=True)
-def _accel(par, tab, pos, x, v, e_dd, w, da, kf):
-    """x'' of the reduced model at mesh phase ``pos``, given e'', the static force w, the
-    centre-distance change da and the stiffness factor kf there, and the mesh force.
+@numba.njit(cache=True, fastmath=True, inline="always")
+def _accel(par, st, x, v, e_dd, w):
+    """x'' of the reduced model in mesh state ``st``, given e'' and the static force w there,
+    and the mesh force.
 
     Each pair's force enters with its factor (1, or the sliding-friction moment factor).
     """
-    l_a, l_b, f_a, f_b = _mesh(par, tab, pos, x, v, da, kf)
+    l_a, l_b, f_a, f_b = _mesh(par, st, x, v)
     return (w - par[MASS] * e_dd - l_a * f_a - l_b * f_b) / par[MASS], f_a + f_b
 
 
@@ -481,10 +494,13 @@ def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins, half, ste
         s1, c1 = math.sin(p[OMEGA1] * t0), math.cos(p[OMEGA1] * t0)
         s2, c2 = math.sin(p[OMEGA_MESH] * t0), math.cos(p[OMEGA_MESH] * t0)
         total = n_transient + k_last + 1  # the last recorded step's force needs its stages
-        _, _, da0, kf0 = _extra(p, t0)
+        # the time terms and the mesh state at the step's start: each instant's are evaluated
+        # once (the end of a step is the start of the next)
+        x0e, w0, da0, kf0 = _extra(p, t0)
+        st0 = _mesh_state(p, tab, pos, da0, kf0)
         for step in range(step0, total + 1):
             # the mesh at (t, x) serves both the record of the state reached and stage 1 of RK4
-            l_a, l_b, f_a, f_b = _mesh(p, tab, pos, x, v, da0, kf0)
+            l_a, l_b, f_a, f_b = _mesh(p, st0, x, v)
             k = step - n_transient
             f = f_a + f_b
             recorded = k_first <= k <= k_last
@@ -507,7 +523,6 @@ def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins, half, ste
             s1n, c1n = s1h * cl + c1h * sl, c1h * cl - s1h * sl  # at t + dt
             s2n, c2n = s2h * cs + c2h * ss, c2h * cs - s2h * ss
             t = step * dt
-            x0e, w0, _, _ = _extra(p, t)
             xhe, wh, dah, kfh = _extra(p, t + 0.5 * dt)
             x1e, w1, da1, kf1 = _extra(p, t + dt)
             e0 = x0e - (a_l * s1 + a_s * s2)
@@ -516,18 +531,18 @@ def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins, half, ste
             a1 = (w0 - p[MASS] * e0 - l_a * f_a - l_b * f_b) / p[MASS]
             pos_h = _wrap(pos + 0.5 * inc, n_tab)
             pos_1 = _wrap(pos + inc, n_tab)
-            a2, f2 = _accel(p, tab, pos_h, x + 0.5 * dt * v, v + 0.5 * dt * a1, eh, wh, dah,
-                            kfh)
-            a3, f3 = _accel(p, tab, pos_h, x + 0.5 * dt * (v + 0.5 * dt * a1),
-                            v + 0.5 * dt * a2, eh, wh, dah, kfh)
-            a4, f4 = _accel(p, tab, pos_1, x + dt * (v + 0.5 * dt * a2), v + dt * a3, e1, w1,
-                            da1, kf1)
+            st_h = _mesh_state(p, tab, pos_h, dah, kfh)
+            st1 = _mesh_state(p, tab, pos_1, da1, kf1)
+            a2, f2 = _accel(p, st_h, x + 0.5 * dt * v, v + 0.5 * dt * a1, eh, wh)
+            a3, f3 = _accel(p, st_h, x + 0.5 * dt * (v + 0.5 * dt * a1), v + 0.5 * dt * a2, eh,
+                            wh)
+            a4, f4 = _accel(p, st1, x + dt * (v + 0.5 * dt * a2), v + dt * a3, e1, w1)
             if recorded:
                 force[j, k - k_first] = (f + 2.0 * (f2 + f3) + f4) / 6.0
             x += dt * (v + dt * (a1 + a2 + a3) / 6.0)
             v += dt * (a1 + 2.0 * a2 + 2.0 * a3 + a4) / 6.0
             pos = pos_1
-            da0, kf0 = da1, kf1
+            x0e, w0, st0 = x1e, w1, st1
             s1, c1, s2, c2 = s1n, c1n, s2n, c2n
             if step % 4096 == 0:  # keep the rotations on the unit circle
                 r1, r2 = math.hypot(s1, c1), math.hypot(s2, c2)
