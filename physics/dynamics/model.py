@@ -260,7 +260,7 @@ def anti_aliased(fine: np.ndarray, n_sub: int, n_out: int) -> np.ndarray:
     return _decimate(h, rows, n_sub, n_out).reshape(*fine.shape[:-1], n_out)
 
 
-@numba.njit(cache=True, parallel=True, fastmath=True)
+@numba.njit(cache=True, parallel=True, fastmath=True, nogil=True)
 def _decimate(h, x, n_sub, n_out):
     """``y[r, i] = sum_t h[t] x[r, i n_sub + t]`` (``h`` symmetric: a convolution)."""
     y = np.empty((x.shape[0], n_out))
@@ -457,7 +457,7 @@ def _wrap(pos, n):
     return pos - n if pos >= n else pos
 
 
-@numba.njit(cache=True, parallel=True, fastmath=True)
+@numba.njit(cache=True, parallel=True, fastmath=True, nogil=True)
 def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins, half, step0=0):
     """DTE at every step and the mesh force averaged over every step (the RK4 stages' weights,
     Simpson's rule: a step's record does not alias the force's harmonics above the

@@ -50,7 +50,7 @@ _SOURCES = {
         "WearScore", "Reader", "wear_estimates", "wear_reference", "wear_score", "wear_skill",
         "wear_check", "reads_wear"),
     "physics.loop.attribution": (
-        "Round", "TimeLimit", "attribute", "candidates_for", "stacked", "second_candidates",
+        "Round", "attribute", "candidates_for", "stacked", "second_candidates",
         "signature_gain", "free_directions", "separable_share", "bic"),
     "physics.loop.form_error": ("FormReference", "form_reference", "check_reference"),
     "physics.loop.own_history": (
@@ -63,6 +63,7 @@ _SOURCES = {
     "physics.loop.verdict": (
         "VERDICTS", "judge", "unexplained_entries", "group_lines", "entry_kind"),
     "physics.loop.usable": ("check_usable", "shown_candidates"),
+    "physics.loop.threads": ("TimeLimit", "one_blas_thread", "each", "in_time"),
     "physics.loop.bundle_loop": ("run_loop",),
     "physics.loop.table_loop": ("run_feature_table", "parse_columns"),
 }

@@ -12,12 +12,9 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
-import time
-from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
-from tqdm import tqdm
 
 from physics.dynamics.model import PairModel
 from physics.loop.comparison import residuals, residuals_db, rms
@@ -29,6 +26,7 @@ from physics.loop.fit import Candidate, screen_effect, search
 from physics.loop.records import Records, by_group
 from physics.loop.report import first_passing, holds, null_test
 from physics.loop.simulation import model_signals
+from physics.loop.threads import each
 from physics.loop.wear_reading import Reader, WearScore, reads_wear, wear_score
 
 log = logging.getLogger(__name__)
@@ -37,19 +35,6 @@ log = logging.getLogger(__name__)
 #: unit-coordinate step of the free parameters' directions that judge a candidate's
 #: separability (:func:`free_directions`)
 SEPARABILITY_STEP = 0.02
-
-
-class TimeLimit(Exception):
-    """The loop's time limit (``loop.time_limit_s``) passed during a round."""
-
-
-def in_time(items: Iterable, deadline: float | None) -> Iterator:
-    """``items`` one by one, until the clock (:func:`time.monotonic`) passes ``deadline``
-    (None: no limit); then :class:`TimeLimit`."""
-    for x in items:
-        if deadline is not None and time.monotonic() > deadline:
-            raise TimeLimit
-        yield x
 
 
 def bic(chi2: float, n: int, k: int) -> float:
@@ -202,16 +187,15 @@ def attribute(rec: Records, judged: Records, declared: Effect | None, declared_v
     null_bic = bic(float(np.sum(null_res**2)), n_train, 0)
     before = rms(residuals(judged, rec.test, base_test))
     effects = {eff.name: eff for eff, _ in candidates}
-    ranking = [screen_effect(rec, eff, option, nuisance)
-               for eff, option in in_time(tqdm(candidates, desc="screening",
-                                                      disable=not progress), deadline)]
+    ranking = each(lambda c: screen_effect(rec, *c, nuisance), candidates, "screening",
+                   progress, deadline)
     ranking.sort(key=lambda c: c.train_rss)
     top = settings.refine
-    ranking[:top] = [search(rec, effects[c.name], c, free_nuisance)
-                     for c in in_time(tqdm(ranking[:top], desc="refining",
-                                              disable=not progress), deadline)]
+    ranking[:top] = each(lambda c: search(rec, effects[c.name], c, free_nuisance),
+                         ranking[:top], "refining", progress, deadline)
     directions = free_directions(rec, nuisance, declared, declared_values, free_nuisance)
-    for c in ranking:
+
+    def scored(c: Candidate) -> None:
         without = residuals(rec, rec.train, model_signals(rec, rec.train, c.nuisance, declared,
                                                           declared_values))
         with_c = residuals(rec, rec.train, model_signals(rec, rec.train, c.nuisance,
@@ -222,6 +206,9 @@ def attribute(rec: Records, judged: Records, declared: Effect | None, declared_v
         c.explained, c.own_before, c.own_after = signature_gain(
             judged, rec.test, base_test, test, effects[c.name].judged_in())
         c.bic = bic(c.train_rss, n_train, c.n_params)
+
+    each(scored, ranking, "judging")
+    for c in ranking:
         log.info("%s %s: held-out %.2f (baseline %.2f), own entries %.2f -> %.2f, explained "
                  "%s, dBIC %.1f, separable %.2f%s", c.name, c.option, c.heldout, before,
                  c.own_before, c.own_after, {k: round(v, 1) for k, v in c.explained.items()},

@@ -109,7 +109,7 @@ import time
 
 import numpy as np
 
-from physics.loop.attribution import TimeLimit, attribute, candidates_for, second_candidates
+from physics.loop.attribution import attribute, candidates_for, second_candidates
 from physics.loop.bundle import Bundle
 from physics.loop.comparison import (
     feature_error,
@@ -129,7 +129,7 @@ from physics.loop.form_error import FormReference
 from physics.loop.records import Records, prepare
 from physics.loop.report import LoopReport
 from physics.loop.simulation import model_signals
-from physics.loop.threads import one_blas_thread
+from physics.loop.threads import TimeLimit, one_blas_thread
 from physics.loop.usable import check_usable, shown_candidates
 from physics.loop.verdict import closest, group_lines, judge, unexplained_entries
 from physics.loop.wear_reading import Reader, wear_score

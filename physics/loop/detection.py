@@ -39,6 +39,7 @@ from physics.loop.effects import Effect
 from physics.loop.records import Records
 from physics.loop.report import holds, null_test
 from physics.loop.simulation import model_signals
+from physics.loop.threads import each
 
 #: the parameter that sizes each effect, where it is not its first
 SIZE = {"transfer_path": "residue"}
@@ -149,8 +150,8 @@ def detection_limits(rec: Records, judged: Records, nuisance: dict,
                      base_test: list[np.ndarray]) -> list[dict]:
     """:func:`detection_limit` of every candidate (effect, option) of the first round, in its
     order, each with its ``effect`` and ``option``."""
-    return [{"effect": eff.name, "option": dict(option),
-             **detection_limit(rec, judged, nuisance, eff, option, base_train, base_test,
-                               len(candidates))}
-            for eff, option in candidates]
+    return each(lambda c: {"effect": c[0].name, "option": dict(c[1]),
+                           **detection_limit(rec, judged, nuisance, *c, base_train, base_test,
+                                             len(candidates))},
+                candidates, "detection limits")
 

@@ -19,6 +19,7 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import math
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -46,6 +47,7 @@ from physics.loop.declared import (
 from physics.loop.effects import Effect
 from physics.loop.records import Records
 from physics.loop.simulation import accel_in, is_accel, model_signals
+from physics.loop.threads import each
 
 #: signature entries that do not scale with the record's gain
 SCALE_FREE = ("kurtosis", "crest", "tsa_kurtosis")
@@ -134,8 +136,15 @@ def least_squares(rec: Records, eff: Effect | None, fixed: dict, start: dict,
         return fixed | start, float(np.sum(fun(np.empty(0)) ** 2))
     u0 = np.array([np.clip(to_unit(start[n], lo, hi, lg), 0.001, 0.999)
                    for n, lo, hi, lg in free])
-    sol = optimize.least_squares(fun, u0, bounds=(0, 1), diff_step=0.01, max_nfev=max_nfev)
+    sol = optimize.least_squares(fun, u0, bounds=(0, 1), diff_step=0.01, max_nfev=max_nfev,
+                                 workers=columns)
     return values(sol.x), float(np.sum(sol.fun**2))
+
+
+def columns(fn: Callable, points: Iterable) -> list:
+    """The finite-difference Jacobian's evaluations on parallel threads (:func:`each`; within
+    a candidate already on its own thread, one after another): scipy's ``workers`` map."""
+    return each(fn, list(points), "jacobian")
 
 
 @dataclass
@@ -207,8 +216,7 @@ def explore(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[
     n_points = rec.settings.explore * (CALIBRATION_EXPLORE if wide(rec, eff) else 1)
     pts = (qmc.Sobol(dim, seed=rec.settings.seed).random(n_points) if dim and n_points
            else np.empty((0, 0)))
-    found = [c]
-    for u in pts:
+    def point(u: np.ndarray) -> Candidate:
         vals = c.option | {p.name: from_unit(float(x), p.low, p.high, p.log)
                            for p, x in zip(params, u, strict=False)}
         nui = dict(c.nuisance)
@@ -216,8 +224,10 @@ def explore(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[
             nui[n] = from_unit(float(np.clip(centres[n] + span[n] * (2 * x - 1), 0, 1)),
                                *BOUNDS[n])
         nui = with_level(rec, nui, eff, vals)
-        found.append(dataclasses.replace(c, values=vals, nuisance=nui,
-                                         train_rss=train_cost(rec, nui, eff, vals)))
+        return dataclasses.replace(c, values=vals, nuisance=nui,
+                                   train_rss=train_cost(rec, nui, eff, vals))
+
+    found = [c, *each(point, list(pts), "exploring")]
     return sorted(found, key=lambda x: x.train_rss)  # stable: the first of equals leads
 
 

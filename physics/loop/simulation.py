@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import threading
 
 import numpy as np
 
@@ -17,8 +18,9 @@ from physics.loop.effects import Effect
 from physics.loop.records import Records
 from physics.signals.measurement import declared_chain, sensed
 
-#: simulations kept by :func:`responses`
+#: simulations kept by :func:`responses` (candidates fitted on parallel threads share them)
 CACHE_SIZE = 256
+_CACHE_LOCK = threading.Lock()
 #: the model's records are integrated from this many decay times of the mesh mode before the
 #: record's start (:func:`physics.dynamics.model.simulate`'s ``settle``), not from t = 0: the
 #: start's free vibration has fallen to e^-30 (1e-13) there, the record's start phase is kept,
@@ -40,8 +42,10 @@ def responses(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | None,
         key = (tuple(int(i) for i in idx),
                tuple(nuisance.get(n) for n in (*DYNAMIC_NUISANCE, *TORQUE)),
                (eff.name, tuple(sorted(values.items()))) if dynamic else None)
-        if key in rec.cache:
-            return rec.cache[key]
+        with _CACHE_LOCK:
+            hit = rec.cache.get(key)
+        if hit is not None:
+            return hit
     man = rec.bundle.manifest
     base_ratio = rec.scenarios[0].dynamics.damping_ratio
     ms = [with_nuisance(m, nuisance, base_ratio)
@@ -69,9 +73,10 @@ def responses(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | None,
     if key is not None:
         for x in out:
             x.flags.writeable = False  # shared by every later call with this key
-        if len(rec.cache) >= CACHE_SIZE:
-            rec.cache.pop(next(iter(rec.cache)))  # the oldest entry
-        rec.cache[key] = out
+        with _CACHE_LOCK:
+            if len(rec.cache) >= CACHE_SIZE:
+                rec.cache.pop(next(iter(rec.cache)))  # the oldest entry
+            rec.cache[key] = out
     return out
 
 

@@ -1,4 +1,5 @@
-"""One BLAS thread for the loop's work (:func:`one_blas_thread`).
+"""The loop's threads: one BLAS thread (:func:`one_blas_thread`), candidates on parallel threads
+(:func:`each`) and the time limit (:class:`TimeLimit`).
 
 The loop alternates the compiled dynamics kernel, parallel over models on numba's OpenMP
 threads, with small dense products (the signature's line projections, a few hundred columns;
@@ -7,17 +8,34 @@ a while; a multi-threaded BLAS call made then competes with them for the cores, 
 shared 2-core machine the line projection of 16 segments took 0.27 s instead of 3 ms
 (``bench/bench_loop.py``: a whole bundle 4-5 times slower). The products are too small to gain
 from a second BLAS thread, so the loop runs with one.
+
+Between the kernel calls a candidate's fit is serial work (signatures, the optimiser's steps):
+run one candidate at a time, that work leaves all cores but one idle. :func:`each` fits the
+candidates on as many threads as numba has, each thread's kernel calls on one numba thread
+(the kernel releases the GIL, as does the BLAS product): the cores are busy throughout. Each
+candidate's computation is independent of the others' and of the thread that runs it, so the
+results are those of the serial order.
 """
 
 from __future__ import annotations
 
 import functools
-from collections.abc import Callable
+import time
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from concurrent.futures import ThreadPoolExecutor, as_completed
 from typing import TypeVar
 
+import numba
 from threadpoolctl import threadpool_limits
+from tqdm import tqdm
 
 F = TypeVar("F", bound=Callable)
+T = TypeVar("T")
+R = TypeVar("R")
+
+
+class TimeLimit(Exception):
+    """The loop's time limit (``loop.time_limit_s``) passed during a round."""
 
 
 def one_blas_thread(fn: F) -> F:
@@ -27,3 +45,47 @@ def one_blas_thread(fn: F) -> F:
         with threadpool_limits(limits=1, user_api="blas"):
             return fn(*args, **kwargs)
     return run  # type: ignore[return-value]
+
+
+def in_time(items: Iterable, deadline: float | None) -> Iterator:
+    """``items`` one by one, until the clock (:func:`time.monotonic`) passes ``deadline``
+    (None: no limit); then :class:`TimeLimit`."""
+    for x in items:
+        if deadline is not None and time.monotonic() > deadline:
+            raise TimeLimit
+        yield x
+
+
+def each(fn: Callable[[T], R], items: Sequence[T], desc: str, progress: bool = False,
+         deadline: float | None = None) -> list[R]:
+    """``[fn(x) for x in items]``, the items on parallel threads (as many as numba's, each
+    thread's kernel calls on one of them), in the items' order. An item not started by
+    ``deadline`` raises :class:`TimeLimit`; an error (or an interrupt in the calling thread)
+    cancels the items not started and waits for the running ones."""
+    workers = min(len(items), numba.get_num_threads())
+    bar = tqdm(total=len(items), desc=desc, disable=not progress)
+    if workers <= 1:
+        out = []
+        for x in in_time(items, deadline):
+            out.append(fn(x))
+            bar.update()
+        bar.close()
+        return out
+
+    def run(x: T) -> R:
+        if deadline is not None and time.monotonic() > deadline:
+            raise TimeLimit
+        numba.set_num_threads(1)  # this thread's kernel calls
+        return fn(x)
+
+    with bar, ThreadPoolExecutor(workers, thread_name_prefix="candidate") as pool:
+        futures = [pool.submit(run, x) for x in items]
+        try:
+            for f in as_completed(futures):
+                f.result()
+                bar.update()
+        except BaseException:
+            for f in futures:
+                f.cancel()
+            raise
+        return [f.result() for f in futures]

@@ -1,19 +1,29 @@
 """What makes the loop fast without changing what it finds: the dynamics integrated from a few
-decay times before each record (the record the same to round-off), one BLAS thread."""
+decay times before each record (the record the same to round-off), one BLAS thread, candidates
+and Jacobian columns on parallel threads (the results those of the serial order)."""
 
 from __future__ import annotations
 
 import dataclasses
+import threading
+import time
 
+import numba
 import numpy as np
 import pytest
 from threadpoolctl import threadpool_info
 
 from physics.dynamics.model import build_model, settle_time, simulate
+from physics.loop.bundle import read_bundle
+from physics.loop.config import LoopSettings
+from physics.loop.declared import completed
 from physics.loop.effects import EFFECTS
+from physics.loop.fit import screen_effect, search
+from physics.loop.records import prepare
 from physics.loop.simulation import SETTLE_DECAYS
-from physics.loop.threads import one_blas_thread
+from physics.loop.threads import TimeLimit, each, one_blas_thread
 from physics.params import scenario_from_config
+from physics.testbeds.synthetic import make_bundle
 
 
 def _blas_threads() -> list[int]:
@@ -58,3 +68,72 @@ def test_settled_records_agree_with_those_integrated_from_rest(models):
     assert settle_time(ms[:1], SETTLE_DECAYS) < 0.5 * dyn.transient_s  # steps are saved
     short = simulate(ms[1:2], dyn, settle=3.0)
     assert _difference(short, simulate(ms[1:2], dyn)) > 1e-6
+
+
+def test_each_keeps_the_items_order_and_runs_them_on_parallel_threads():
+    if numba.get_num_threads() < 2:
+        pytest.skip("one numba thread: each() runs the items in turn")
+    names, lock = set(), threading.Lock()
+
+    def slow_square(x: int) -> int:
+        with lock:
+            names.add(threading.current_thread().name)
+        time.sleep(0.02 * (5 - x))  # the first items end last
+        return x * x
+
+    assert each(slow_square, list(range(6)), "test") == [x * x for x in range(6)]
+    assert len(names) == 2 and threading.current_thread().name not in names
+
+
+def test_each_stops_at_the_deadline_and_passes_an_error_on():
+    with pytest.raises(TimeLimit):
+        each(lambda x: x, [1, 2], "test", deadline=time.monotonic() - 1.0)
+    started = []
+
+    def fails_first(x: int) -> int:
+        started.append(x)
+        if x == 0:
+            raise ValueError("item 0")
+        time.sleep(0.05)
+        return x
+
+    with pytest.raises(ValueError, match="item 0"):
+        each(fails_first, list(range(40)), "test")
+    assert len(started) < 40  # the items not started were cancelled
+
+
+@pytest.fixture(scope="module")
+def small_records(tmp_path_factory):
+    scn = scenario_from_config({"case": 3})
+    path, truth = make_bundle(tmp_path_factory.mktemp("threads") / "b", scn, "friction",
+                              seed=2, records=4, duration_s=0.5)
+    rec = prepare(read_bundle(path), scn, LoopSettings(seed=2, explore=2, max_nfev=2))
+    return rec, completed(truth["nuisance"], scn)
+
+
+def test_candidates_on_parallel_threads_find_what_they_find_in_turn(small_records):
+    """The screening of two candidates on two threads, and a search whose exploration and
+    Jacobian columns run on two threads, against the same on one thread: the same fits to
+    the last digit."""
+    if numba.get_num_threads() < 2:
+        pytest.skip("one numba thread: nothing runs in parallel")
+    rec, nui = small_records
+    cands = [(EFFECTS[n], {}) for n in ("gear_runout", "friction")]
+
+    def fitted() -> list:
+        rec.cache.clear()
+        screened = each(lambda c: screen_effect(rec, *c, nui), cands, "screening")
+        # from the calling thread: the exploration's points and the Jacobian's columns on
+        # parallel threads
+        best = search(rec, EFFECTS["friction"], screened[1], ["damping_ratio",
+                                                               "housing_mass_kg"])
+        return [(c.values, c.nuisance, c.train_rss) for c in (*screened, best)]
+
+    parallel = fitted()
+    threads = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        serial = fitted()
+    finally:
+        numba.set_num_threads(threads)
+    assert parallel == serial
