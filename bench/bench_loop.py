@@ -54,6 +54,7 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
+import numba
 import numpy as np
 import pandas as pd
 
@@ -225,7 +226,10 @@ def main() -> None:
                   ref(q), args.own_history)
                  for s in range(args.null_seeds) for q in sensors(None)]
         spawn = multiprocessing.get_context("spawn")  # numba's OpenMP threads do not survive fork
-        with ProcessPoolExecutor(args.jobs, mp_context=spawn) as pool:
+        # the bundles share the cores: each process's loop on its share of numba's threads
+        share = max(1, (os.cpu_count() or 1) // args.jobs)
+        with ProcessPoolExecutor(args.jobs, mp_context=spawn, initializer=numba.set_num_threads,
+                                 initargs=(share,)) as pool:
             rows = list(pool.map(one, jobs))
     runs = attainable(pd.DataFrame(rows))
     runs.to_csv(out / "loop_runs.csv", index=False)
