@@ -10,10 +10,11 @@ records), ``comparison`` (residuals and errors), ``fit`` (calibration and search
 ``attribution`` (candidates, null test, second round), ``form_error`` (a sister gearbox's
 form reference), ``own_history`` (this unit's earliest records as the reference), ``lines``
 (spectral lines no declared order explains), ``verdict`` (an effect, an unexplained residual
-or nothing), ``usable`` (what a bundle lets the loop do,
-decided before work), ``report``; ``bundle_loop.run_loop`` orchestrates them, ``table_loop`` runs
-the loop on a feature table. Imports every physics subpackage above it except the apps; the
-test rigs that make bundles to try it on are in :mod:`physics.testbeds`."""
+or nothing), ``usable`` (what a bundle lets the loop do, decided before work), ``report``;
+``threads`` (candidates on parallel threads, the time limit) serves them;
+``bundle_loop.run_loop`` orchestrates them, ``table_loop`` runs the loop on a feature table.
+Imports every physics subpackage above it except the apps; the test rigs that make bundles to
+try it on are in :mod:`physics.testbeds`."""
 
 from __future__ import annotations
 

@@ -19,6 +19,7 @@ from physics.dynamics.model import PairModel
 from physics.gear.stiffness import mesh_stiffness
 from physics.loop.bundle import Bundle, record_scenario
 from physics.loop.config import LoopSettings
+from physics.loop.threads import each
 from physics.loop.worn_states import (
     records_cycles,
     records_history,
@@ -134,12 +135,17 @@ def prepare(bundle: Bundle, base: Scenario, settings: LoopSettings) -> Records:
         keyed.setdefault((scn.operating.n1_rpm, scn.operating.torque_Nm), []).append(i)
     models: list[PairModel | None] = [None] * len(man)
     wear_states: list[list[tuple[float, PairModel]]] = [[] for _ in range(len(man))]
-    for idx in keyed.values():
+
+    def worn(idx: list[int]) -> tuple:  # one operating point's wear run and worn models
         scn, rows = scenarios[idx[0]], man.iloc[idx]
         history = records_history(scn, rows)
         cycles = dict(zip(idx, records_cycles(history, rows), strict=True))
         grid = wear_grid_cycles(history, max(cycles.values()), settings.wear_grid)
-        by_cycles, root = worn_models(scn, ms, [*cycles.values(), *grid], history)
+        return (cycles, grid, *worn_models(scn, ms, [*cycles.values(), *grid], history))
+
+    points = list(keyed.values())
+    for idx, (cycles, grid, by_cycles, root) in zip(points, each(worn, points, "wear runs"),
+                                                     strict=True):
         for i in idx:
             models[i] = by_cycles[cycles[i]]
             wear_states[i] = [(root[float(g)], by_cycles[float(g)]) for g in grid]

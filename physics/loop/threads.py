@@ -12,7 +12,9 @@ from a second BLAS thread, so the loop runs with one.
 Between the kernel calls a candidate's fit is serial work (signatures, the optimiser's steps):
 run one candidate at a time, that work leaves all cores but one idle. :func:`each` fits the
 candidates on as many threads as numba has, each thread's kernel calls on one numba thread
-(the kernel releases the GIL, as does the BLAS product): the cores are busy throughout. Each
+(the kernel releases the GIL, as does the BLAS product): the cores are busy throughout. Where
+the calling thread is free (the calibration), the exploration's points and the least-squares
+Jacobian's columns run on the threads instead. Each
 candidate's computation is independent of the others' and of the thread that runs it, so the
 results are those of the serial order.
 """
@@ -20,6 +22,7 @@ results are those of the serial order.
 from __future__ import annotations
 
 import functools
+import threading
 import time
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor, as_completed
@@ -32,6 +35,19 @@ from tqdm import tqdm
 F = TypeVar("F", bound=Callable)
 T = TypeVar("T")
 R = TypeVar("R")
+
+
+#: threads for :func:`each`; None: as many as numba has (``NUMBA_NUM_THREADS``, the cores)
+THREADS: int | None = None
+_local = threading.local()
+
+
+def parallel_threads() -> int:
+    """Threads :func:`each` uses here: :data:`THREADS` or numba's, and 1 within an item that
+    already runs on a parallel thread (a candidate's own exploration and Jacobian)."""
+    if getattr(_local, "in_item", False):
+        return 1
+    return THREADS if THREADS is not None else numba.get_num_threads()
 
 
 class TimeLimit(Exception):
@@ -58,11 +74,11 @@ def in_time(items: Iterable, deadline: float | None) -> Iterator:
 
 def each(fn: Callable[[T], R], items: Sequence[T], desc: str, progress: bool = False,
          deadline: float | None = None) -> list[R]:
-    """``[fn(x) for x in items]``, the items on parallel threads (as many as numba's, each
-    thread's kernel calls on one of them), in the items' order. An item not started by
-    ``deadline`` raises :class:`TimeLimit`; an error (or an interrupt in the calling thread)
-    cancels the items not started and waits for the running ones."""
-    workers = min(len(items), numba.get_num_threads())
+    """``[fn(x) for x in items]``, the items on parallel threads (:func:`parallel_threads`,
+    each thread's kernel calls on one numba thread), in the items' order. An item not started
+    by ``deadline`` raises :class:`TimeLimit`; an error (or an interrupt in the calling
+    thread) cancels the items not started and waits for the running ones."""
+    workers = min(len(items), parallel_threads())
     bar = tqdm(total=len(items), desc=desc, disable=not progress)
     if workers <= 1:
         out = []
@@ -75,6 +91,7 @@ def each(fn: Callable[[T], R], items: Sequence[T], desc: str, progress: bool = F
     def run(x: T) -> R:
         if deadline is not None and time.monotonic() > deadline:
             raise TimeLimit
+        _local.in_item = True
         numba.set_num_threads(1)  # this thread's kernel calls
         return fn(x)
 

@@ -6,6 +6,7 @@ estimate reads a record by (:mod:`physics.loop.wear_reading`)."""
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -25,6 +26,7 @@ GRID_REACH = 1.2
 KEPT = 16
 
 _kept: dict[Scenario, WearHistory] = {}
+_KEPT_LOCK = threading.Lock()  # operating points' runs on parallel threads
 
 
 @dataclass(frozen=True)
@@ -70,7 +72,8 @@ def wear_history(scn: Scenario, enough: Callable[[np.ndarray, np.ndarray], bool]
     def done(h: WearHistory) -> bool:
         return len(h.cycles) > 1 and enough(h.cycles, h.root_mm)
 
-    kept = _kept.get(scn)
+    with _KEPT_LOCK:
+        kept = _kept.get(scn)
     if kept is not None and done(kept):
         return kept
     res = simulate_dynamic_wear(scn, MAX_CYCLES, stiffness=mesh_stiffness(scn.gear, scn.material),
@@ -78,10 +81,11 @@ def wear_history(scn: Scenario, enough: Callable[[np.ndarray, np.ndarray], bool]
     history = WearHistory(res.s, *res.history)
     for a in (history.s, history.cycles, history.pinion, history.gear):
         a.flags.writeable = False
-    _kept.pop(scn, None)
-    if len(_kept) >= KEPT:
-        _kept.pop(next(iter(_kept)))  # the oldest
-    _kept[scn] = history
+    with _KEPT_LOCK:
+        _kept.pop(scn, None)
+        if len(_kept) >= KEPT:
+            _kept.pop(next(iter(_kept)))  # the oldest
+        _kept[scn] = history
     return history
 
 

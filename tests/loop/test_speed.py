@@ -8,12 +8,12 @@ import dataclasses
 import threading
 import time
 
-import numba
 import numpy as np
 import pytest
 from threadpoolctl import threadpool_info
 
 from physics.dynamics.model import build_model, settle_time, simulate
+from physics.loop import threads
 from physics.loop.bundle import read_bundle
 from physics.loop.config import LoopSettings
 from physics.loop.declared import completed
@@ -70,9 +70,8 @@ def test_settled_records_agree_with_those_integrated_from_rest(models):
     assert _difference(short, simulate(ms[1:2], dyn)) > 1e-6
 
 
-def test_each_keeps_the_items_order_and_runs_them_on_parallel_threads():
-    if numba.get_num_threads() < 2:
-        pytest.skip("one numba thread: each() runs the items in turn")
+def test_each_keeps_the_items_order_and_runs_them_on_parallel_threads(monkeypatch):
+    monkeypatch.setattr(threads, "THREADS", 2)  # a test worker has one numba thread
     names, lock = set(), threading.Lock()
 
     def slow_square(x: int) -> int:
@@ -85,7 +84,8 @@ def test_each_keeps_the_items_order_and_runs_them_on_parallel_threads():
     assert len(names) == 2 and threading.current_thread().name not in names
 
 
-def test_each_stops_at_the_deadline_and_passes_an_error_on():
+def test_each_stops_at_the_deadline_and_passes_an_error_on(monkeypatch):
+    monkeypatch.setattr(threads, "THREADS", 2)
     with pytest.raises(TimeLimit):
         each(lambda x: x, [1, 2], "test", deadline=time.monotonic() - 1.0)
     started = []
@@ -111,12 +111,11 @@ def small_records(tmp_path_factory):
     return rec, completed(truth["nuisance"], scn)
 
 
-def test_candidates_on_parallel_threads_find_what_they_find_in_turn(small_records):
+def test_candidates_on_parallel_threads_find_what_they_find_in_turn(small_records,
+                                                                   monkeypatch):
     """The screening of two candidates on two threads, and a search whose exploration and
     Jacobian columns run on two threads, against the same on one thread: the same fits to
     the last digit."""
-    if numba.get_num_threads() < 2:
-        pytest.skip("one numba thread: nothing runs in parallel")
     rec, nui = small_records
     cands = [(EFFECTS[n], {}) for n in ("gear_runout", "friction")]
 
@@ -129,11 +128,7 @@ def test_candidates_on_parallel_threads_find_what_they_find_in_turn(small_record
                                                                "housing_mass_kg"])
         return [(c.values, c.nuisance, c.train_rss) for c in (*screened, best)]
 
+    monkeypatch.setattr(threads, "THREADS", 2)
     parallel = fitted()
-    threads = numba.get_num_threads()
-    numba.set_num_threads(1)
-    try:
-        serial = fitted()
-    finally:
-        numba.set_num_threads(threads)
-    assert parallel == serial
+    monkeypatch.setattr(threads, "THREADS", 1)
+    assert fitted() == parallel
