@@ -82,8 +82,11 @@ class PairModel:
     gear_error: float = 0.0  # amplitude of the gear's run-out error on the line of action [m]
     centre_runout: float = 0.0  # amplitude of the centre-distance change it causes [m]
     omega2: float = 0.0  # gear speed [rad/s]
-    # the mesh stiffness times 1 + gear_modulation cos(omega2 t + gear_modulation_phase): the
-    # run-out's once-per-gear-revolution modulation (physics.dynamics.model_form.with_modulation)
+    # the mesh stiffness times 1 + pinion_modulation cos(omega1 t + pinion_modulation_phase)
+    # and times 1 + gear_modulation cos(omega2 t + gear_modulation_phase): the run-outs' once-
+    # per-revolution modulations (physics.dynamics.model_form.with_modulation)
+    pinion_modulation: float = 0.0
+    pinion_modulation_phase: float = 0.0  # [rad]
     gear_modulation: float = 0.0
     gear_modulation_phase: float = 0.0  # [rad]
     ripple_force: float = 0.0  # amplitude of the torque ripple as mesh force [N]
@@ -92,7 +95,8 @@ class PairModel:
     @property
     def omega_max(self) -> float:
         """Highest natural frequency of the linearised mesh, ``sqrt(k_max / m_e)`` [rad/s]."""
-        k_max = float(np.max(self.k_a + self.k_b)) * (1.0 + abs(self.gear_modulation))
+        k_max = float(np.max(self.k_a + self.k_b)) * ((1.0 + abs(self.pinion_modulation))
+                                                      * (1.0 + abs(self.gear_modulation)))
         return math.sqrt(k_max / self.mass)
 
     @property
@@ -200,8 +204,8 @@ class Response:
 #: positions of the kernel's per-scenario parameters (numba reads module constants as literals)
 (MASS, DAMPING, STATIC_FORCE, HALF_BACKLASH, LONG_ERROR, SHORT_ERROR, OMEGA1, OMEGA_MESH,
  ROLL_SPEED, BASE_PITCH, GEAR_ERROR, OMEGA2, RIPPLE_FORCE, OMEGA_RIPPLE, CELLS_PER_PERIOD,
- CENTRE_RUNOUT, CELLS_PER_METRE, GEAR_MODULATION, GEAR_MODULATION_PHASE,
- N_PARAMETERS) = range(20)
+ CENTRE_RUNOUT, CELLS_PER_METRE, GEAR_MODULATION, GEAR_MODULATION_PHASE, PINION_MODULATION,
+ PINION_MODULATION_PHASE, N_PARAMETERS) = range(22)
 
 
 def kernel_parameters(m: PairModel) -> np.ndarray:
@@ -215,6 +219,8 @@ def kernel_parameters(m: PairModel) -> np.ndarray:
     row[GEAR_ERROR], row[CENTRE_RUNOUT] = m.gear_error, m.centre_runout
     row[GEAR_MODULATION], row[GEAR_MODULATION_PHASE] = (m.gear_modulation,
                                                         m.gear_modulation_phase)
+    row[PINION_MODULATION], row[PINION_MODULATION_PHASE] = (m.pinion_modulation,
+                                                            m.pinion_modulation_phase)
     row[RIPPLE_FORCE], row[OMEGA_RIPPLE] = m.ripple_force, m.omega_ripple
     row[CELLS_PER_PERIOD] = len(m.k_a) / m.periods
     row[CELLS_PER_METRE] = row[CELLS_PER_PERIOD] / (m.geometry.base_pitch
@@ -425,14 +431,14 @@ def _mesh(par, st, x, v):
 
 
 @numba.njit(cache=True, fastmath=True, inline="always")
-def _accel(par, st, x, v, e_dd, w):
-    """x'' of the reduced model in mesh state ``st``, given e'' and the static force w there,
-    and the mesh force.
+def _accel(par, st, x, v, e_dd, w, inv_m):
+    """x'' of the reduced model in mesh state ``st``, given e'' and the static force w there
+    (``inv_m``: the inverse of the equivalent mass), and the mesh force.
 
     Each pair's force enters with its factor (1, or the sliding-friction moment factor).
     """
     l_a, l_b, f_a, f_b = _mesh(par, st, x, v)
-    return (w - par[MASS] * e_dd - l_a * f_a - l_b * f_b) / par[MASS], f_a + f_b
+    return (w - l_a * f_a - l_b * f_b) * inv_m - e_dd, f_a + f_b
 
 
 @numba.njit(cache=True, fastmath=True, inline="always")
@@ -480,6 +486,7 @@ def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins, half, ste
     for j in numba.prange(n):
         p, tab = par[j], tables[j]
         x, v = x0[j], 0.0
+        inv_m = 1.0 / p[MASS]
         n_tab = float(n_phase)
         n_per = p[CELLS_PER_PERIOD]  # table cells per mesh period
         # mesh phase advance per step, in table cells
@@ -496,8 +503,11 @@ def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins, half, ste
         total = n_transient + k_last + 1  # the last recorded step's force needs its stages
         # the time terms and the mesh state at the step's start: each instant's are evaluated
         # once (the end of a step is the start of the next)
+        # the pinion run-out's modulation 1 + mu cos(w1 t + phi), from the rotation of w1 t
+        mu_c = p[PINION_MODULATION] * math.cos(p[PINION_MODULATION_PHASE])
+        mu_s = p[PINION_MODULATION] * math.sin(p[PINION_MODULATION_PHASE])
         x0e, w0, da0, kf0 = _extra(p, t0)
-        st0 = _mesh_state(p, tab, pos, da0, kf0)
+        st0 = _mesh_state(p, tab, pos, da0, kf0 * (1.0 + mu_c * c1 - mu_s * s1))
         for step in range(step0, total + 1):
             # the mesh at (t, x) serves both the record of the state reached and stage 1 of RK4
             l_a, l_b, f_a, f_b = _mesh(p, st0, x, v)
@@ -528,15 +538,15 @@ def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins, half, ste
             e0 = x0e - (a_l * s1 + a_s * s2)
             eh = xhe - (a_l * s1h + a_s * s2h)
             e1 = x1e - (a_l * s1n + a_s * s2n)
-            a1 = (w0 - p[MASS] * e0 - l_a * f_a - l_b * f_b) / p[MASS]
+            a1 = (w0 - l_a * f_a - l_b * f_b) * inv_m - e0
             pos_h = _wrap(pos + 0.5 * inc, n_tab)
             pos_1 = _wrap(pos + inc, n_tab)
-            st_h = _mesh_state(p, tab, pos_h, dah, kfh)
-            st1 = _mesh_state(p, tab, pos_1, da1, kf1)
-            a2, f2 = _accel(p, st_h, x + 0.5 * dt * v, v + 0.5 * dt * a1, eh, wh)
+            st_h = _mesh_state(p, tab, pos_h, dah, kfh * (1.0 + mu_c * c1h - mu_s * s1h))
+            st1 = _mesh_state(p, tab, pos_1, da1, kf1 * (1.0 + mu_c * c1n - mu_s * s1n))
+            a2, f2 = _accel(p, st_h, x + 0.5 * dt * v, v + 0.5 * dt * a1, eh, wh, inv_m)
             a3, f3 = _accel(p, st_h, x + 0.5 * dt * (v + 0.5 * dt * a1), v + 0.5 * dt * a2, eh,
-                            wh)
-            a4, f4 = _accel(p, st1, x + dt * (v + 0.5 * dt * a2), v + dt * a3, e1, w1)
+                            wh, inv_m)
+            a4, f4 = _accel(p, st1, x + dt * (v + 0.5 * dt * a2), v + dt * a3, e1, w1, inv_m)
             if recorded:
                 force[j, k - k_first] = (f + 2.0 * (f2 + f3) + f4) / 6.0
             x += dt * (v + dt * (a1 + a2 + a3) / 6.0)
@@ -577,7 +587,7 @@ def simulate_two_dof(model: PairModel, t_eval: np.ndarray, rtol: float = 1e-9,
 
     geom, m = model.geometry, model
     if (m.periods != 1 or m.lam_a is not None or m.lam_b is not None or m.gear_error
-            or m.ripple_force or m.centre_runout or m.gear_modulation):
+            or m.ripple_force or m.centre_runout or m.gear_modulation or m.pinion_modulation):
         raise ValueError("simulate_two_dof checks the declared model only; this one carries "
                          "effects of physics.effects")
     j1, j2 = m.inertias

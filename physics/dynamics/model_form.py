@@ -102,27 +102,22 @@ def with_modulation(m, v: dict):
     in amplitude (Inalpolat & Kahraman, J. Sound Vib. 329 (2010) 371; the sidebands ``k f_m
     +- f_1`` of Randall, J. Mech. Des. 104 (1982) 259). The depth is not predictable from a
     tolerance class (the face-load factor's variation is unknown), so it is calibrated. The
-    tables are tiled over one pinion revolution (``periods`` = ``z1``; a model that already
-    spans one, with a tooth defect, keeps its tables) and multiplied cell by cell, pairs A
-    and B by the same instantaneous factor.
+    factor is a time term of the kernel (``m.pinion_modulation``, its phase), pairs A and B by
+    the same instantaneous factor; the tables keep their length.
 
     A gear that runs out (the loop's effect ``gear_runout``: ``m.centre_runout``, its
     eccentricity ``e2``) changes the centre distance in the same way once per gear revolution,
     so it modulates the mesh by the same mechanism: depth ``mu e2 / e1`` (the depth per unit
     eccentricity of the pinion's, ``e1`` = ``v["eccentricity1_um"]``) in the same phase
     relation to its own centre-distance change (``k (1 + mu2 cos(w2 t + phi))``, a time term of
-    the kernel: the tables would have to span both revolutions). Without it a gear run-out would
-    make its sidebands by the kinematic error and the moving path of contact alone, while the
-    pinion's, declared, makes them by all three.
+    the kernel as well). Without it a gear run-out would make its sidebands by the kinematic
+    error and the moving path of contact alone, while the pinion's, declared, makes them by
+    all three.
     """
     mu = float(v.get("mesh_modulation", 0.0))
     if mu == 0.0:
         return m
     phase = float(v.get("modulation_phase_rad", 0.0))
-    rev = revolution_tables(m)
-    n = len(rev.k_a)
-    # table cell c is reached at the pinion angle 2 pi c / n (the tables start at t = 0)
-    factor = 1.0 + mu * np.cos(2 * np.pi * np.arange(n) / n + phase)
     depth2 = mu * m.centre_runout / (v["eccentricity1_um"] * 1e-6) if m.centre_runout else 0.0
-    return dataclasses.replace(rev, k_a=rev.k_a * factor, k_b=rev.k_b * factor,
+    return dataclasses.replace(m, pinion_modulation=mu, pinion_modulation_phase=phase,
                                gear_modulation=depth2, gear_modulation_phase=phase)

@@ -48,7 +48,11 @@ def _basis(n: int, fs: float, freqs: tuple[float, ...]) -> np.ndarray:
 
 def line_amplitudes(x: np.ndarray, fs: float, freqs: np.ndarray) -> np.ndarray:
     """Amplitudes of sinusoids at ``freqs`` [Hz] in ``x`` (..., n): Hann-windowed projection."""
-    basis = _basis(x.shape[-1], float(fs), tuple(float(f) for f in freqs))
+    return _amplitudes(x, float(fs), tuple(float(f) for f in freqs))
+
+
+def _amplitudes(x: np.ndarray, fs: float, freqs: tuple[float, ...]) -> np.ndarray:
+    basis = _basis(x.shape[-1], fs, freqs)
     proj = (x - x.mean(axis=-1, keepdims=True)).astype(np.float32) @ basis
     return np.hypot(proj[..., :len(freqs)], proj[..., len(freqs):])
 
@@ -121,6 +125,11 @@ def _tsa_residual_kurtosis(x: np.ndarray, fs: float, f1: float, z1: int) -> np.n
 
 def line_frequencies(f1: float, f2: float, z1: int, fs: float) -> dict[str, float]:
     """The named lines of the signature [Hz]: mesh harmonics below 0.45 fs with sidebands."""
+    return dict(_lines(f1, f2, z1, fs))
+
+
+@lru_cache(maxsize=64)
+def _lines(f1: float, f2: float, z1: int, fs: float) -> tuple[tuple[str, float], ...]:
     fm = z1 * f1
     lines = {"shaft1/2": f1 / 2, "shaft1": f1, "shaft1x2": 2 * f1, "shaft2": f2}
     for k in range(1, max(1, int(0.45 * fs / fm)) + 1):
@@ -130,7 +139,16 @@ def line_frequencies(f1: float, f2: float, z1: int, fs: float) -> dict[str, floa
             lines[f"mesh{k}-{name}"] = k * fm - j * f1
         lines[f"mesh{k}+g"] = k * fm + f2
         lines[f"mesh{k}-g"] = k * fm - f2
-    return lines
+    return tuple(lines.items())
+
+
+@lru_cache(maxsize=64)
+def _bands(n: int, fs: float, fm: float) -> tuple[tuple[int, int], ...]:
+    """The half-octave bands (:func:`band_edges`) as ranges of a record's one-sided spectrum
+    bins (``n`` samples): the bins of a band are contiguous."""
+    f = np.fft.rfftfreq(n, 1.0 / fs)
+    return tuple((int(np.searchsorted(f, lo, "left")), int(np.searchsorted(f, hi, "left")))
+                 for lo, hi in itertools.pairwise(band_edges(fm, fs)))
 
 
 def band_edges(fm: float, fs: float) -> np.ndarray:
@@ -150,12 +168,10 @@ def signatures(x: np.ndarray, fs: float, f1: float, f2: float, z1: int,
     """The signature of each row of ``x`` (rows, samples), one analysis segment each [dB]
     (names: :func:`signature_names`); all rows at once."""
     x = np.atleast_2d(np.asarray(x, float))
-    lines = line_frequencies(f1, f2, z1, fs)
-    amp = line_amplitudes(x, fs, np.array(list(lines.values())))
-    f, spec = power_spectrum(x, fs)
-    edges = band_edges(z1 * f1, fs)
-    bands = np.column_stack([spec[:, (f >= lo) & (f < hi)].sum(axis=1)
-                             for lo, hi in itertools.pairwise(edges)] or [np.empty((len(x), 0))])
+    amp = _amplitudes(x, float(fs), tuple(f for _, f in _lines(f1, f2, z1, fs)))
+    _, spec = power_spectrum(x, fs)
+    bands = np.column_stack([spec[:, a:b].sum(axis=1) for a, b in _bands(x.shape[-1], fs, z1 * f1)]
+                            or [np.empty((len(x), 0))])
     feat = features(x)
     stats = [feat["rms"], feat["kurtosis"], feat["crest"], _tsa_residual_kurtosis(x, fs, f1, z1)]
     stats += [np.abs(x.mean(axis=1))] if dte else []

@@ -12,7 +12,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from physics.dynamics.model import build_model, simulate
-from physics.dynamics.model_form import with_model_form, with_modulation
+from physics.dynamics.model_form import revolution_tables, with_model_form, with_modulation
 from physics.gear.stiffness import MeshStiffness
 from physics.loop import (
     BOUNDS,
@@ -449,9 +449,10 @@ def test_mesh_modulation_makes_pinion_sidebands_and_keeps_the_mean_stiffness(scn
     m = build_model(scn)
     z1 = scn.gear.z1
     mod = with_modulation(m, {"mesh_modulation": 0.05, "modulation_phase_rad": 1.0})
-    assert mod.periods == z1 and len(mod.k_a) == z1 * len(m.k_a)
-    assert np.mean(mod.k_a + mod.k_b) == pytest.approx(np.mean(m.k_a + m.k_b), rel=1e-9)
-    # a model that already spans a revolution (a tooth defect) keeps its tables' length
+    # a time term of the kernel: the tables (one mesh period, or a tooth defect's revolution)
+    # keep their length and values, so the mean stiffness over a revolution is the model's
+    assert (mod.pinion_modulation, mod.pinion_modulation_phase) == (0.05, 1.0)
+    assert mod.k_a is m.k_a and mod.k_b is m.k_b
     pit = EFFECTS["tooth_defect"].model(m, EFFECTS["tooth_defect"].defaults())
     assert len(with_modulation(pit, {"mesh_modulation": 0.05}).k_a) == len(pit.k_a)
     f1 = scn.operating.n1_rpm / 60
@@ -459,8 +460,7 @@ def test_mesh_modulation_makes_pinion_sidebands_and_keeps_the_mean_stiffness(scn
     lines = np.array([fm - f1, fm, fm + f1])
     fs = scn.dynamics.sample_rate_hz
     shallow = with_modulation(m, {"mesh_modulation": 0.02})
-    plain, = _dte([m], scn)  # one-period tables: a batch of its own
-    low, high, shifted = _dte([shallow, with_modulation(m, {"mesh_modulation": 0.04}),
+    plain, low, high, shifted = _dte([m, shallow, with_modulation(m, {"mesh_modulation": 0.04}),
                                       with_modulation(m, {"mesh_modulation": 0.04,
                                                           "modulation_phase_rad": 2.0})], scn)
     amp = {k: line_amplitudes(x, fs, lines) for k, x in
@@ -470,6 +470,14 @@ def test_mesh_modulation_makes_pinion_sidebands_and_keeps_the_mean_stiffness(scn
     assert np.all(amp["plain"][[0, 2]] < 0.05 * amp["low"][[0, 2]])
     np.testing.assert_allclose(amp["high"][[0, 2]] / amp["low"][[0, 2]], 2.0, rtol=0.1)
     np.testing.assert_allclose(amp["shifted"], amp["high"], rtol=0.05)
+    # the same modulation written into the tables cell by cell over a revolution (cell c at
+    # the pinion angle 2 pi c / n, the tables starting at t = 0): the same record
+    rev = revolution_tables(m)
+    factor = 1.0 + 0.05 * np.cos(2 * np.pi * np.arange(len(rev.k_a)) / len(rev.k_a) + 1.0)
+    tabled = dataclasses.replace(rev, k_a=rev.k_a * factor, k_b=rev.k_b * factor)
+    timed, = _dte([mod], scn)
+    cells, = _dte([tabled], scn)
+    assert np.max(np.abs(timed - cells)) < 1e-5 * np.ptp(cells)
 
 
 def test_a_gear_run_out_modulates_the_mesh_as_the_pinions_does_per_unit_eccentricity(scn):
