@@ -216,6 +216,7 @@ def explore(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[
     n_points = rec.settings.explore * (CALIBRATION_EXPLORE if wide(rec, eff) else 1)
     pts = (qmc.Sobol(dim, seed=rec.settings.seed).random(n_points) if dim and n_points
            else np.empty((0, 0)))
+
     def point(u: np.ndarray) -> Candidate:
         vals = c.option | {p.name: from_unit(float(x), p.low, p.high, p.log)
                            for p, x in zip(params, u, strict=False)}
