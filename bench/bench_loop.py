@@ -41,7 +41,8 @@ read against its own first ``N`` records (``reference=first:N``,
 :func:`physics.loop.own_reference`), the reference a user with records from commissioning has.
 Also times one bundle alone (:func:`solo_timing`; ``--timing-only``: that alone), printed
 beside the time before the loop's speed-up (:data:`REFERENCE_S`); the per-bundle seconds of
-the table are those of ``--jobs`` bundles sharing the machine.
+the table are those of ``--jobs`` bundles sharing the machine, each on its share of numba's
+threads.
 """
 
 from __future__ import annotations
