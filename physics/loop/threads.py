@@ -29,8 +29,11 @@ from concurrent.futures import ThreadPoolExecutor, as_completed
 from typing import TypeVar
 
 import numba
+import numpy as np
 from threadpoolctl import threadpool_limits
 from tqdm import tqdm
+
+from physics.dynamics.model import anti_aliased, anti_aliasing_filter
 
 F = TypeVar("F", bound=Callable)
 T = TypeVar("T")
@@ -43,11 +46,26 @@ _local = threading.local()
 
 
 def parallel_threads() -> int:
-    """Threads :func:`each` uses here: :data:`THREADS` or numba's, and 1 within an item that
-    already runs on a parallel thread (a candidate's own exploration and Jacobian)."""
+    """Threads :func:`each` uses here: :data:`THREADS` or numba's; 1 within an item that
+    already runs on a parallel thread (a candidate's own exploration and Jacobian), and 1
+    where numba's threading layer cannot run kernels from several threads at once."""
     if getattr(_local, "in_item", False):
         return 1
-    return THREADS if THREADS is not None else numba.get_num_threads()
+    if THREADS is not None:
+        return THREADS
+    return numba.get_num_threads() if concurrent_kernels() else 1
+
+
+def concurrent_kernels() -> bool:
+    """Whether threads may call numba's parallel kernels at once: the OpenMP and TBB threading
+    layers allow it, the workqueue fallback (a numba without either) does not. Numba chooses
+    the layer when a parallel kernel first runs: before that, a tiny decimation runs."""
+    try:
+        layer = numba.threading_layer()
+    except ValueError:  # no parallel kernel has run in this process yet
+        anti_aliased(np.zeros(len(anti_aliasing_filter(2))), 2, 1)
+        layer = numba.threading_layer()
+    return layer != "workqueue"
 
 
 class TimeLimit(Exception):

@@ -84,6 +84,18 @@ def test_each_keeps_the_items_order_and_runs_them_on_parallel_threads(monkeypatc
     assert len(names) == 2 and threading.current_thread().name not in names
 
 
+def test_each_runs_in_turn_where_kernels_cannot_run_from_several_threads(monkeypatch):
+    # numba's workqueue layer (no OpenMP or TBB) stops a process whose kernels two threads call
+    monkeypatch.setattr(threads.numba, "threading_layer", lambda: "workqueue")
+    assert threads.parallel_threads() == 1
+    names = set()
+    each(lambda x: names.add(threading.current_thread().name), [1, 2, 3], "test")
+    assert names == {threading.current_thread().name}
+    monkeypatch.setattr(threads.numba, "threading_layer", lambda: "omp")
+    monkeypatch.setattr(threads.numba, "get_num_threads", lambda: 2)
+    assert threads.parallel_threads() == 2
+
+
 def test_each_stops_at_the_deadline_and_passes_an_error_on(monkeypatch):
     monkeypatch.setattr(threads, "THREADS", 2)
     with pytest.raises(TimeLimit):
