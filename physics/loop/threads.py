@@ -13,10 +13,11 @@ Between the kernel calls a candidate's fit is serial work (signatures, the optim
 run one candidate at a time, that work leaves all cores but one idle. :func:`each` fits the
 candidates on as many threads as numba has, each thread's kernel calls on one numba thread
 (the kernel releases the GIL, as does the BLAS product): the cores are busy throughout. Where
-the calling thread is free (the calibration), the exploration's points and the least-squares
-Jacobian's columns run on the threads instead. Each
-candidate's computation is independent of the others' and of the thread that runs it, so the
-results are those of the serial order.
+the calling thread is free (the calibration, an operating point's wear run), the exploration's
+points and the least-squares Jacobian's columns run on the threads instead. Each candidate's
+computation is independent of the others' and of the thread that runs it, so the results are
+those of the serial order. Numba's workqueue threading layer (a numba without OpenMP or TBB)
+cannot run kernels from several threads at once: there the items run in turn.
 """
 
 from __future__ import annotations
