@@ -382,10 +382,10 @@ def _mesh_state(par, tab, pos, da, kf):
 
     ``pos`` in [0, n) is the mesh phase in table cells; the tables are interpolated linearly and
     periodically. ``da`` is the centre-distance change [m] (gear run-out): it moves the ends of
-    the path of contact; ``kf`` a factor on every pair's stiffness (the gear run-out's
-    modulation). It depends on the instant only, not on the state, so an RK4 step evaluates it
-    at its two new instants (``t + dt/2``, shared by stages 2 and 3, and ``t + dt``, also the
-    next step's stage 1).
+    the path of contact; ``kf`` a factor on every pair's stiffness (the run-outs' modulations,
+    :func:`_pinion_factor` and :func:`_extra`). It depends on the instant only, not on the
+    state, so an RK4 step evaluates it at its two new instants (``t + dt/2``, shared by stages
+    2 and 3, and ``t + dt``, also the next step's stage 1).
     """
     n = tab.shape[1]
     i0 = int(pos)
@@ -459,6 +459,13 @@ def _extra(par, t):
 
 
 @numba.njit(cache=True, fastmath=True, inline="always")
+def _pinion_factor(mu_c, mu_s, s1, c1):
+    """The pinion run-out's modulation ``1 + mu cos(w1 t + phi)`` from the sine and cosine of
+    ``w1 t`` the kernel tracks (``mu_c``, ``mu_s``: ``mu cos phi``, ``mu sin phi``)."""
+    return 1.0 + mu_c * c1 - mu_s * s1
+
+
+@numba.njit(cache=True, fastmath=True, inline="always")
 def _wrap(pos, n):
     return pos - n if pos >= n else pos
 
@@ -501,13 +508,12 @@ def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins, half, ste
         s1, c1 = math.sin(p[OMEGA1] * t0), math.cos(p[OMEGA1] * t0)
         s2, c2 = math.sin(p[OMEGA_MESH] * t0), math.cos(p[OMEGA_MESH] * t0)
         total = n_transient + k_last + 1  # the last recorded step's force needs its stages
-        # the time terms and the mesh state at the step's start: each instant's are evaluated
-        # once (the end of a step is the start of the next)
-        # the pinion run-out's modulation 1 + mu cos(w1 t + phi), from the rotation of w1 t
         mu_c = p[PINION_MODULATION] * math.cos(p[PINION_MODULATION_PHASE])
         mu_s = p[PINION_MODULATION] * math.sin(p[PINION_MODULATION_PHASE])
+        # the time terms and the mesh state at the step's start: each instant's are evaluated
+        # once (the end of a step is the start of the next)
         x0e, w0, da0, kf0 = _extra(p, t0)
-        st0 = _mesh_state(p, tab, pos, da0, kf0 * (1.0 + mu_c * c1 - mu_s * s1))
+        st0 = _mesh_state(p, tab, pos, da0, kf0 * _pinion_factor(mu_c, mu_s, s1, c1))
         for step in range(step0, total + 1):
             # the mesh at (t, x) serves both the record of the state reached and stage 1 of RK4
             l_a, l_b, f_a, f_b = _mesh(p, st0, x, v)
@@ -541,8 +547,8 @@ def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins, half, ste
             a1 = (w0 - l_a * f_a - l_b * f_b) * inv_m - e0
             pos_h = _wrap(pos + 0.5 * inc, n_tab)
             pos_1 = _wrap(pos + inc, n_tab)
-            st_h = _mesh_state(p, tab, pos_h, dah, kfh * (1.0 + mu_c * c1h - mu_s * s1h))
-            st1 = _mesh_state(p, tab, pos_1, da1, kf1 * (1.0 + mu_c * c1n - mu_s * s1n))
+            st_h = _mesh_state(p, tab, pos_h, dah, kfh * _pinion_factor(mu_c, mu_s, s1h, c1h))
+            st1 = _mesh_state(p, tab, pos_1, da1, kf1 * _pinion_factor(mu_c, mu_s, s1n, c1n))
             a2, f2 = _accel(p, st_h, x + 0.5 * dt * v, v + 0.5 * dt * a1, eh, wh, inv_m)
             a3, f3 = _accel(p, st_h, x + 0.5 * dt * (v + 0.5 * dt * a1), v + 0.5 * dt * a2, eh,
                             wh, inv_m)
