@@ -25,11 +25,13 @@ friction           dynamics   Coulomb sliding friction ``mu`` reversing at the p
 tip_relief         dynamics   linear tip relief ``C_a`` of both gears over the double-contact
                               zones (long relief): lower mesh harmonics at and below design load
 tooth_defect       dynamics   a pit or spall of depth ``d`` on one pinion tooth over a share ``s``
-                              of its face, both fitted (material loss as separation, stiffness
-                              lowered by ``s``; a shallow wide spall and a deep narrow pit differ
-                              in how much of each they make): once per pinion
-                              revolution, a family of pinion sidebands ``k f_m +- j f_1``, raised
-                              kurtosis of the synchronous-average residual
+                              of its face and a length ``l`` of its profile, all three fitted
+                              (material loss as separation, stiffness lowered by ``s``; a
+                              shallow wide spall and a deep narrow pit differ in how much of
+                              each they make, ``l`` in how sharp their impulse is): once per
+                              pinion revolution, a family of pinion sidebands
+                              ``k f_m +- j f_1``, raised kurtosis of the synchronous-average
+                              residual
 transfer_path      measure    a structural mode (``f_n``, ``zeta`` 0.01-0.1, residue ``g``
                               -1 to 1) between mesh and accelerometer, the rigid path plus the
                               mode's accelerance (``g = 1``: a sensor on a base-excited
@@ -70,6 +72,7 @@ class Param:
     high: float
     typical: float  # a realistic size (used by the bundle generator)
     log: bool = True
+    shape: bool = False  # a shape (a length), not a size: kept as a wear-grown effect grows
 
 
 @dataclass(frozen=True)
@@ -196,9 +199,12 @@ EFFECTS: dict[str, Effect] = {e.name: e for e in (
     Effect("friction", "dynamics", (Param("mu", "1", 0.003, 0.3, 0.06),), model=_friction),
     Effect("tip_relief", "dynamics", (Param("relief_um", "um", 0.5, 60.0, 15.0),),
            model=_tip_relief),
+    # pits and spalls run from a few tenths of a millimetre to a few millimetres along the
+    # profile; the length sets how sharp the once-per-revolution impulse is
     Effect("tooth_defect", "dynamics", (Param("depth_um", "um", 0.5, 100.0, 20.0),
-                                        Param("face_share", "1", 0.05, 0.9, 0.3, log=False)),
-           options=({"centre_mm": -0.5, "length_mm": 1.5},),
+                                        Param("face_share", "1", 0.05, 0.9, 0.3, log=False),
+                                        Param("length_mm", "mm", 0.2, 4.0, 1.5, shape=True)),
+           options=({"centre_mm": -0.5},),
            grows_with_wear=True, model=_tooth_defect),
     # a structural mode's damping: 1-10 %, the range the datasets draw for the same mode
     # (``physics.dataset.generation.NuisanceRanges.transfer_zeta``: first plate modes of small

@@ -11,7 +11,8 @@ Table 13 features of model and measurement are compared as log ratios.
    the healthy machine, and the change with wear is what the model must then explain.
 2. **Attribution**: every effect of :mod:`physics.loop.effects` that can show in the quantity is
    added; effects marked ``grows_with_wear`` (a local defect, backlash growth) take their size
-   in proportion to the row's wear depth (zero on the unworn row), the others a constant size.
+   in proportion to the row's wear depth (zero on the unworn row; a shape parameter such as a
+   pit's length is kept), the others a constant size.
    Each is judged by leave-one-row-out error (its parameters, ``m_h`` and noise refitted on the
    other rows with the structural nuisance kept, the left-out row predicted; the calibrated
    model alone gets the same refit) and by BIC (Gaussian, unknown variance) on all rows;
@@ -126,7 +127,8 @@ def model_features(td: TableData, rows: np.ndarray, nuisance: dict, eff: Effect 
 def _sized(eff: Effect, values: dict, share: float) -> dict:
     if not eff.grows_with_wear:
         return values
-    return {k: (v * share if k in {p.name for p in eff.params} else v) for k, v in values.items()}
+    sizes = {p.name for p in eff.params if not p.shape}
+    return {k: (v * share if k in sizes else v) for k, v in values.items()}
 
 
 def _log_ratio(td: TableData, rows: np.ndarray, model: np.ndarray) -> np.ndarray:
