@@ -268,15 +268,19 @@ def anti_aliased(fine: np.ndarray, n_sub: int, n_out: int) -> np.ndarray:
 
 @numba.njit(cache=True, parallel=True, fastmath=True, nogil=True)
 def _decimate(h, x, n_sub, n_out):
-    """``y[r, i] = sum_t h[t] x[r, i n_sub + t]`` (``h`` symmetric: a convolution)."""
+    """``y[r, i] = sum_t h[t] x[r, i n_sub + t]`` (``h`` symmetric: a convolution). The inner
+    product runs over a one-dimensional slice of the row, which numba vectorises (indexing the
+    2-D array in the loop kept it scalar: five times slower)."""
     y = np.empty((x.shape[0], n_out))
+    taps = h.size
     for r in numba.prange(x.shape[0]):
+        row, out = x[r], y[r]
         for i in range(n_out):
+            window = row[i * n_sub:i * n_sub + taps]
             acc = 0.0
-            base = i * n_sub
-            for t in range(h.size):
-                acc += h[t] * x[r, base + t]
-            y[r, i] = acc
+            for t in range(taps):
+                acc += h[t] * window[t]
+            out[i] = acc
     return y
 
 

@@ -97,6 +97,12 @@ class Effect:
     def defaults(self) -> dict:
         return {p.name: p.typical for p in self.params} | dict(self.options[0])
 
+    def scaled(self, values: dict, share: float) -> dict:
+        """``values`` with the effect's sizes times ``share``; its shapes (a pit's length) and
+        options kept."""
+        sizes = {p.name for p in self.params if not p.shape}
+        return {k: v * share if k in sizes else v for k, v in values.items()}
+
     def bounds(self) -> list[tuple[str, float, float, bool]]:
         """(name, low, high, log) of each parameter: the free-parameter form of the fits."""
         return [(p.name, p.low, p.high, p.log) for p in self.params]

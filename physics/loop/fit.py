@@ -173,7 +173,7 @@ def screen_effect(rec: Records, eff: Effect, option: dict, nuisance: dict) -> Ca
     ``m_h`` levelled at each), the best grid point polished by a short least squares of the
     effect's parameters and ``m_h`` (a grid step is a seventh of the range, a factor of 1.4
     even for a sensor gain, too coarse for a signature as sharp as a gain on the DTE mean)."""
-    per = 7 if len(eff.params) == 1 else 5
+    per = {1: 7, 2: 5}.get(len(eff.params), 4)
     best = None
     for u in itertools.product(*[np.linspace(0.05, 0.95, per)] * len(eff.params)):
         vals = option | {p.name: from_unit(x, p.low, p.high, p.log)

@@ -125,10 +125,7 @@ def model_features(td: TableData, rows: np.ndarray, nuisance: dict, eff: Effect 
 
 
 def _sized(eff: Effect, values: dict, share: float) -> dict:
-    if not eff.grows_with_wear:
-        return values
-    sizes = {p.name for p in eff.params if not p.shape}
-    return {k: (v * share if k in sizes else v) for k, v in values.items()}
+    return eff.scaled(values, share) if eff.grows_with_wear else values
 
 
 def _log_ratio(td: TableData, rows: np.ndarray, model: np.ndarray) -> np.ndarray:

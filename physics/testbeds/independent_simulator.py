@@ -788,13 +788,19 @@ def make_independent_bundle(
         quantities: Sequence[str] = ("dte_m",), fs_hz: float = 40960.0,
         duration_s: float = 0.5, snr_db: float = 30.0, seed: int = 0,
         effect_size: float = 1.0, pair: IndependentPair | None = None,
-        values: dict | None = None) -> tuple[Path, dict]:
+        values: dict | None = None, onset: float | None = None,
+        cycles_max: float | None = None) -> tuple[Path, dict]:
     """Write a bundle (``shared/specs/measured-bundle.md``) of the independent model: one record
     per operating point x wear depth x quantity, all from one gear set (its error phases drawn
     once from ``seed``), each record at its own random start angle and with its own noise.
 
     ``values`` set some of the effect's values beyond its typical ones: ``{"order": 2.6}``
     puts a torque ripple at a non-integer order of the pinion shaft (default: 1/2).
+    ``onset`` (a share of the life, 0-1): the effect appears during the bundle's life, in the
+    records of at least ``onset`` times the largest wear depth only (the earlier ones are
+    clean). ``cycles_max``: the load cycles of the largest wear depth's records, the others' in
+    proportion to their wear (a constant wear rate), so that the earliest records can be a
+    reference (``reference=first:N``); without it the manifest's cycles are empty.
 
     Returns the bundle's path and the truth: the effect (canonical name), its values, the
     pair's parameters, the seed, and ``effect_to_noise_db``, the power the effect adds to the
@@ -812,6 +818,13 @@ def make_independent_bundle(
     wears = list(wear_mm)
     if not wears:
         raise _bad("wear_mm", wear_mm, "must hold at least one wear depth")
+    if onset is not None and not 0.0 < onset <= 1.0:
+        raise _bad("onset", onset, "must be a share of the life in (0, 1]; e.g. 0.3 leaves "
+                   "the wear states below 30 % of the largest clean")
+    if cycles_max is not None and not (math.isfinite(cycles_max) and cycles_max > 0
+                                       and max(wears) > 0):
+        raise _bad("cycles_max", cycles_max, "must be a number of load cycles > 0, given with "
+                   "a wear depth > 0 (the cycles are in proportion to the wear)")
     qs = list(quantities)
     if not qs or any(q not in QUANTITIES for q in qs) or len(set(qs)) != len(qs):
         raise _bad("quantities", quantities, f"must be distinct names from {QUANTITIES}")
@@ -844,15 +857,16 @@ def make_independent_bundle(
             theta0 = float(rng.uniform(0.0, 12 * np.pi))
             args = (pair, float(n1), float(torque), float(wear), float(fs_hz),
                     float(duration_s))
-            dte, acc = _respond(*args, name, values, phases, theta0)
+            here = name if onset is None or wear >= onset * max(wears) else None
+            dte, acc = _respond(*args, here, values, phases, theta0)
             plain = None
-            if name == "sensor":  # acts after the response only
+            if here == "sensor":  # acts after the response only
                 plain = (dte, acc)
-            elif name is not None:
+            elif here is not None:
                 plain = _respond(*args, None, {}, phases, theta0)
             for q in qs:
                 rec_rng = np.random.default_rng([seed, 2, i_op, i_w, QUANTITIES.index(q)])
-                y, clean = _finish(dte, acc, q, pair, name, values, snr_db, rec_rng)
+                y, clean = _finish(dte, acc, q, pair, here, values, snr_db, rec_rng)
                 if plain is not None and q in _EFFECTS[name][2]:
                     base = plain[0] if q == "dte_m" else plain[1]
                     scale = np.mean((clean - clean.mean()) ** 2)
@@ -863,7 +877,10 @@ def make_independent_bundle(
                 signals[rec] = np.ascontiguousarray(y, dtype=np.float64)
                 rows.append({"record": rec, "quantity": q, "fs_hz": float(fs_hz),
                              "n1_rpm": float(n1), "torque_Nm": float(torque),
-                             "wear_mm": float(wear), "cycles": np.nan, "split": ""})
+                             "wear_mm": float(wear),
+                             "cycles": (math.nan if cycles_max is None
+                                        else cycles_max * wear / max(wears)),
+                             "split": ""})
     manifest = pd.DataFrame(rows, columns=["record", "quantity", "fs_hz", "n1_rpm",
                                            "torque_Nm", "wear_mm", "cycles", "split"])
     gear = {}
@@ -882,6 +899,6 @@ def make_independent_bundle(
         "pair": dataclasses.asdict(pair),
         "phases": dataclasses.asdict(phases), "snr_db": snr_db,
         "k_mean_N_m": pair.k_mean, "equivalent_mass_kg": pair.equivalent_mass,
-        "effect_to_noise_db": e2n,
+        "effect_to_noise_db": e2n, "onset": onset,
     }
     return out, truth

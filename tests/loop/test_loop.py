@@ -316,6 +316,32 @@ def test_tooth_defect_is_once_per_revolution(scn, healthy):
     assert a[1] > 3 * a[0]
 
 
+def test_a_shorter_pit_is_a_sharper_impulse(healthy):
+    """The stiffness a pit takes over the pinion's revolution is a cos^2 bump in roll: its
+    spectrum's centroid over the revolution's orders scales as one over the pit's length."""
+
+    def centroid(length_mm):
+        values = EFFECTS["tooth_defect"].defaults() | {"length_mm": length_mm}
+        pit = effect("tooth_defect").model(healthy, values)
+        lost = sum(np.tile(getattr(healthy, k), pit.periods) - getattr(pit, k)
+                   for k in ("k_a", "k_b"))
+        power = np.abs(np.fft.rfft(lost))[1:] ** 2
+        order = np.arange(1, len(power) + 1)
+        return float(np.sum(order * power) / np.sum(power))
+
+    assert centroid(0.5) / centroid(2.0) == pytest.approx(4.0, rel=0.05)
+
+
+def test_a_grown_pit_keeps_its_length():
+    """A feature table's wear-grown pit scales its depth and face share with the wear; its
+    length along the profile, a shape, and its centre stay."""
+    pit = EFFECTS["tooth_defect"]
+    v = pit.defaults()
+    half = pit.scaled(v, 0.5)
+    assert half["depth_um"] == 0.5 * v["depth_um"] and half["face_share"] == 0.5 * v["face_share"]
+    assert half["length_mm"] == v["length_mm"] and half["centre_mm"] == v["centre_mm"]
+
+
 @pytest.mark.parametrize("centre_mm", [-3.0, -2.0, -0.5])  # on pair A's stretch
 def test_tooth_defect_sits_where_its_centre_says_and_spans_its_length(healthy, centre_mm):
     """The pit lowers tooth 0's stiffness around its centre on the roll coordinate, over its
