@@ -265,6 +265,28 @@ def test_bad_pair_parameters_name_field_and_value(kwargs, named):
         IndependentPair(**kwargs)
 
 
+def test_an_effect_that_appears_during_the_life_leaves_the_earlier_records_clean(tmp_path):
+    """With ``onset`` the records below that share of the largest wear are those of the same
+    gear set without the effect, byte for byte; the later ones carry it; ``cycles_max`` gives
+    the records load cycles in proportion to their wear, which order them for a reference."""
+    kw = {"wear_mm": (0.0, 0.004, 0.012), "quantities": ("dte_m",), "duration_s": 0.34,
+          "seed": 5}
+    clean, _ = make_independent_bundle(tmp_path / "clean", **kw)
+    path, truth = make_independent_bundle(tmp_path / "late", effect="gear_runout", onset=0.5,
+                                          cycles_max=3e6, **kw)
+    man = read_bundle(path).manifest
+    assert truth["onset"] == 0.5 and truth["effect_to_noise_db"] > -20
+    assert np.allclose(man.cycles, 3e6 * man.wear_mm / 0.012)
+    for rec, wear in zip(man.record, man.wear_mm, strict=True):
+        same = ((path / "signals" / f"{rec}.npy").read_bytes()
+                == (clean / "signals" / f"{rec}.npy").read_bytes())
+        assert same == (wear < 0.5 * 0.012), (rec, wear)
+    for bad, named in (({"onset": 0.0}, "onset = 0.0"), ({"cycles_max": -1.0}, "cycles_max")):
+        with pytest.raises(ValueError, match=named):
+            make_independent_bundle(tmp_path / "bad", effect="gear_runout", **(kw | bad))
+    assert not (tmp_path / "bad").exists()
+
+
 def test_bad_bundle_arguments(tmp_path):
     with pytest.raises(ValueError, match=r"duration_s = 0\.2"):  # < 10 revolutions
         make_independent_bundle(tmp_path / "x", duration_s=0.2)
