@@ -36,10 +36,10 @@ transfer-path mode from the mesh) the other's may.
 mounting), at the bundle's operating points and quantities; its calibration is made once and
 timed apart.
 ``--own-history N``: every effect appears during the bundle's life (in the records from
-:data:`ONSET` of the cycles on, with the independent generator of its largest wear; the earlier
-ones are clean) and every bundle is read against its own first ``N`` records of each group
-(``reference=first:N``, :func:`physics.loop.own_reference`), the reference a user with records
-from commissioning has.
+:data:`ONSET` of the cycles on, with the independent generator of its largest wear, its records
+dated in order of wear; the earlier ones are clean) and every bundle is read against its own
+first ``N`` records of each group (``reference=first:N``, :func:`physics.loop.own_reference`),
+the reference a user with records from commissioning has.
 Also times one bundle alone (:func:`solo_timing`; ``--timing-only``: that alone), printed
 beside the time before the loop's speed-up (:data:`REFERENCE_S`); the per-bundle seconds of
 the table are those of ``--jobs`` bundles sharing the machine, each on its share of numba's
@@ -87,9 +87,6 @@ from physics.testbeds import (
 
 #: ``--own-history``: the share of the life after which the effect is in the records
 ONSET = 0.3
-#: ``--own-history`` with the independent generator: the load cycles of its largest wear state
-#: (the others' in proportion), which order the records for ``first:N``
-CYCLES_MAX = 1.5e7
 #: effect-to-noise power [dB] below which an effect has not changed the records (round-off)
 ABSENT_DB = -100.0
 #: one bundle alone on 2 cores before the loop's speed-up (one BLAS thread, records integrated
@@ -122,7 +119,7 @@ def one(job: tuple[str, str | None, int, int, bool, str, tuple[str, ...], str,
     if generator == "independent":
         path, truth = make_independent_bundle(
             folder, name, quantities=quantities, seed=seed, onset=ONSET if history else None,
-            cycles_max=CYCLES_MAX if history else None)
+            dated=bool(history))
     else:
         path, truth = make_bundle(folder, base, name, seed, quantity=quantity, records=records,
                                   onset=ONSET if history else None)

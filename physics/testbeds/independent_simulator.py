@@ -124,6 +124,8 @@ from physics.loop.bundle import write_bundle
 
 QUANTITIES = ("dte_m", "accel_m_s2")
 STEEL_E = 206e9  # Pa, ISO 6336-1 steel reference modulus
+#: the first wear state's date in a dated bundle (arbitrary)
+EPOCH = pd.Timestamp("2000-01-03")
 
 # effect -> (typical values at effect_size 1, how each value scales with effect_size, quantities)
 _EFFECTS: dict[str, tuple[dict, dict, tuple[str, ...]]] = {
@@ -789,7 +791,7 @@ def make_independent_bundle(
         duration_s: float = 0.5, snr_db: float = 30.0, seed: int = 0,
         effect_size: float = 1.0, pair: IndependentPair | None = None,
         values: dict | None = None, onset: float | None = None,
-        cycles_max: float | None = None) -> tuple[Path, dict]:
+        dated: bool = False) -> tuple[Path, dict]:
     """Write a bundle (``shared/specs/measured-bundle.md``) of the independent model: one record
     per operating point x wear depth x quantity, all from one gear set (its error phases drawn
     once from ``seed``), each record at its own random start angle and with its own noise.
@@ -798,9 +800,11 @@ def make_independent_bundle(
     puts a torque ripple at a non-integer order of the pinion shaft (default: 1/2).
     ``onset`` (a share of the life, 0-1): the effect appears during the bundle's life, in the
     records of at least ``onset`` times the largest wear depth only (the earlier ones are
-    clean). ``cycles_max``: the load cycles of the largest wear depth's records, the others' in
-    proportion to their wear (a constant wear rate), so that the earliest records can be a
-    reference (``reference=first:N``); without it the manifest's cycles are empty.
+    clean). ``dated``: the manifest gets a ``time`` column (ISO 8601), the wear states a week
+    apart in order of wear, so that the earliest records can be a reference
+    (``reference=first:N``); the cycles stay unknown, so the loop reads its model at each
+    record's stated wear (at cycle counts its own wear law would put there, the model's other
+    wear rate would be a residual of its own).
 
     Returns the bundle's path and the truth: the effect (canonical name), its values, the
     pair's parameters, the seed, and ``effect_to_noise_db``, the power the effect adds to the
@@ -821,10 +825,6 @@ def make_independent_bundle(
     if onset is not None and not 0.0 < onset <= 1.0:
         raise _bad("onset", onset, "must be a share of the life in (0, 1]; e.g. 0.3 leaves "
                    "the wear states below 30 % of the largest clean")
-    if cycles_max is not None and not (math.isfinite(cycles_max) and cycles_max > 0
-                                       and max(wears) > 0):
-        raise _bad("cycles_max", cycles_max, "must be a number of load cycles > 0, given with "
-                   "a wear depth > 0 (the cycles are in proportion to the wear)")
     qs = list(quantities)
     if not qs or any(q not in QUANTITIES for q in qs) or len(set(qs)) != len(qs):
         raise _bad("quantities", quantities, f"must be distinct names from {QUANTITIES}")
@@ -877,12 +877,12 @@ def make_independent_bundle(
                 signals[rec] = np.ascontiguousarray(y, dtype=np.float64)
                 rows.append({"record": rec, "quantity": q, "fs_hz": float(fs_hz),
                              "n1_rpm": float(n1), "torque_Nm": float(torque),
-                             "wear_mm": float(wear),
-                             "cycles": (math.nan if cycles_max is None
-                                        else cycles_max * wear / max(wears)),
-                             "split": ""})
+                             "wear_mm": float(wear), "cycles": np.nan, "split": ""}
+                            | ({"time": (EPOCH + pd.Timedelta(weeks=i_w)).isoformat()}
+                               if dated else {}))
     manifest = pd.DataFrame(rows, columns=["record", "quantity", "fs_hz", "n1_rpm",
-                                           "torque_Nm", "wear_mm", "cycles", "split"])
+                                           "torque_Nm", "wear_mm", "cycles", "split",
+                                           *(["time"] if dated else [])])
     gear = {}
     thesis = IndependentPair()
     for key in ("module_mm", "z1", "z2", "pressure_angle_deg", "face_width_mm"):

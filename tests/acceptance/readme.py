@@ -281,6 +281,8 @@ DOCS: dict[str, Case] = {
         ("--seeds", "1", "--null-seeds", "1"), slow=True, timeout=2700),
     "python bench/bench_loop.py --own-history 3": Case(
         ("--seeds", "1", "--null-seeds", "1", "--records", "8"), slow=True, timeout=2700),
+    "python bench/bench_loop.py --generator independent --own-history 2": Case(
+        ("--seeds", "1", "--null-seeds", "1"), slow=True, timeout=2700),
 }
 #: the snippets of the docs pages (own data): a table of a user's own, from the built dataset
 DOCS_SNIPPETS: dict[str, Case] = {

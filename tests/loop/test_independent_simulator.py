@@ -10,6 +10,7 @@ import sys
 import time
 
 import numpy as np
+import pandas as pd
 import pytest
 from scipy import stats
 
@@ -267,23 +268,24 @@ def test_bad_pair_parameters_name_field_and_value(kwargs, named):
 
 def test_an_effect_that_appears_during_the_life_leaves_the_earlier_records_clean(tmp_path):
     """With ``onset`` the records below that share of the largest wear are those of the same
-    gear set without the effect, byte for byte; the later ones carry it; ``cycles_max`` gives
-    the records load cycles in proportion to their wear, which order them for a reference."""
+    gear set without the effect, byte for byte; the later ones carry it; ``dated`` dates the
+    wear states a week apart in order of wear, which orders them for a reference."""
     kw = {"wear_mm": (0.0, 0.004, 0.012), "quantities": ("dte_m",), "duration_s": 0.34,
           "seed": 5}
     clean, _ = make_independent_bundle(tmp_path / "clean", **kw)
     path, truth = make_independent_bundle(tmp_path / "late", effect="gear_runout", onset=0.5,
-                                          cycles_max=3e6, **kw)
+                                          dated=True, **kw)
     man = read_bundle(path).manifest
     assert truth["onset"] == 0.5 and truth["effect_to_noise_db"] > -20
-    assert np.allclose(man.cycles, 3e6 * man.wear_mm / 0.012)
+    days = pd.to_datetime(man.time).map(pd.Timestamp.toordinal).to_numpy()
+    assert np.array_equal(np.argsort(days, kind="stable"), np.argsort(man.wear_mm, kind="stable"))
+    assert man.cycles.isna().all()
     for rec, wear in zip(man.record, man.wear_mm, strict=True):
         same = ((path / "signals" / f"{rec}.npy").read_bytes()
                 == (clean / "signals" / f"{rec}.npy").read_bytes())
         assert same == (wear < 0.5 * 0.012), (rec, wear)
-    for bad, named in (({"onset": 0.0}, "onset = 0.0"), ({"cycles_max": -1.0}, "cycles_max")):
-        with pytest.raises(ValueError, match=named):
-            make_independent_bundle(tmp_path / "bad", effect="gear_runout", **(kw | bad))
+    with pytest.raises(ValueError, match=r"onset = 0\.0"):
+        make_independent_bundle(tmp_path / "bad", effect="gear_runout", onset=0.0, **kw)
     assert not (tmp_path / "bad").exists()
 
 
