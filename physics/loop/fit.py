@@ -197,14 +197,14 @@ def wide(rec: Records, eff: Effect | None) -> bool:
 def explore(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[str]
             ) -> list[Candidate]:
     """``c`` and a scrambled Sobol sample (``settings.explore`` points, twice as many for each
-    effect parameter beyond the first) over the effect's whole
-    range and the dynamic nuisance within ``EXPLORE_SPAN`` (unit coordinates) of its declared
-    values (the model form: of ``c``'s; in the calibration ``CALIBRATION_EXPLORE`` times as
-    many points, with ``loop.model_form``, :func:`wide`, the model form over its whole range;
-    the default loop's run-out modulation around its declared value, none),
-    ``m_h`` levelled at each; best first. A missing effect drags the calibration
-    (to the bounds, at worst), and least squares from a single start stays in its basin; the
-    declared values are the prior that does not depend on the fit."""
+    effect parameter beyond the first) over the effect's whole range and the dynamic nuisance
+    within ``EXPLORE_SPAN`` (unit coordinates) of its declared values (the model form: of
+    ``c``'s; in the calibration ``CALIBRATION_EXPLORE`` times as many points, with
+    ``loop.model_form``, :func:`wide`, the model form over its whole range; the default loop's
+    run-out modulation around its declared value, none), ``m_h`` levelled at each; best first.
+    A missing effect drags the calibration (to the bounds, at worst), and least squares from a
+    single start stays in its basin; the declared values are the prior that does not depend on
+    the fit."""
     params = eff.params if eff is not None else ()
     dyn = [n for n in free_nuisance if n in EXPLORED]
     # the scenario's nuisance (and support mode) around its declared values; the model form
