@@ -58,8 +58,8 @@ MIN_SENSITIVITY = 0.02
 EXPLORE_SPAN = 0.25
 #: the calibration explores this many times ``loop.explore`` points: every candidate starts from
 #: it, and an effect in every record drags it into a basin of its own (an independent bundle
-#: with a pit: damping ratio 0.010 and run-out modulation 0.125 from 32 points, 0.126 and 0.2
-#: from 128, from which the pit is found and its held-out error halved); with the model form
+#: with a pit: damping ratio 0.010 and run-out modulation 0.125 from 32 points, and a transfer
+#: path named; 0.126 and 0.2 from 128, and the pit named, 14.4 -> 8.5); with the model form
 #: over its whole range the resonance's residual surface has a basin per mesh harmonic as well
 CALIBRATION_EXPLORE = 4
 #: ... and refines this many of its best points by least squares, keeping the best fit: from
