@@ -124,8 +124,8 @@ from physics.loop.bundle import write_bundle
 
 QUANTITIES = ("dte_m", "accel_m_s2")
 STEEL_E = 206e9  # Pa, ISO 6336-1 steel reference modulus
-#: the first wear state's date in a dated bundle (arbitrary)
-EPOCH = pd.Timestamp("2000-01-03")
+#: the first wear state's time in a dated bundle: the Unix epoch (any start would do)
+EPOCH = pd.Timestamp(0)
 
 # effect -> (typical values at effect_size 1, how each value scales with effect_size, quantities)
 _EFFECTS: dict[str, tuple[dict, dict, tuple[str, ...]]] = {
