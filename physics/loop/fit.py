@@ -197,11 +197,13 @@ def wide(rec: Records, eff: Effect | None) -> bool:
 def explore(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[str]
             ) -> list[Candidate]:
     """``c`` and a scrambled Sobol sample (``settings.explore`` points, twice as many for each
-    effect parameter beyond the first) over the effect's whole range and the dynamic nuisance
-    within ``EXPLORE_SPAN`` (unit coordinates) of its declared values (the model form: of
-    ``c``'s; in the calibration ``CALIBRATION_EXPLORE`` times as many points, with
-    ``loop.model_form``, :func:`wide`, the model form over its whole range; the default loop's
-    run-out modulation around its declared value, none), ``m_h`` levelled at each; best first.
+    effect parameter beyond the first; a measurement stage's extra points share the dynamic
+    nuisance, and so the simulation, of the ``settings.explore`` others) over the effect's
+    whole range and the dynamic nuisance within ``EXPLORE_SPAN`` (unit coordinates) of its
+    declared values (the model form: of ``c``'s; in the calibration ``CALIBRATION_EXPLORE``
+    times as many points, with ``loop.model_form``, :func:`wide`, the model form over its whole
+    range; the default loop's run-out modulation around its declared value, none), ``m_h``
+    levelled at each; best first.
     A missing effect drags the calibration (to the bounds, at worst), and least squares from a
     single start stays in its basin; the declared values are the prior that does not depend on
     the fit."""
@@ -221,10 +223,16 @@ def explore(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[
     # for each parameter beyond the first (a pit's depth, face share and length from 32
     # points: 0.5 um, 0.74, 2.8 mm, held-out error 3.2; from 128: 22 um, 0.43, 1.18 mm, 1.25,
     # the true pit's 26 um, 0.41, 1.18 mm giving 1.24)
-    n_points = rec.settings.explore * (CALIBRATION_EXPLORE if eff is None
-                                       else 2 ** max(len(params) - 1, 0))
+    per_dynamics = 2 ** max(len(params) - 1, 0)
+    n_points = rec.settings.explore * (CALIBRATION_EXPLORE if eff is None else per_dynamics)
     pts = (qmc.Sobol(dim, seed=rec.settings.seed).random(n_points) if dim and n_points
            else np.empty((0, 0)))
+    # a measurement stage leaves the dynamics alone: its extra points share the dynamic
+    # nuisance of the first of each block (one simulation per block, :func:`responses`' cache),
+    # the dynamics as widely explored as for any one-parameter effect
+    shared = eff is not None and eff.model is None and dyn and per_dynamics > 1
+    if shared:
+        pts[:, len(params):] = np.repeat(pts[::per_dynamics, len(params):], per_dynamics, axis=0)
 
     def point(u: np.ndarray) -> Candidate:
         vals = c.option | {p.name: from_unit(float(x), p.low, p.high, p.log)
@@ -237,7 +245,12 @@ def explore(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[
         return dataclasses.replace(c, values=vals, nuisance=nui,
                                    train_rss=train_cost(rec, nui, eff, vals))
 
-    found = [c, *each(point, list(pts), "exploring")]
+    if shared:  # a block on one thread: its points after the first find the simulation kept
+        blocks = each(lambda b: [point(u) for u in b],
+                      list(pts.reshape(-1, per_dynamics, dim)), "exploring")
+        found = [c, *itertools.chain.from_iterable(blocks)]
+    else:
+        found = [c, *each(point, list(pts), "exploring")]
     return sorted(found, key=lambda x: x.train_rss)  # stable: the first of equals leads
 
 

@@ -5,6 +5,7 @@ and Jacobian columns on parallel threads (the results those of the serial order)
 from __future__ import annotations
 
 import dataclasses
+import math
 import threading
 import time
 
@@ -144,3 +145,23 @@ def test_candidates_on_parallel_threads_find_what_they_find_in_turn(small_record
     parallel = fitted()
     monkeypatch.setattr(threads, "THREADS", 1)
     assert fitted() == parallel
+
+
+def test_a_measurement_stage_explores_its_parameters_on_shared_dynamics(small_records):
+    """The transfer path's exploration (three parameters: four times the points of a
+    one-parameter effect): its points span as many distinct dynamic nuisance draws as a
+    one-parameter effect's, each shared by four draws of the path's parameters; each point's
+    cost is its own (the same as computed afresh with nothing kept)."""
+    from physics.loop.fit import Candidate, explore, train_cost
+
+    rec, nui = small_records
+    eff = EFFECTS["transfer_path"]
+    c = Candidate(eff.name, {}, eff.defaults(), nui, math.inf, len(eff.params))
+    rec.cache.clear()
+    found = [p for p in explore(rec, eff, c, ["damping_ratio", "housing_mass_kg"]) if p is not c]
+    assert len(found) == 4 * rec.settings.explore
+    assert len({p.nuisance["damping_ratio"] for p in found}) == rec.settings.explore
+    assert len({p.values["fn_hz"] for p in found}) == len(found)
+    rec.cache.clear()
+    for p in found:
+        assert train_cost(rec, p.nuisance, eff, p.values) == p.train_rss
