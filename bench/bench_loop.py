@@ -258,6 +258,10 @@ def main() -> None:
     told = right | (eff.verdict == "unexplained_residual")
     print(f"right effect named, or an unexplained residual reported: {told.mean():.0%} of them "
           f"('none' on {int((eff.verdict == 'none').sum())})")
+    beyond = eff[eff.beyond_chance]
+    print(f"  'none' where the error before exceeds every clean bundle's of its quantity (the "
+          f"clean floor's chance level): {int((beyond.verdict == 'none').sum())} of "
+          f"{len(beyond)} such bundles (target 0)")
     print(f"held-out error at least halved: {halved.mean():.0%} of them (target >= 90 %)")
     print(f"  halving attainable (error before at least twice the smallest clean bundle's of "
           f"its quantity) on {int(eff.halving_attainable.sum())} of them; halved on "

@@ -116,10 +116,14 @@ def attainable(runs: pd.DataFrame) -> pd.DataFrame:
     smallest held-out error of the clean bundles of its quantity (what the declared model
     misses on records without any effect: the form error and noise a perfect fit of the effect
     leaves, at best), and ``halving_attainable``, its error before at least twice that. Where
-    the effect adds less than the form error already is, no fit of it can halve the error."""
-    clean = runs[runs.truth == "none"].groupby("quantity").error_before.min()
-    floor = runs.quantity.map(clean)
-    return runs.assign(clean_floor=floor, halving_attainable=runs.error_before >= 2 * floor)
+    the effect adds less than the form error already is, no fit of it can halve the error.
+    ``beyond_chance``: its error before exceeds every clean bundle's of its quantity (the clean
+    floor's chance level: the largest form error of the clean draws); a bundle below it cannot
+    be told from a clean one by its error alone."""
+    clean = runs[runs.truth == "none"].groupby("quantity").error_before
+    floor = runs.quantity.map(clean.min())
+    return runs.assign(clean_floor=floor, halving_attainable=runs.error_before >= 2 * floor,
+                       beyond_chance=runs.error_before > runs.quantity.map(clean.max()))
 
 
 def best_candidate(r) -> dict:

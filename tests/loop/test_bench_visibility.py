@@ -65,7 +65,8 @@ def test_a_bundle_stands_out_only_above_every_other_clean_bundle_of_its_quantity
 
 def test_halving_is_attainable_only_where_the_effect_stands_twice_above_the_clean_floor(bench):
     """The floor is the smallest clean bundle's error of the same quantity: a perfect fit of
-    the effect leaves at best what the declared model misses without any effect."""
+    the effect leaves at best what the declared model misses without any effect; the chance
+    level is the largest."""
     runs = pd.DataFrame({
         "truth": ["none", "none", "none", "friction", "tip_relief", "sensor"],
         "quantity": ["accel_m_s2", "accel_m_s2", "dte_m", "accel_m_s2", "accel_m_s2", "dte_m"],
@@ -73,3 +74,5 @@ def test_halving_is_attainable_only_where_the_effect_stands_twice_above_the_clea
     out = bench.attainable(runs)
     assert out.clean_floor.tolist() == [3.3, 3.3, 3.4, 3.3, 3.3, 3.4]
     assert out.halving_attainable.tolist() == [False, False, False, True, False, False]
+    # beyond the largest clean error of the quantity (3.9 acceleration, 3.4 DTE)
+    assert out.beyond_chance.tolist() == [False, False, False, True, True, True]
