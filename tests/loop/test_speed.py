@@ -19,7 +19,7 @@ from physics.loop.bundle import read_bundle
 from physics.loop.config import LoopSettings
 from physics.loop.declared import completed
 from physics.loop.effects import EFFECTS
-from physics.loop.fit import screen_effect, search
+from physics.loop.fit import Candidate, explore, screen_effect, search, train_cost
 from physics.loop.records import prepare
 from physics.loop.simulation import SETTLE_DECAYS
 from physics.loop.threads import TimeLimit, each, one_blas_thread
@@ -152,8 +152,6 @@ def test_a_measurement_stage_explores_its_parameters_on_shared_dynamics(small_re
     one-parameter effect): its points span as many distinct dynamic nuisance draws as a
     one-parameter effect's, each shared by four draws of the path's parameters; each point's
     cost is its own (the same as computed afresh with nothing kept)."""
-    from physics.loop.fit import Candidate, explore, train_cost
-
     rec, nui = small_records
     eff = EFFECTS["transfer_path"]
     c = Candidate(eff.name, {}, eff.defaults(), nui, math.inf, len(eff.params))
