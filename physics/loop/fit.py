@@ -230,9 +230,8 @@ def explore(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[
     # a measurement stage leaves the dynamics alone: its extra points share the dynamic
     # nuisance of the first of each block (one simulation per block, :func:`responses`' cache),
     # the dynamics as widely explored as for any one-parameter effect
-    shared = eff is not None and eff.model is None and dyn and per_dynamics > 1
-    if shared:
-        pts[:, len(params):] = np.repeat(pts[::per_dynamics, len(params):], per_dynamics, axis=0)
+    block = per_dynamics if eff is not None and eff.model is None and dyn else 1
+    pts[:, len(params):] = np.repeat(pts[::block, len(params):], block, axis=0)
 
     def point(u: np.ndarray) -> Candidate:
         vals = c.option | {p.name: from_unit(float(x), p.low, p.high, p.log)
@@ -245,12 +244,10 @@ def explore(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[
         return dataclasses.replace(c, values=vals, nuisance=nui,
                                    train_rss=train_cost(rec, nui, eff, vals))
 
-    if shared:  # a block on one thread: its points after the first find the simulation kept
-        blocks = each(lambda b: [point(u) for u in b],
-                      list(pts.reshape(-1, per_dynamics, dim)), "exploring")
-        found = [c, *itertools.chain.from_iterable(blocks)]
-    else:
-        found = [c, *each(point, list(pts), "exploring")]
+    # a block on one thread: its points after the first find the simulation kept
+    blocks = each(lambda b: [point(u) for u in b],
+                  [pts[i:i + block] for i in range(0, len(pts), block)], "exploring")
+    found = [c, *itertools.chain.from_iterable(blocks)]
     return sorted(found, key=lambda x: x.train_rss)  # stable: the first of equals leads
 
 
