@@ -99,9 +99,8 @@ def replicates_per_case(gearboxes: int, cases: int) -> int:
 
 def validation_count(trajectories: int) -> int:
     """Validation trajectories of a case with ``trajectories``: a tenth, at least
-    :data:`MIN_VALIDATION`. The conformal interval's quantile is read from them; 8 of 256 gave
-    an interval whose coverage scattered from 0.72 to 0.88 over seeds, 26 from 0.83 to 0.95
-    (docs/surrogate.md)."""
+    :data:`MIN_VALIDATION`. The conformal interval's quantile is read from them: the fewer, the
+    more its coverage scatters over seeds."""
     return max(MIN_VALIDATION, round(trajectories / 10))
 
 

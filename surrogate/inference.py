@@ -8,8 +8,9 @@ and the :class:`~surrogate.novelty.Novelty` (training rows and threshold); it is
 Predictions run in ONNX Runtime (:func:`onnx_session`): the input scaling, the five members and
 their mixture as one graph, built from the loaded weights on first use. On this machine it runs
 at 1.8-1.9 times torch's batch rate on two threads and an eighth of its single-row latency
-(``bench/bench_surrogate.py``, docs/surrogate.md, Throughput); :func:`torch_predict` is the
-same computation in torch, the reference the tests and the benchmark hold it to.
+(``bench/bench_surrogate.py``, docs/surrogate.md, Training and inference time);
+:func:`torch_predict` is the same computation in torch, the reference the tests and the
+benchmark hold it to.
 """
 
 from __future__ import annotations
@@ -244,7 +245,8 @@ class Surrogate:
 
         Batches of 16384 rows keep the members' activations in the cache (two threads of this
         machine, before the scaling was folded in: 8.8e6 rows/s against 6.1e6 with batches of
-        131072); the rates and what else was tried: docs/surrogate.md, Throughput."""
+        131072); the rates and what else was tried: docs/surrogate.md, Training and inference
+        time."""
         xs = np.ascontiguousarray(x, np.float32)
         if xs.ndim != 2 or xs.shape[1] != len(self.schema.inputs):
             raise ValueError(f"x has shape {xs.shape}; the model takes (rows, "

@@ -34,7 +34,7 @@ class DataConfig:
     target: str = "root_wear_mm"
     #: read the features as changes since each gearbox's baseline record (its first: unworn in
     #: the physics dataset, the first row of each group in a user's table); the operating point
-    #: stays as measured. Needs that record at inference (docs/surrogate.md, Baseline)
+    #: stays as measured. Needs that record at inference (docs/surrogate.md, Method, Baseline mode)
     baseline: bool = False
     # whole trajectories (case, replicate) per case, never rows of one; the validation ones
     # calibrate the interval. null: a tenth of each case's trajectories, at least 8
@@ -72,7 +72,7 @@ class ModelConfig:
     """Schema of ``conf/train/model/`` (the network's settings), checked by :meth:`check`."""
 
     _target_: str = "surrogate.model.WearRegressor"
-    width: int = 16  # 16: 3e6 rows/s on 2 cores; 32 is 0.6 points of MRE better and 5x slower
+    width: int = 16  # the inference rate falls with the width (docs/surrogate.md)
     depth: int = 2
     members: int = 5  # ensemble size: the spread of the members is the epistemic uncertainty
     lr: float = 3e-3
