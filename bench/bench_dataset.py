@@ -4,7 +4,7 @@ Prints:
 - wall time and peak memory (this process and its workers) of the default dataset of
   ``python -m physics.dataset`` (5 cases x 64 replicates x 8 wear states; memory target <= 2 GB
   on this 2-core machine; the time is dominated by the wear evolution of each trajectory, about
-  one second each), written to a temporary folder, with 2 worker processes and, as the
+  0.6 s each), written to a temporary folder, with 2 worker processes and, as the
   reference measured in the same run, one chunk of it with one process;
 - the analytic empirical-inverse estimator's throughput in rows per second, vectorised over a
   batch against one call per row (the surrogate is compared with these figures).

@@ -41,7 +41,7 @@ dated in order of wear; the earlier ones are clean) and every bundle is read aga
 first ``N`` records of each group (``reference=first:N``, :func:`physics.loop.own_reference`),
 the reference a user with records from commissioning has.
 Also times one bundle alone (:func:`solo_timing`; ``--timing-only``: that alone), printed
-beside the time before the loop's speed-up (:data:`REFERENCE_S`); the per-bundle seconds of
+beside the serial design's time (:data:`REFERENCE_S`); the per-bundle seconds of
 the table are those of ``--jobs`` bundles sharing the machine, each on its share of numba's
 threads.
 """
@@ -89,9 +89,9 @@ from physics.testbeds import (
 ONSET = 0.3
 #: effect-to-noise power [dB] below which an effect has not changed the records (round-off)
 ABSENT_DB = -100.0
-#: one bundle alone on 2 cores before the loop's speed-up (one BLAS thread, records integrated
-#: from a few decay times before their start, the chain batched), by (generator, --both,
-#: --reference): the figures of docs/loop.md's time table then
+#: the loop's serial design's time for one bundle alone on 2 cores, by (generator, --both,
+#: --reference) [s]: what the 30 s target quarters (one BLAS thread, records integrated from a
+#: few decay times before their start, the chain batched, candidates and records one by one)
 REFERENCE_S = {("independent", False, False): 102.7, ("independent", False, True): 108.6,
                ("own", False, False): 242.5}
 
@@ -167,7 +167,7 @@ def solo_timing(generator: str, model_form: bool, tmp: Path, both: bool = False,
     ref = REFERENCE_S.get((generator, both, reference is not None))
     print(f"one bundle of {len(bundle.records)} records alone: {wall:.1f} s ({cpu:.1f} s of "
           f"CPU; load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores)"
-          + (f"; before the loop's speed-up: {ref:.1f} s alone on 2 cores, {ref / wall:.1f} "
+          + (f"; the serial design: {ref:.1f} s alone on 2 cores, {ref / wall:.1f} "
              "times this" if ref else "")
           + ("; target: 12 records of 0.5 s in <= 30 s" if generator == "independent" else ""))
 

@@ -39,7 +39,7 @@ Every model and estimator is scored on its own target (root wear unless named). 
   (``case3_finetuned``, ``all_finetuned``) or its output layers only (``case3_head``,
   ``all_head``), and one of the DTE features trained on those gearboxes alone
   (``case3_dte_scratch``, ``all_dte_scratch``): what a user with a few labelled records of his
-  own gearbox type gets (README, training on your own data). Per training seed of ``case3``
+  own gearbox type gets (docs/own-data.md). Per training seed of ``case3``
   (the seed draws the fleet's split too), once for ``all``.
 
 The estimator (thesis 4.4: cubics of DTE peak-to-peak and kurtosis in cycles and the empirical
@@ -618,12 +618,12 @@ def seed_summary(table: pd.DataFrame) -> pd.DataFrame:
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m surrogate.benchmark",
                                      description=__doc__.split("\n\n")[0],
-                                     epilog="Takes about 12 minutes on 2 cores the first "
+                                     epilog="Takes about 15 minutes on 2 cores the first "
                                             "time (the case-3, all-case, shifted, beyond-range, "
                                             "dry-law and model-form-off datasets are generated "
-                                            "once into data/), 10 minutes after (27 trainings "
-                                            "on the physics, 18 on the fleet's labelled "
-                                            "gearboxes and 20 on draws of them).")
+                                            "once into data/), less after: 27 trainings on the "
+                                            "physics, 18 on the fleet's labelled gearboxes, 20 "
+                                            "on draws of them and 34 on the one-rig table.")
     parser.add_argument("--out", type=Path, default=None,
                         help="output folder (default: logs/benchmark/<time>)")
     parser.add_argument("--seeds", type=int, default=5,

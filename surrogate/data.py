@@ -9,8 +9,7 @@ the training rows only and travels with the model in its :class:`~surrogate.sche
 
 A dataset built here simulates :func:`replicates_per_case` gearboxes per trained case: what a
 network learns about gearboxes it was not trained on is set by how many it was trained on
-(docs/surrogate.md: with 48 training gearboxes of case 3 the error on a shifted gearbox ranged
-from 3 to 18 % over training seeds, with 219 from 1.5 to 4.9 %).
+(docs/surrogate.md, Alternatives considered).
 """
 
 from __future__ import annotations
@@ -77,17 +76,15 @@ def cases_of(case: str | int) -> list[int]:
                      "Table 11) or all")
 
 
-#: the fewest gearboxes per case a built dataset simulates. With 64 (the dataset API's
-#: default) the all-case network's error on the nuisance-shifted gearboxes was 2.7-6.4 % over
-#: five training seeds and its interval covered 0.73-0.91 of them; with 128, 1.9-2.4 % and
-#: 0.84-0.93; with 256, 1.7-2.7 % and 0.84-0.96 (docs/surrogate.md)
+#: the fewest gearboxes per case a built dataset simulates: the all-case network's error on
+#: shifted gearboxes scatters over training seeds with fewer (docs/surrogate.md, Alternatives
+#: considered)
 MIN_REPLICATES = 128
 #: the fewest validation trajectories per case: they calibrate the 90 % interval
 MIN_VALIDATION = 8
 #: chunks of a dataset built here (fewer where it has fewer trajectories): the build's
-#: processes take chunks as they finish, so many small ones keep both cores busy to the end.
-#: The dataset API's 5 left one of 2 processes idle for the last fifth of the case-3 build
-#: (256 gearboxes: 73 s with 5 chunks, 65 s with 32, 2 cores)
+#: processes take chunks as they finish, so many small ones keep both cores busy to the end
+#: (with the dataset API's 5, one of 2 processes idles through the last fifth of a build)
 BUILD_CHUNKS = 32
 
 
@@ -381,7 +378,7 @@ def user_rows(df: pd.DataFrame, path: str | Path, group: str | None, needed: lis
     missing = [c for c in needed if c not in df.columns]
     if missing:
         raise ValueError(f"{path} lacks column(s) {missing}; map yours with data.columns "
-                         "(units as in the dataset: README, The dataset)")
+                         "(units as in the dataset: docs/dataset.md)")
     if df.empty:
         raise ValueError(f"data.table = {path} has no rows")
     if target is None:
@@ -759,7 +756,7 @@ class WearDataModule(L.LightningDataModule):
 
     def train_dataloader(self) -> DataLoader:
         # the batches of ``shuffle=True`` (same permutation), each taken as one slice of the
-        # tensors instead of row by row and stacked (3.2 of the trainer's 35 s in a profile)
+        # tensors instead of row by row and stacked
         data, g = self.tensors("train"), torch.Generator().manual_seed(self.seed)
         order = BatchSampler(RandomSampler(data, generator=g), self.batch_size, drop_last=False)
         return DataLoader(data, sampler=order, batch_size=None, generator=g)

@@ -74,8 +74,7 @@ class ScaledEnsemble(torch.nn.Module):
     """Unscaled inputs -> mean and standard deviation of wear in the target's unit: the
     ensemble and its Gaussian mixture (:func:`mixture`) on a copy of the network whose first
     layer carries the schema's input scaling, ``((x - shift) / std) W + b = x W' + b'`` with
-    ``W' = W / std`` and ``b' = b - (shift / std) W`` (one pass over the rows fewer: the
-    scaling took 13 % of ONNX Runtime's time)."""
+    ``W' = W / std`` and ``b' = b - (shift / std) W`` (one pass over the rows fewer)."""
 
     def __init__(self, model: Network | WearRegressor, schema: FeatureSchema) -> None:
         super().__init__()
@@ -108,8 +107,8 @@ def onnx_session(model: Network | WearRegressor, schema: FeatureSchema, threads:
                  ) -> ort.InferenceSession:
     """:class:`ScaledEnsemble` as an ONNX Runtime session on ``threads`` threads.
 
-    Exported in memory by torch's TorchScript-based exporter (0.1-0.5 s; the torch.export-based
-    one takes 6 s here for the same graph); ONNX Runtime fuses each ``x sigmoid(x)`` into one
+    Exported in memory by torch's TorchScript-based exporter (the torch.export-based one is
+    many times slower for the same graph); ONNX Runtime fuses each ``x sigmoid(x)`` into one
     kernel and the first layer's product with its bias."""
     n_in = len(schema.inputs)
     graph = ScaledEnsemble(model, schema).eval()
@@ -243,10 +242,9 @@ class Surrogate:
     def predict_array(self, x: np.ndarray, batch: int = 16384) -> tuple[np.ndarray, np.ndarray]:
         """Mean and standard deviation of wear for an unscaled input matrix (no checks).
 
-        Batches of 16384 rows keep the members' activations in the cache (two threads of this
-        machine, before the scaling was folded in: 8.8e6 rows/s against 6.1e6 with batches of
-        131072); the rates and what else was tried: docs/surrogate.md, Training and inference
-        time."""
+        Batches of 16384 rows keep the members' activations in the cache (faster than batches
+        of 131072); the rates and what else was tried: docs/surrogate.md, Training and
+        inference time."""
         xs = np.ascontiguousarray(x, np.float32)
         if xs.ndim != 2 or xs.shape[1] != len(self.schema.inputs):
             raise ValueError(f"x has shape {xs.shape}; the model takes (rows, "

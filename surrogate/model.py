@@ -46,7 +46,7 @@ class WearRegressor(L.LightningModule):
     def training_step(self, batch, _):
         loss = self._nll(*batch)
         # summed here and logged once an epoch: a ``self.log`` per step costs more than the
-        # step of these small networks (profile of the main job: docs/surrogate.md)
+        # step of these small networks
         rows = len(batch[1])
         self._epoch_loss += torch.stack([loss.detach() * rows, torch.tensor(float(rows))])
         return loss

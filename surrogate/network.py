@@ -42,8 +42,8 @@ class EnsembleMLP(nn.Module):
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         # Rows last: every product is (units_out, units_in) @ (units_in, rows), one wide matrix
         # product per member, and the first layer of all members is one product with the input
-        # read as its transpose (no copy). On one thread of this machine 5.2e6 rows/s against
-        # 3.7e6 with rows first (batches of 4096, both timed in one process; docs/surrogate.md).
+        # read as its transpose (no copy): faster than rows first on the CPU
+        # (``bench/bench_surrogate.py``).
         w, b = self.weights[0], self.biases[0]
         members, n_in, n_out = w.shape
         h = torch.addmm(b.transpose(1, 2).reshape(-1, 1),

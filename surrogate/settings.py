@@ -29,8 +29,7 @@ class DataConfig:
     operating_point: bool = True  # speed and torque as inputs (a user knows them)
     inputs: list[str] | None = None  # explicit input columns instead (a user's own table)
     #: the wear column to read: root_wear_mm (the thesis's), or mean_wear_mm (the flank's mean
-    #: depth over the path of contact, which reads the independent simulator where the root
-    #: depth does not; neither reads the dry wear law: docs/surrogate.md)
+    #: depth over the path of contact; docs/surrogate.md, Method, Target)
     target: str = "root_wear_mm"
     #: read the features as changes since each gearbox's baseline record (its first: unworn in
     #: the physics dataset, the first row of each group in a user's table); the operating point
@@ -72,7 +71,7 @@ class ModelConfig:
     """Schema of ``conf/train/model/`` (the network's settings), checked by :meth:`check`."""
 
     _target_: str = "surrogate.model.WearRegressor"
-    width: int = 16  # the inference rate falls with the width (docs/surrogate.md)
+    width: int = 16  # units per hidden layer
     depth: int = 2
     members: int = 5  # ensemble size: the spread of the members is the epistemic uncertainty
     lr: float = 3e-3

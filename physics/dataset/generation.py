@@ -197,8 +197,7 @@ class DatasetSpec:
     cycles_max: float = bounded(1.5e7, 0.0, 1e10, "pinion cycles of the last wear state")
     wear_states: int = bounded(8, 2, 100_000, "cycle counts per replicate", whole=True)
     #: many gearboxes, few wear states each: the features' spread comes from the nuisance far
-    #: more than from wear (docs/surrogate.md: 16 training trajectories of one case give 25 %
-    #: error on a shifted gearbox, 48 give 3 %)
+    #: more than from wear (docs/surrogate.md, Alternatives considered)
     replicates: int = bounded(64, 1, 100_000, whole=True)
     nuisance: NuisanceRanges = field(default_factory=NuisanceRanges)
     seed: int = bounded(0, 0, 2**32 - 1, whole=True)

@@ -34,7 +34,7 @@ low-pass every such system has before its converter (:func:`anti_aliased`), then
 to ``sample_rate_hz``. Sampling the integrator's state directly folds the mesh force's
 harmonics above ``fs / 2`` (its stiffness steps pass straight into the force above the mesh
 resonance) back into the band, and point values of the force at each step fold those above the
-integration rate: at 2000 r/min in case 3 together they made lines at ``f_m / 3`` and
+integration rate: at 2000 r/min in case 3 together they make lines at ``f_m / 3`` and
 ``2 f_m / 3`` 6-10 dB above the mesh line itself.
 """
 

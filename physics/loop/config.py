@@ -18,9 +18,8 @@ class LoopSettings:
     segment_s: float = bounded(0.25, 0.0, 100.0, "analysis segment [s]; the model simulates one")
     transient_s: float = bounded(0.05, 0.0, 100.0, closed=True)
     # RK4 step of the model's records (``dynamics.step_factor`` for the loop's simulations
-    # only; the wear and the datasets keep theirs): 0.5 moves the signature by 0.12-0.23
-    # noise sd RMS against 0.25, a sixteenth of what starting the record 0.1 ms later moves
-    # it (2.6-3.8), and halves the integration (docs/loop.md, the loop's time)
+    # only; the wear and the datasets keep theirs): half the integration of 0.25, and its
+    # change of the signature is far below what a record's start time moves
     step_factor: float = bounded(0.5, 0.0, 2.78, "omega_max dt of the model's records; above "
                                  "2.78 fourth-order Runge-Kutta is unstable")
     test_fraction: float = bounded(0.3, 0.0, 1.0, "share of the records held out")

@@ -42,7 +42,7 @@ SUPPORT = {"support_hz": (200.0, 20000.0, True), "support_damping": (0.005, 0.3,
 #: (:func:`physics.signals.measurement.housing_mount`) where the scenario states one
 #: (``dynamics.mount_hz`` > 0): held at the stated values, not calibrated. Its own lines, the
 #: shaft orders, carry little, and above it the mode tilts the lowest mesh harmonics: freed,
-#: on records of a housing mounted at 55 Hz stated as 90 Hz, the fit took it to 330 Hz
+#: on records of a housing mounted at 55 Hz stated as 90 Hz, the fit takes it to 330 Hz
 MOUNT = {"mount_hz": (5.0, 1000.0, True), "mount_damping": (0.02, 0.5, True)}
 #: the acceleration chain's modes, each by the frequency that declares it
 CHAIN_MODES = {"support_hz": SUPPORT, "mount_hz": MOUNT}

@@ -78,7 +78,6 @@ class Param:
 @dataclass(frozen=True)
 class Effect:
     name: str
-    acts_on: str  # "dynamics" or "measurement"
     params: tuple[Param, ...]
     options: tuple[dict, ...] = ({},)  # discrete alternatives, each fitted separately
     grows_with_wear: bool = False  # in feature-table mode its size scales with the wear depth
@@ -200,15 +199,15 @@ def _sensor(x: np.ndarray, fs: float, v: dict) -> np.ndarray:
 
 
 EFFECTS: dict[str, Effect] = {e.name: e for e in (
-    Effect("gear_runout", "dynamics", (Param("runout_um", "um", 0.5, 80.0, 15.0),),
+    Effect("gear_runout", (Param("runout_um", "um", 0.5, 80.0, 15.0),),
            model=_gear_runout),
-    Effect("friction", "dynamics", (Param("mu", "1", 0.003, 0.3, 0.06),), model=_friction),
-    Effect("tip_relief", "dynamics", (Param("relief_um", "um", 0.5, 60.0, 15.0),),
+    Effect("friction", (Param("mu", "1", 0.003, 0.3, 0.06),), model=_friction),
+    Effect("tip_relief", (Param("relief_um", "um", 0.5, 60.0, 15.0),),
            model=_tip_relief),
     # the pit's length along the profile sets how sharp its once-per-revolution impulse is:
     # from about the finest a record resolves (at case 3's speed a sample at 41 kHz is 0.09 mm
     # of roll) to beyond the single-contact zone (2.5 mm of case 3's 9.3 mm path of contact)
-    Effect("tooth_defect", "dynamics", (Param("depth_um", "um", 0.5, 100.0, 20.0),
+    Effect("tooth_defect", (Param("depth_um", "um", 0.5, 100.0, 20.0),
                                         Param("face_share", "1", 0.05, 0.9, 0.3, log=False),
                                         Param("length_mm", "mm", 0.2, 4.0, 1.5, shape=True)),
            options=({"centre_mm": -0.5},),
@@ -216,15 +215,15 @@ EFFECTS: dict[str, Effect] = {e.name: e for e in (
     # a structural mode's damping: 1-10 %, the range the datasets draw for the same mode
     # (``physics.dataset.generation.NuisanceRanges.transfer_zeta``: first plate modes of small
     # cast housings); beyond it the filter is a broad spectral tilt, not a mode
-    Effect("transfer_path", "measurement", (Param("fn_hz", "Hz", 800.0, 15000.0, 3200.0),
+    Effect("transfer_path", (Param("fn_hz", "Hz", 800.0, 15000.0, 3200.0),
                                             Param("zeta", "1", 0.01, 0.1, 0.04),
                                             Param("residue", "1", -1.0, 1.0, 1.0, log=False)),
            quantities=("accel_m_s2",), record=_transfer_path),
-    Effect("backlash_growth", "dynamics", (Param("kappa", "1", 0.1, 20.0, 1.0),),
+    Effect("backlash_growth", (Param("kappa", "1", 0.1, 20.0, 1.0),),
            grows_with_wear=True, model=_backlash_growth),
-    Effect("torque_ripple", "dynamics", (Param("ripple_pct", "%", 0.2, 30.0, 5.0),),
+    Effect("torque_ripple", (Param("ripple_pct", "%", 0.2, 30.0, 5.0),),
            options=({"order": 1}, {"order": 2}, {"order": 0.5}), model=_torque_ripple),
-    Effect("sensor", "measurement", (Param("gain", "1", 0.3, 3.0, 1.3),),
+    Effect("sensor", (Param("gain", "1", 0.3, 3.0, 1.3),),
            quantities=("dte_m",), record=_sensor),
 )}
 

@@ -1,7 +1,7 @@
 """The declared model's form error measured on a reference gearbox: the discrepancy's mean.
 
 Two reasonable gear models of one pair differ by far more than measurement noise (on the
-independent simulator's records the calibrated declared model sits at 6 to 10 times the noise
+independent simulator's records the calibrated declared model sits at 5 to 9 times the noise
 in a clean bundle, docs/loop.md). In Kennedy and O'Hagan's terms the residual is
 ``r = delta + eps``: a model discrepancy ``delta`` and the noise (J. R. Stat. Soc. B 63 (2001)
 425). :func:`physics.loop.discrepancy.discrepancy_sd` estimates the discrepancy's variance on

@@ -15,7 +15,7 @@ from physics.files import atomic_write, pyplot
 from physics.loop.verdict import summary_line, unexplained_figure
 from physics.signals.order_analysis import line_amplitudes
 
-#: the keys every report.json leads with, in this order (README: stable keys)
+#: the keys every report.json leads with, in this order (docs/loop.md)
 STABLE_KEYS = ("mode", "verdict", "unexplained", "partial", "chosen_effect", "chosen_option",
                "chosen_parameters", "error_before", "error_after", "error_unit",
                "feature_error_before_pct", "feature_error_after_pct",

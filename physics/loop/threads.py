@@ -5,7 +5,7 @@ The loop alternates the compiled dynamics kernel, parallel over models on numba'
 threads, with small dense products (the signature's line projections, a few hundred columns;
 the least-squares steps' SVDs). After each parallel region the OpenMP threads keep spinning for
 a while; a multi-threaded BLAS call made then competes with them for the cores, and on a
-shared 2-core machine the line projection of 16 segments took 0.27 s instead of 3 ms
+shared 2-core machine the line projection of 16 segments takes 0.27 s instead of 3 ms
 (``bench/bench_loop.py``: a whole bundle 4-5 times slower). The products are too small to gain
 from a second BLAS thread, so the loop runs with one.
 

@@ -148,11 +148,11 @@ def wear_check(before: WearScore | None, after: WearScore | None, max_loss: floa
     the train records): it may lower the wear estimate's skill by at most ``max_loss``, i.e. raise
     its mean absolute error by at most that share of the constant guess's (the spread of the wear
     it reads), not of its own error, which on a good estimate is finer than the estimate's
-    resolution (a torque ripple of our own records was refused at 3.9 -> 5.3 % of error, skill 0.85
-    -> 0.79). Where the skill is undefined (the guess exact: every such record of one wear) the
-    mean relative error may grow by at most ``max_loss`` of its value. None without such scores:
-    the adopted effect reads the wear. Both scores carry the same guess, so their skills are both
-    defined or both not."""
+    resolution (a rule on the error itself refuses a torque ripple of our own records at 3.9 ->
+    5.3 % of error, skill 0.85 -> 0.79). Where the skill is undefined (the guess exact: every
+    such record of one wear) the mean relative error may grow by at most ``max_loss`` of its
+    value. None without such scores: the adopted effect reads the wear. Both scores carry the
+    same guess, so their skills are both defined or both not."""
     if before is None or after is None:
         return None
     if before.skill is not None and after.skill is not None:

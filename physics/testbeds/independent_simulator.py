@@ -398,12 +398,6 @@ def effect_values(effect: str | None, effect_size: float = 1.0) -> tuple[str | N
     return name, values
 
 
-def effect_quantities(effect: str) -> tuple[str, ...]:
-    """The quantities in whose records ``effect`` can show."""
-    name, _ = effect_values(effect)
-    return _EFFECTS[name][2]
-
-
 # ---------------------------------------------------------------------------------------------
 # the mesh over one pinion revolution
 

@@ -758,21 +758,6 @@ def _to_solution(out: dict, pb: _Problem, b: float, p_hertz: float, R: float, si
     )
 
 
-# ------------------------------------------------------------------------------------------------
-# The Greenwood-Tripp integral in log form, for the wear loop's table
-# ------------------------------------------------------------------------------------------------
-_LAM_T = np.linspace(-5.0, 30.0, 7001)  # film ratios for the table interpolation
-
-
-@lru_cache(maxsize=1)
-def _log_gap_table() -> np.ndarray:
-    """ln(h_T/sigma) on ``_LAM_T``: strictly increasing, so it can be inverted by interpolation."""
-    t = _LAM_T
-    lg = np.log(t * special.ndtr(t) + np.exp(-0.5 * t * t) / math.sqrt(2.0 * math.pi))
-    lg.setflags(write=False)
-    return lg
-
-
 def log_gt_integral(t: np.ndarray, order: float = 2.5) -> np.ndarray:
     """``ln F_order(t)`` of the Greenwood-Tripp integral (:func:`greenwood_tripp_integral`) by
     interpolation of its closed-form table on ``t`` in [-20, 37] (step 0.005; relative error of
