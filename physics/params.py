@@ -319,8 +319,9 @@ class Dynamics:
       the model for ``transient_s`` and then at least this many whole pinion revolutions (more
       where one revolution's steps miss a mesh-phase bin), over which it averages the mesh
       force by mesh phase (whole revolutions: the shaft-rate run-out averages out). Not
-      stated by the thesis; whole revolutions rather than ``duration_s`` (0.1 s, 3.3
-      revolutions at 2000 r/min) keep the average free of a part revolution's run-out.
+      stated by the thesis; one whole revolution averages the shaft-rate run-out out and costs
+      less than ``duration_s`` (0.1 s, 3.3 revolutions at 2000 r/min), for a change of the
+      wear far below the step error of docs/reproduction.md, Limits.
     - ``housing_mass_kg`` 20: effective mass ``m_h`` of the declared measurement chain, a rigid
       housing whose acceleration along the line of action is ``(F_d - mean F_d) / m_h``; the
       order of a small single-stage housing. It is a nuisance parameter, calibrated against

@@ -208,16 +208,16 @@ EFFECTS: dict[str, Effect] = {e.name: e for e in (
     # from about the finest a record resolves (at case 3's speed a sample at 41 kHz is 0.09 mm
     # of roll) to beyond the single-contact zone (2.5 mm of case 3's 9.3 mm path of contact)
     Effect("tooth_defect", (Param("depth_um", "um", 0.5, 100.0, 20.0),
-                                        Param("face_share", "1", 0.05, 0.9, 0.3, log=False),
-                                        Param("length_mm", "mm", 0.2, 4.0, 1.5, shape=True)),
+                            Param("face_share", "1", 0.05, 0.9, 0.3, log=False),
+                            Param("length_mm", "mm", 0.2, 4.0, 1.5, shape=True)),
            options=({"centre_mm": -0.5},),
            grows_with_wear=True, model=_tooth_defect),
     # a structural mode's damping: 1-10 %, the range the datasets draw for the same mode
     # (``physics.dataset.generation.NuisanceRanges.transfer_zeta``: first plate modes of small
     # cast housings); beyond it the filter is a broad spectral tilt, not a mode
     Effect("transfer_path", (Param("fn_hz", "Hz", 800.0, 15000.0, 3200.0),
-                                            Param("zeta", "1", 0.01, 0.1, 0.04),
-                                            Param("residue", "1", -1.0, 1.0, 1.0, log=False)),
+                             Param("zeta", "1", 0.01, 0.1, 0.04),
+                             Param("residue", "1", -1.0, 1.0, 1.0, log=False)),
            quantities=("accel_m_s2",), record=_transfer_path),
     Effect("backlash_growth", (Param("kappa", "1", 0.1, 20.0, 1.0),),
            grows_with_wear=True, model=_backlash_growth),
