@@ -621,9 +621,9 @@ def main(argv: list[str] | None = None) -> None:
                                      epilog="Takes about 15 minutes on 2 cores the first "
                                             "time (the case-3, all-case, shifted, beyond-range, "
                                             "dry-law and model-form-off datasets are generated "
-                                            "once into data/), less after: 27 trainings on the "
-                                            "physics, 18 on the fleet's labelled gearboxes, 20 "
-                                            "on draws of them and 34 on the one-rig table.")
+                                            "once into data/), 9 minutes after: 27 trainings on "
+                                            "the physics, 18 on the fleet's labelled gearboxes, "
+                                            "20 on draws of them and 34 on the one-rig table.")
     parser.add_argument("--out", type=Path, default=None,
                         help="output folder (default: logs/benchmark/<time>)")
     parser.add_argument("--seeds", type=int, default=5,
