@@ -258,6 +258,9 @@ def main() -> None:
     told = right | (eff.verdict == "unexplained_residual")
     print(f"right effect named, or an unexplained residual reported: {told.mean():.0%} of them "
           f"('none' on {int((eff.verdict == 'none').sum())})")
+    unexplained = eff[eff.verdict == "unexplained_residual"]
+    print(f"  an unexplained residual whose closest candidate is the right effect: "
+          f"{int((unexplained.best == unexplained.truth).sum())} of {len(unexplained)}")
     beyond = eff[eff.beyond_chance]
     print(f"  'none' where the error before exceeds every clean bundle's of its quantity (the "
           f"clean floor's chance level): {int((beyond.verdict == 'none').sum())} of "
