@@ -70,6 +70,7 @@ import itertools
 import json
 import logging
 import math
+import tempfile
 import time
 from datetime import datetime
 from pathlib import Path
@@ -77,6 +78,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 from hydra import compose, initialize_config_module
+from hydra.errors import HydraException
 from hydra.utils import instantiate
 
 from physics.dataset.generation import NuisanceRanges
@@ -90,7 +92,7 @@ from surrogate.baselines import fit_estimator, typical_wear
 from surrogate.data import load_dataset
 from surrogate.inference import Surrogate
 from surrogate.schema import FeatureSchema
-from surrogate.training import parity_figure, train
+from surrogate.training import parity_figure, prepare, train
 
 log = logging.getLogger(__name__)
 
@@ -458,15 +460,15 @@ def one_rig(root: Path, out: Path, extra: list[str], seed: int = 0) -> list[dict
     return rows
 
 
-def run(out: Path, root: Path, max_epochs: int | None = None, seeds: int = 5
+def run(out: Path, root: Path, extra: list[str], seeds: int = 5
         ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Train the models of :data:`MODELS` (those of :data:`SEEDED` once per training seed: the
     seed draws their split and start, and one seed's figure says little) and, for ``case3``
     and ``all``, the networks of :data:`FLEET_NETWORKS` on the fleet's labelled gearboxes;
     score them, the estimator and the null model (refitted on the fleet beside a network
     trained on it) on the test sets (column ``seed``); and :func:`labelled_counts`. Writes
-    ``benchmark.csv``, ``labelled_counts.csv`` and ``parity.png``; returns the two tables."""
-    extra = [f"trainer.max_epochs={max_epochs}"] if max_epochs else []
+    ``benchmark.csv``, ``labelled_counts.csv`` and ``parity.png``; returns the two tables.
+    ``extra``: train.py overrides for every network."""
     shifted = load_dataset(root / "data" / "dataset_shifted.parquet",
                            {"seed": 1, "replicates": 8, "nuisance": shifted_ranges()})
     dry = load_dataset(root / "data" / "dataset_dry_law.parquet", DRY_LAW)
@@ -615,6 +617,18 @@ def seed_summary(table: pd.DataFrame) -> pd.DataFrame:
         coverage_min=("interval_coverage", "min")).round(3)
 
 
+def refusal(extra: list[str]) -> str | None:
+    """Why the train.py overrides ``extra`` cannot train the case-3 network (an unknown key, a
+    value its check refuses), None if they can: checked by composing and preparing that run in
+    a temporary folder, before any dataset is built."""
+    with tempfile.TemporaryDirectory() as tmp:
+        try:
+            prepare(train_config(Path.cwd(), Path(tmp), *MODELS["case3"], *extra))
+        except (HydraException, ValueError) as err:
+            return " ".join(str(err).splitlines()[:2])
+    return None
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m surrogate.benchmark",
                                      description=__doc__.split("\n\n")[0],
@@ -634,6 +648,9 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--max-epochs", type=int, default=None,
                         help="cap the training epochs (quick looks; the default config's "
                              "early stopping otherwise)")
+    parser.add_argument("--override", action="append", default=[], metavar="KEY=VALUE",
+                        help="a train.py override for every network trained (repeatable; "
+                             "e.g. model.interval=0.975), checked before any work")
     parser.add_argument("--narrow-ranges", action="store_true",
                         help="instead: case-3 networks of the default nuisance ranges, of "
                              "narrow ones (NARROW_RANGES) and of two steps between, --seeds "
@@ -644,8 +661,12 @@ def main(argv: list[str] | None = None) -> None:
     out = args.out or Path("logs/benchmark") / datetime.now().strftime("%Y-%m-%d_%H-%M-%S")
     if args.seeds < 1:
         parser.error(f"--seeds {args.seeds}: give at least 1")
+    extra = [*([f"trainer.max_epochs={args.max_epochs}"] if args.max_epochs else []),
+             *args.override]
+    refused = refusal(extra)
+    if refused:
+        parser.error(f"--override {' '.join(args.override)}: {refused}")
     if args.narrow_ranges:
-        extra = [f"trainer.max_epochs={args.max_epochs}"] if args.max_epochs else []
         table = narrow_ranges(Path.cwd(), out.resolve(), extra, args.seeds)
         atomic_write(out.resolve() / "narrow_ranges.csv",
                      lambda p: table.to_csv(p, index=False))
@@ -653,7 +674,7 @@ def main(argv: list[str] | None = None) -> None:
             print(range_summary(table).to_string())
         print(f"\n-> {out / 'narrow_ranges.csv'}")
         return
-    table, counts = run(out.resolve(), Path.cwd(), args.max_epochs, args.seeds)
+    table, counts = run(out.resolve(), Path.cwd(), extra, args.seeds)
     rig = pd.read_csv(out.resolve() / "one_rig.csv")
     cols = ["scenario", "estimator", "seed", "rmse", "r2", "mean_relative_error_pct",
             "max_relative_error_pct", "interval_coverage", "flag_rate", "missed_not_flagged",

@@ -269,3 +269,21 @@ def test_the_benchmark_refuses_a_bad_count(tmp_path, monkeypatch, capsys):
     assert refused.value.code == 2
     assert "--seeds 0: give at least 1" in capsys.readouterr().err
     assert not _tree(tmp_path)
+
+
+@pytest.mark.parametrize("override, named", [("model.interval=2", "must lie in (0, 1)"),
+                                             ("foo.bar=1", "Could not override 'foo.bar'")])
+def test_the_benchmark_refuses_a_bad_override_before_work(tmp_path, monkeypatch, capsys,
+                                                          override, named):
+    """A train.py override the benchmark passes to every network is checked by composing and
+    preparing the case-3 run in a temporary folder: refused in one line naming it, exit 2, no
+    dataset built and nothing left behind."""
+    from surrogate.benchmark import main
+
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as refused:
+        main(["--override", override])
+    assert refused.value.code == 2
+    err = capsys.readouterr().err
+    assert f"--override {override}: " in err and named in err
+    assert not _tree(tmp_path)
