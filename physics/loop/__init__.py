@@ -52,7 +52,7 @@ _SOURCES = {
         "wear_check", "reads_wear"),
     "physics.loop.attribution": (
         "Round", "attribute", "candidates_for", "stacked", "second_candidates",
-        "signature_gain", "free_directions", "separable_share", "bic"),
+        "signature_gain", "whole_cut", "free_directions", "separable_share", "bic"),
     "physics.loop.form_error": ("FormReference", "form_reference", "check_reference"),
     "physics.loop.own_history": (
         "History", "parse_history", "split_history", "own_reference", "life_order"),

@@ -44,7 +44,7 @@ def bic(chi2: float, n: int, k: int) -> float:
 
 def signature_gain(rec: Records, idx: np.ndarray, before: list[np.ndarray],
                    after: list[np.ndarray], quantities: tuple[str, ...]
-                   ) -> tuple[dict[str, float], float, float]:
+                   ) -> tuple[dict[str, float], float, float, float]:
     """Where a candidate's own signature lives and what it explains there, on records ``idx``.
 
     Its entries in a group: those where the model's signature moves with the candidate by
@@ -56,10 +56,11 @@ def signature_gain(rec: Records, idx: np.ndarray, before: list[np.ndarray],
     over the records of the drop of the standardised sum of squares (noise and discrepancy)
     over those entries, and the RMS residual there in units of the noise alone, before and
     after (its groups pooled; the effect-size guard of the null test, in the unit of the
-    report's headline).
+    report's headline), and the least over those groups of the whole signature's cut
+    (:func:`whole_cut`).
     """
     res_b, res_a = residuals_db(rec, idx, before), residuals_db(rec, idx, after)
-    explained, e_b, e_a = {}, [], []
+    explained, e_b, e_a, whole = {}, [], [], []
     for k, mine in by_group(rec, idx).items():
         g = rec.groups[k]
         if g.key[2] not in quantities:
@@ -72,9 +73,20 @@ def signature_gain(rec: Records, idx: np.ndarray, before: list[np.ndarray],
         explained[g.label] = float(np.mean(np.sum((rb**2 - ra**2) / g.sd[own] ** 2, axis=1)))
         e_b.append((rb / g.entry_sd[own]).ravel())
         e_a.append((ra / g.entry_sd[own]).ravel())
+        whole.append(whole_cut(np.array([res_b[j] for j in mine]) / g.entry_sd,
+                               np.array([res_a[j] for j in mine]) / g.entry_sd))
     if not explained:
-        return {}, math.nan, math.nan
-    return explained, rms(np.concatenate(e_b)), rms(np.concatenate(e_a))
+        return {}, math.nan, math.nan, math.nan
+    return explained, rms(np.concatenate(e_b)), rms(np.concatenate(e_a)), min(whole)
+
+
+def whole_cut(before: np.ndarray, after: np.ndarray) -> float:
+    """The relative cut of a group's held-out error over all its entries (RMS in units of the
+    noise, records x entries ``before`` and ``after`` a candidate), in units of the relative
+    standard error of an RMS of that many values, ``1 / sqrt(2 n)``: a candidate whose own
+    entries improve while the group's whole signature does not (a line or two of form error
+    that an effect of the library happens to fit) cuts it by less than one."""
+    return (1.0 - rms(after) / rms(before)) * math.sqrt(2.0 * before.size)
 
 
 def free_directions(rec: Records, nuisance: dict, eff: Effect | None, values: dict,
@@ -203,7 +215,7 @@ def attribute(rec: Records, judged: Records, declared: Effect | None, declared_v
         c.separable = separable_share(directions, with_c - without)
         test = model_signals(rec, rec.test, c.nuisance, effects[c.name], c.values)
         c.heldout = rms(residuals(judged, rec.test, test))
-        c.explained, c.own_before, c.own_after = signature_gain(
+        c.explained, c.own_before, c.own_after, c.whole_cut = signature_gain(
             judged, rec.test, base_test, test, effects[c.name].judged_in())
         c.bic = bic(c.train_rss, n_train, c.n_params)
 
@@ -219,7 +231,7 @@ def attribute(rec: Records, judged: Records, declared: Effect | None, declared_v
         allowed = discrepancy_allowance(c.n_params, len(ranking), settings.false_add_rate)
         return allowed, null_test(c.own_after, c.own_before, c.bic - null_bic,
                                   settings.min_gain, settings.min_delta_bic,
-                                  min(c.explained.values(), default=0.0), allowed)
+                                  min(c.explained.values(), default=0.0), allowed, c.whole_cut)
 
     verdicts = [verdict(c) for c in ranking]
     pick = first_passing([checks for _, checks in verdicts])

@@ -85,13 +85,13 @@ def judged_at(rec: Records, judged: Records, nuisance: dict, eff: Effect, values
     chi2 = float(np.sum(residuals(fit, rec.train, train) ** 2))
     k = len(eff.params)
     delta_bic = bic(chi2, null.size, k) - bic(float(np.sum(null**2)), null.size, 0)
-    explained, own_before, own_after = signature_gain(judge, rec.test, base_test, test,
-                                                      eff.judged_in())
+    explained, own_before, own_after, whole = signature_gain(judge, rec.test, base_test, test,
+                                                             eff.judged_in())
     allowed = discrepancy_allowance(k, n_candidates, s.false_add_rate)
     if not explained:  # the effect moves none of its entries by their noise: not seen
         return {"seen": {"value": 0.0, "bound": 1.0, "holds": False}}
     return null_test(own_after, own_before, delta_bic, s.min_gain, s.min_delta_bic,
-                     min(explained.values()), allowed)
+                     min(explained.values()), allowed, whole)
 
 
 def detection_limit(rec: Records, judged: Records, nuisance: dict, eff: Effect, option: dict,

@@ -165,6 +165,7 @@ class Candidate:
     explained: dict = field(default_factory=dict)
     own_before: float = math.nan  # held-out error in its own entries, declared model ...
     own_after: float = math.nan  # ... and with the candidate
+    whole_cut: float = math.nan  # the least group's whole-signature cut (whole_cut)
     separable: float = math.nan  # share of its change no free parameter mimics (separable_share)
 
 

@@ -24,12 +24,14 @@ STABLE_KEYS = ("mode", "verdict", "unexplained", "partial", "chosen_effect", "ch
 
 
 def null_test(heldout: float, null_heldout: float, delta_bic: float, min_gain: float,
-              min_delta_bic: float, explained: float | None = None, allowed: float = 0.0
-              ) -> dict[str, dict]:
+              min_delta_bic: float, explained: float | None = None, allowed: float = 0.0,
+              whole: float | None = None) -> dict[str, dict]:
     """The conditions of the null test, each with the candidate's value, the bound it must
     pass and whether it does: ``gain``, the held-out error's relative cut, at least
-    ``min_gain``; ``delta_bic``, at most ``-min_delta_bic``; and, where the loop measures it,
-    ``explained``, more than ``allowed``.
+    ``min_gain``; ``delta_bic``, at most ``-min_delta_bic``; and, where the loop measures them,
+    ``explained``, more than ``allowed``, and ``whole``, the whole signature's cut in every
+    group where the candidate shows, at least one standard error
+    (:func:`physics.loop.attribution.whole_cut`).
 
     The bundle loop passes the held-out errors in the candidate's own signature entries (in units of
     the noise), as ``explained`` the smallest over the groups (operating points and quantities; of
@@ -37,7 +39,7 @@ def null_test(heldout: float, null_heldout: float, delta_bic: float, min_gain: f
     discrepancy) it removes per held-out record there, and as ``allowed`` what the discrepancy lets
     a candidate of its size absorb by chance
     (:func:`physics.loop.bundle_loop.discrepancy_allowance`). The feature-table loop judges the
-    features as a whole and leaves the last condition out."""
+    features as a whole and leaves the last two conditions out."""
     gain = 1.0 - heldout / null_heldout if null_heldout > 0 else math.nan
     checks = {"gain": {"value": gain, "bound": min_gain,
                        "holds": bool(heldout <= (1 - min_gain) * null_heldout)},
@@ -46,6 +48,8 @@ def null_test(heldout: float, null_heldout: float, delta_bic: float, min_gain: f
     if explained is not None:
         checks["explained"] = {"value": explained, "bound": allowed,
                                "holds": bool(explained > allowed)}
+    if whole is not None:
+        checks["whole"] = {"value": whole, "bound": 1.0, "holds": bool(whole >= 1.0)}
     return checks
 
 
@@ -64,7 +68,9 @@ def first_passing(verdicts: list[dict[str, dict]]) -> int:
 #: how a verdict writes each condition: its value, then its bound
 CONDITION_WORDS = {"gain": ("held-out error cut by {value:.0%}", "needs >= {bound:.0%}"),
                    "delta_bic": ("dBIC {value:.4g}", "needs <= {bound:g}"),
-                   "explained": ("explained {value:.1f}", "needs > {bound:.1f}")}
+                   "explained": ("explained {value:.1f}", "needs > {bound:.1f}"),
+                   "whole": ("whole signature cut by {value:.1f} standard errors",
+                             "needs >= {bound:g}")}
 
 #: how a verdict writes which model reads the wear after an adopted effect, by the measure of
 #: :func:`physics.loop.bundle_loop.wear_check` (``error`` where the skill is undefined)
@@ -240,7 +246,9 @@ def markdown(r: dict) -> str:
         lines[-1] += (f", and explains more than {rule['allowed']:.1f} (standardised sum of "
                       f"squares per held-out record, in every group of the quantities it acts "
                       f"on), what the discrepancy "
-                      f"allows at a false-add rate of {rule['false_add_rate']:.0%}")
+                      f"allows at a false-add rate of {rule['false_add_rate']:.0%}, and cuts "
+                      f"each such group's held-out error over all its entries by at least one "
+                      f"standard error")
     lines[-1] += "."
     if "max_wear_loss" in rule:
         lines[-1] += (f" An adopted effect reads the wear unless it lowers the wear estimate's "

@@ -55,6 +55,7 @@ from physics.loop import (
     wear_reference,
     wear_score,
     wear_skill,
+    whole_cut,
     with_discrepancy,
     with_nuisance,
     worn_models,
@@ -150,12 +151,12 @@ def test_a_candidate_is_judged_only_where_it_can_show(mixed):
     after = model_signals(rec, rec.test, nuisance | {"damping_ratio": 2 * nuisance[
         "damping_ratio"]}, path, path.defaults())
     label = {g.label: g.key[2] for g in rec.groups}
-    everywhere, _, _ = signature_gain(rec, rec.test, before, after, ("dte_m", "accel_m_s2"))
+    everywhere, _, _, _ = signature_gain(rec, rec.test, before, after, ("dte_m", "accel_m_s2"))
     assert {label[k] for k in everywhere} == {"dte_m", "accel_m_s2"}  # the damping moved both
-    own, e_before, e_after = signature_gain(rec, rec.test, before, after, path.quantities)
+    own, e_before, e_after, whole = signature_gain(rec, rec.test, before, after, path.quantities)
     assert {label[k] for k in own} == {"accel_m_s2"}
     assert own == {k: v for k, v in everywhere.items() if label[k] == "accel_m_s2"}
-    assert np.isfinite(e_before) and np.isfinite(e_after)
+    assert np.isfinite(e_before) and np.isfinite(e_after) and np.isfinite(whole)
 
 
 def test_discrepancy_brings_a_mismatched_bundle_towards_one(mixed):
@@ -211,11 +212,30 @@ def test_allowance_holds_the_designed_false_add_rate():
     assert discrepancy_allowance(2, 8, 0.01) > discrepancy_allowance(1, 8, 0.01)
 
 
+def test_the_whole_signature_cut_by_hand_and_a_fit_of_two_lines_of_form_error():
+    """``whole_cut``: the relative cut of a group's RMS in units of ``1 / sqrt(2 n)``. By hand:
+    4 records x 300 entries all at 5, after at 4.5: 10 % of sqrt(2400) = 4.9 standard errors.
+    A candidate that removes two entries of form error per record (at 6 noise sd among 300 at
+    5) lowers its own entries' error to zero but the whole signature by under one standard
+    error: the DTE ripple a clean bundle of another model form got had that shape."""
+    before = np.full((4, 300), 5.0)
+    assert whole_cut(before, np.full((4, 300), 4.5)) == pytest.approx(0.1 * np.sqrt(2400))
+    assert whole_cut(before, before) == 0.0
+    form = before.copy()
+    form[:, :2] = 6.0
+    fitted = form.copy()
+    fitted[:, :2] = 5.0
+    assert 0 < whole_cut(form, fitted) < 1.0
+
+
 def test_the_null_test_is_one_rule_for_both_loops_and_says_what_stopped_it():
     def adopts(*args, **kw):
         return holds(null_test(*args, **kw))
 
     assert adopts(0.5, 1.0, -20.0, 0.2, 10.0)  # the feature-table form: no allowance
+    # an own-entry gain that leaves the whole signature where it was (under a standard error)
+    assert not adopts(0.5, 1.0, -20.0, 0.2, 10.0, explained=50.0, allowed=10.0, whole=0.7)
+    assert adopts(0.5, 1.0, -20.0, 0.2, 10.0, explained=50.0, allowed=10.0, whole=1.5)
     assert not adopts(0.5, 1.0, -20.0, 0.2, 10.0, explained=5.0, allowed=10.0)
     assert adopts(0.5, 1.0, -20.0, 0.2, 10.0, explained=50.0, allowed=10.0)
     assert not adopts(float("nan"), 1.0, -20.0, 0.2, 10.0, explained=50.0, allowed=10.0)
