@@ -73,7 +73,9 @@ into its run folder.
    ``min_delta_bic`` (10, "very strong" on Kass & Raftery's scale), and, in every group where it
    shows (of the quantities it can act on), removes more standardised sum of squares per held-out
    record than the discrepancy lets a candidate of its size absorb by chance
-   (:func:`~physics.loop.discrepancy.discrepancy_allowance`). The records' wear takes no part in
+   (:func:`~physics.loop.discrepancy.discrepancy_allowance`) and cuts the group's held-out error
+   over all its entries by at least one standard error
+   (:func:`~physics.loop.attribution.whole_cut`). The records' wear takes no part in
    this decision: an adopted effect **reads the wear** (:mod:`physics.loop.wear_reading`) only if,
    where the train records' wear is known, it does not lower the model-based wear estimate's
    leave-one-out skill on them by more than ``max_wear_loss`` (0.1: its mean absolute error may
