@@ -661,11 +661,13 @@ def main(argv: list[str] | None = None) -> None:
     out = args.out or Path("logs/benchmark") / datetime.now().strftime("%Y-%m-%d_%H-%M-%S")
     if args.seeds < 1:
         parser.error(f"--seeds {args.seeds}: give at least 1")
-    extra = [*([f"trainer.max_epochs={args.max_epochs}"] if args.max_epochs else []),
-             *args.override]
+    given = {**({f"--max-epochs {args.max_epochs}": f"trainer.max_epochs={args.max_epochs}"}
+                 if args.max_epochs else {}),
+             **{f"--override {o}": o for o in args.override}}
+    extra = list(given.values())
     refused = refusal(extra)
     if refused:
-        parser.error(f"--override {' '.join(args.override)}: {refused}")
+        parser.error(f"{' '.join(given)}: {refused}")
     if args.narrow_ranges:
         table = narrow_ranges(Path.cwd(), out.resolve(), extra, args.seeds)
         atomic_write(out.resolve() / "narrow_ranges.csv",
