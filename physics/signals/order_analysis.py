@@ -32,18 +32,32 @@ from scipy import signal as sps
 
 from physics.signals.features import features
 
+#: samples per block of the line projection (:func:`_blocked_basis`)
+_BLOCK = 256
+
 
 @lru_cache(maxsize=16)
-def _basis(n: int, fs: float, freqs: tuple[float, ...]) -> np.ndarray:
-    """Hann-weighted cosines and sines at ``freqs``, (n, 2 lines), in single precision: the
-    record is real, so two real products cost half of one complex one."""
-    t = np.arange(n) / fs
+def _blocked_basis(n: int, fs: float, freqs: tuple[float, ...]
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The Hann-windowed projection on ``exp(i w t)`` at ``freqs``, factorised by blocks of
+    ``B`` samples: with ``t = (a B + b) / fs``, ``exp(i w t) = exp(i w a B / fs) exp(i w b /
+    fs)``, so one (B, 2 lines) basis of cosines and sines serves every block and a phase per
+    block and line rotates the block sums into place. The whole record's basis of a 0.25 s
+    segment at 41 kHz with 310 lines is 25 MB, read from memory at every call; the block
+    basis stays in the cache and the product takes half the time. Returns the window weights
+    (``2 w / sum w``, zero-padded to ``A B`` samples), the block basis (float32: the record is
+    real, two real products cost half of one complex one) and the phases (A, lines)."""
+    b = min(_BLOCK, n)
+    a = -(-n // b)
     w = np.hanning(n)
-    phase = 2 * np.pi * np.outer(t, freqs)
-    basis = np.hstack([np.cos(phase), np.sin(phase)]) * (2 * w / w.sum())[:, None]
-    basis = basis.astype(np.float32)
-    basis.flags.writeable = False
-    return basis
+    weights = np.zeros(a * b, np.float32)
+    weights[:n] = 2 * w / w.sum()
+    phase_b = 2 * np.pi * np.outer(np.arange(b) / fs, freqs)
+    block = np.hstack([np.cos(phase_b), np.sin(phase_b)]).astype(np.float32)
+    rotate = np.exp(2j * np.pi * np.outer(np.arange(a) * b / fs, freqs)).astype(np.complex64)
+    for arr in (weights, block, rotate):
+        arr.flags.writeable = False
+    return weights, block, rotate
 
 
 def line_amplitudes(x: np.ndarray, fs: float, freqs: np.ndarray) -> np.ndarray:
@@ -52,9 +66,14 @@ def line_amplitudes(x: np.ndarray, fs: float, freqs: np.ndarray) -> np.ndarray:
 
 
 def _amplitudes(x: np.ndarray, fs: float, freqs: tuple[float, ...]) -> np.ndarray:
-    basis = _basis(x.shape[-1], fs, freqs)
-    proj = (x - x.mean(axis=-1, keepdims=True)).astype(np.float32) @ basis
-    return np.hypot(proj[..., :len(freqs)], proj[..., len(freqs):])
+    weights, block, rotate = _blocked_basis(x.shape[-1], fs, freqs)
+    a, b = rotate.shape[0], block.shape[0]
+    y = np.zeros((*x.shape[:-1], a * b), np.float32)
+    y[..., :x.shape[-1]] = x - x.mean(axis=-1, keepdims=True)
+    y *= weights
+    proj = y.reshape(*x.shape[:-1], a, b) @ block  # (..., blocks, 2 lines)
+    lines = len(freqs)
+    return np.abs(((proj[..., :lines] + 1j * proj[..., lines:]) * rotate).sum(axis=-2))
 
 
 @lru_cache(maxsize=16)

@@ -180,6 +180,21 @@ def test_line_amplitude_of_an_off_bin_sinusoid(f, a, phase):
     amp = line_amplitudes(x, FS, np.array([f, 7.3 * f]))
     np.testing.assert_allclose(amp, [a, 0.5 * a], rtol=0.02)
 
+@settings(max_examples=25, deadline=None)
+@given(st.integers(3, 3000), st.integers(1, 40), st.integers(0, 2**32 - 1))
+def test_the_blocked_line_projection_is_the_whole_records_projection(n, lines, seed):
+    # any length (shorter than a block, not a multiple of it): the same amplitudes as the
+    # Hann-windowed projection on exp(i w t) over the whole record, in double precision
+    rng = np.random.default_rng(seed)
+    x = rng.standard_normal((2, n)) + 3.0
+    freqs = rng.uniform(0.0, FS / 2, lines)
+    t = np.arange(n) / FS
+    w = np.hanning(n)
+    direct = np.abs((x - x.mean(axis=1, keepdims=True))
+                    @ (np.exp(2j * np.pi * np.outer(t, freqs)) * (2 * w / w.sum())[:, None]))
+    np.testing.assert_allclose(line_amplitudes(x, FS, freqs), direct, rtol=1e-4, atol=1e-6)
+
+
 
 @settings(max_examples=25, deadline=None)
 @given(st.integers(1, 5000), st.floats(-1e3, 1e3), st.integers(0, 2**32 - 1))
