@@ -8,8 +8,10 @@
   files, records) and raises ``ValueError`` for bad input; nothing has been computed or written
   yet, so the refusal is one line on stderr (no traceback), what Hydra made for it is removed
   (only what this run made, by the record :class:`RunRecord` took before it started), and the
-  exit code is 2. ``execute(plan)`` then does the work; an error there is a bug and keeps its
-  traceback.
+  exit code is 2. ``execute(plan)`` then does the work; a run that leaves the model's scope
+  there (:class:`~physics.params.OutOfScope`: the physics has stopped, not the code) ends with
+  one line on stderr and exit code 1, its folder and log kept; any other error there is a bug
+  and keeps its traceback.
 - :func:`entry` is an app's console entry around its ``@hydra.main`` function: Ctrl-C (SIGINT)
   or SIGTERM, in any phase (start-up, checks, numba kernels, joblib workers, Lightning's fit
   loop), ends the app with one line on stderr saying what was kept and how to resume, without
@@ -38,6 +40,7 @@ from hydra.experimental.callback import Callback
 from omegaconf import DictConfig, OmegaConf, open_dict, read_write
 
 from physics import interrupt
+from physics.params import OutOfScope
 
 Plan = TypeVar("Plan")
 
@@ -232,6 +235,10 @@ def run_command(cfg: DictConfig, prepare: Callable[[DictConfig], Plan],
         if job is not None:
             _record_failure(folder, f"failed: {type(err).__name__}: {err}")
             logging.getLogger(__name__).exception("job %d failed", job)
+        elif isinstance(err, OutOfScope):
+            logging.getLogger(__name__).error("out of the model's scope: %s", err)
+            print(f"error: out of the model's scope: {err}", file=sys.stderr)
+            raise SystemExit(1) from None
         raise
     if job is None:
         interrupt.note(lambda: "the run had finished; its results are kept")

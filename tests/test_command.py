@@ -1,7 +1,9 @@
-"""A refused run removes only what it made: the record taken before Hydra made the run folder."""
+"""A refused run removes only what it made: the record taken before Hydra made the run folder;
+a run that leaves the model's scope ends in one line."""
 
 from __future__ import annotations
 
+import dataclasses
 import subprocess
 import sys
 from pathlib import Path
@@ -9,9 +11,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from omegaconf import OmegaConf
 
 from physics import command
 from physics.loop.bundle import write_bundle
+from physics.params import OutOfScope
 
 
 def _refuse_in(folder: Path) -> None:
@@ -85,3 +89,29 @@ def test_refused_loop_run_in_the_working_folder_keeps_the_users_files(tmp_path):
     assert "non-finite sample" in run.stderr and "Traceback" not in run.stderr
     assert [p.name for p in work.iterdir()] == ["notebook.log"]
     assert (work / "notebook.log").read_text() == "notes"
+
+
+@dataclasses.dataclass
+class _Config:
+    x: int = 1
+
+
+def test_a_run_that_leaves_the_models_scope_ends_in_one_line(capsys):
+    """The physics stopped, not the code: one line and exit code 1 (the run folder kept); any
+    other error in the work keeps its traceback."""
+    cfg = OmegaConf.structured(_Config)
+
+    def out_of_scope(_plan):
+        raise OutOfScope("the worn flanks no longer meet as one line contact")
+
+    with pytest.raises(SystemExit) as exit_:
+        command.run_command(cfg, lambda c: c.x, out_of_scope)
+    assert exit_.value.code == 1 and exit_.value.__cause__ is None
+    assert capsys.readouterr().err == ("error: out of the model's scope: the worn flanks no "
+                                       "longer meet as one line contact\n")
+
+    def bug(_plan):
+        raise RuntimeError("a bug")
+
+    with pytest.raises(RuntimeError, match="a bug"):
+        command.run_command(cfg, lambda c: c.x, bug)

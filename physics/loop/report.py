@@ -160,6 +160,11 @@ def markdown(r: dict) -> str:
                   f"{p['after_round']}; {p['missing']}.", ""]
     if r.get("verdict"):
         lines += [summary_line(r), ""]
+    b = r.get("beyond_reach")
+    if b:
+        lines += [f"**Rows left out:** {len(b['rows'])} rows of {min(b['wear_mm']):.4g}-"
+                  f"{max(b['wear_mm']):.4g} mm root wear lie beyond the {b['reach_mm']:.4g} mm "
+                  f"the declared model follows at this operating point: {b['reason']}.", ""]
     chosen = r["chosen_effect"]
     lines.append(f"**Chosen effect:** {chosen or 'none (no candidate passes the null test)'}")
     if chosen:

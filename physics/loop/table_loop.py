@@ -4,7 +4,10 @@ A feature table carries no signal, so the comparison is in the features themselv
 row (a wear depth) the declared model is run at the worn state of that depth (the dynamically
 coupled wear evolution of the configured operating point, :mod:`physics.dynamics.evolution`),
 its housing acceleration (or DTE) goes through the measurement chain with white noise, and the
-Table 13 features of model and measurement are compared as log ratios.
+Table 13 features of model and measurement are compared as log ratios. Rows deeper than the
+model follows (its wear run leaves the model's scope first: a worn flank past the shakedown
+limit, worn flanks that no longer meet as one line contact) are left out and listed
+(``beyond_reach`` of the report); three rows must remain.
 
 1. **Calibration**: damping ratio, pinion run-out, profile error, ``m_h`` (acceleration) and the
    noise level, by bounded least squares on the least-worn row: the declared model describes
@@ -25,6 +28,7 @@ Table 13 features of model and measurement are compared as log ratios.
 from __future__ import annotations
 
 import dataclasses
+import logging
 import math
 import re
 
@@ -41,10 +45,12 @@ from physics.loop.effects import EFFECTS, Effect
 from physics.loop.report import LoopReport, holds, null_test
 from physics.loop.simulation import SETTLE_DECAYS
 from physics.loop.threads import one_blas_thread
-from physics.loop.worn_states import cycles_for_wear, worn_models
-from physics.params import Scenario
+from physics.loop.worn_states import cycles_for_wear, wear_reach, worn_models
+from physics.params import OutOfScope, Scenario
 from physics.signals.features import FEATURES, features
 from physics.signals.measurement import declared_chain, sensed
+
+log = logging.getLogger(__name__)
 
 _COLUMN = re.compile(r"^(?P<feat>[a-z_]+?)(?:_(?P<scale>1e-?\d+)?_?(?P<unit>m_per_s2|m))?$")
 
@@ -81,6 +87,23 @@ class TableData:
     models: list[PairModel]
     base: Scenario
     settings: LoopSettings
+    #: rows deeper than the model follows (:func:`beyond_reach`), left out; None: none
+    beyond: dict | None = None
+
+
+def beyond_reach(wear: np.ndarray, reach_mm: float, why: str | None) -> dict | None:
+    """The rows of a table deeper than the root wear ``reach_mm`` the declared model follows
+    (it leaves its scope there, ``why``): their wear, the reach and the reason; None if all
+    lie within it. Three rows at least must remain, else :class:`OutOfScope`."""
+    inside = wear <= reach_mm
+    if inside.all():
+        return None
+    if inside.sum() < 3:
+        raise OutOfScope(f"feature table: {int(inside.sum())} of {len(wear)} rows lie within "
+                         f"the {reach_mm:.4g} mm of root wear the declared model follows at this "
+                         f"operating point, and the leave-one-out judgement needs 3; {why}")
+    return {"reach_mm": reach_mm, "reason": why, "rows": np.flatnonzero(~inside).tolist(),
+            "wear_mm": wear[~inside].tolist()}
 
 
 def prepare_table(df: pd.DataFrame, base: Scenario, settings: LoopSettings) -> TableData:
@@ -91,12 +114,19 @@ def prepare_table(df: pd.DataFrame, base: Scenario, settings: LoopSettings) -> T
     if len(df) < 3:
         raise ValueError(f"feature table: {len(df)} rows; the leave-one-out judgement needs "
                          "at least 3 wear states")
+    beyond = beyond_reach(wear, *wear_reach(base, wear))
+    if beyond is not None:
+        log.warning("feature table: %d rows deeper than %.4g mm of root wear are left out: "
+                    "the declared model leaves its scope there (%s)", len(beyond["rows"]),
+                    beyond["reach_mm"], beyond["reason"])
+        df = df.drop(index=df.index[beyond["rows"]])
+        wear = df.wear_mm.to_numpy(float)
     cycles = cycles_for_wear(base, wear)
     ms = mesh_stiffness(base.gear, base.material)
     by_cycles, _ = worn_models(base, ms, list(cycles))
     measured = np.column_stack([df[c].to_numpy(float) * s for c, (_, s) in cols.items()])
     return TableData(quantity, wear, measured, [f for f, _ in cols.values()],
-                     [by_cycles[float(c)] for c in cycles], base, settings)
+                     [by_cycles[float(c)] for c in cycles], base, settings, beyond)
 
 
 def model_features(td: TableData, rows: np.ndarray, nuisance: dict, eff: Effect | None,
@@ -250,5 +280,6 @@ def run_feature_table(df: pd.DataFrame, base: Scenario,
             "rise_measured": rise(td.measured),
             "rise_before": rise(before),
             "rise_after": rise(after),
+            "beyond_reach": td.beyond,
         },
     )

@@ -6,6 +6,7 @@ estimate reads a record by (:mod:`physics.loop.wear_reading`)."""
 
 from __future__ import annotations
 
+import math
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -16,7 +17,7 @@ import pandas as pd
 from physics.dynamics.evolution import simulate_dynamic_wear
 from physics.dynamics.model import PairModel, build_model
 from physics.gear.stiffness import MeshStiffness, mesh_stiffness
-from physics.params import Scenario
+from physics.params import OutOfScope, Scenario
 
 #: the most pinion cycles a run goes to in search of a wear depth (beyond any gear's life)
 MAX_CYCLES = 1e13
@@ -40,6 +41,9 @@ class WearHistory:
     cycles: np.ndarray
     pinion: np.ndarray
     gear: np.ndarray
+    #: why the run ended where the model's scope ends (:class:`physics.params.OutOfScope`),
+    #: else None: no run of this operating point goes further
+    left_scope: str | None = None
 
     @property
     def root_mm(self) -> np.ndarray:
@@ -65,20 +69,26 @@ def wear_history(scn: Scenario, enough: Callable[[np.ndarray, np.ndarray], bool]
     """The dynamically coupled wear run of ``scn`` until ``enough(cycles, root_mm)`` of its
     block ends (at most ``MAX_CYCLES``).
 
+    A run that leaves the model's scope ends there (:attr:`WearHistory.left_scope`).
+
     A run without snapshots does not depend on where it ends, so the longest run of each
     operating point is kept (for the last ``KEPT`` points) and serves every shorter need: a
     bundle and its sister unit at the same operating points, or a table and its worn models,
     share one run."""
     def done(h: WearHistory) -> bool:
-        return len(h.cycles) > 1 and enough(h.cycles, h.root_mm)
+        return h.left_scope is not None or (len(h.cycles) > 1 and enough(h.cycles, h.root_mm))
 
     with _KEPT_LOCK:
         kept = _kept.get(scn)
     if kept is not None and done(kept):
         return kept
-    res = simulate_dynamic_wear(scn, MAX_CYCLES, stiffness=mesh_stiffness(scn.gear, scn.material),
-                                until=lambda c, w1: enough(c, w1[:, 0] * 1e3))
-    history = WearHistory(res.s, *res.history)
+    try:
+        res = simulate_dynamic_wear(scn, MAX_CYCLES,
+                                    stiffness=mesh_stiffness(scn.gear, scn.material),
+                                    until=lambda c, w1: enough(c, w1[:, 0] * 1e3))
+        history = WearHistory(res.s, *res.history)
+    except OutOfScope as err:
+        history = WearHistory(*err.history, left_scope=str(err))
     for a in (history.s, history.cycles, history.pinion, history.gear):
         a.flags.writeable = False
     with _KEPT_LOCK:
@@ -90,10 +100,12 @@ def wear_history(scn: Scenario, enough: Callable[[np.ndarray, np.ndarray], bool]
 
 
 def _reached(h: WearHistory, root_mm: float, what: str) -> None:
-    if h.root_mm[-1] < root_mm:
-        raise ValueError(f"the model's root wear reaches only {h.root_mm[-1]:.4g} mm in "
-                         f"{h.cycles[-1]:.3g} cycles, below {root_mm:.4g} mm ({what}): check "
-                         "the operating point and tribology.regime")
+    if h.root_mm[-1] >= root_mm:
+        return
+    why = (f"there the model leaves its scope: {h.left_scope}" if h.left_scope else
+           "check the operating point and tribology.regime")
+    raise OutOfScope(f"the model's root wear reaches only {h.root_mm[-1]:.4g} mm in "
+                     f"{h.cycles[-1]:.3g} cycles, below {root_mm:.4g} mm ({what}); {why}")
 
 
 def records_history(scn: Scenario, rows: pd.DataFrame) -> WearHistory | None:
@@ -113,6 +125,14 @@ def records_history(scn: Scenario, rows: pd.DataFrame) -> WearHistory | None:
     h = wear_history(scn, enough)
     _reached(h, GRID_REACH * max(w_max, h.root_at(c_max)), "the wear-state grid's top")
     return h
+
+
+def wear_reach(scn: Scenario, wear_mm: np.ndarray) -> tuple[float, str | None]:
+    """The deepest pinion root wear [mm] the model follows towards the deepest of ``wear_mm``
+    at ``scn`` and, where it stops short, why (the scope it leaves; else None)."""
+    target = float(np.max(wear_mm))
+    h = wear_history(scn, lambda _, root: root[-1] >= target)
+    return (math.inf, None) if h.root_mm[-1] >= target else (float(h.root_mm[-1]), h.left_scope)
 
 
 def cycles_for_wear(scn: Scenario, wear_mm: np.ndarray) -> np.ndarray:

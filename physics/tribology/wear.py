@@ -286,6 +286,10 @@ def simulate_wear(
     band's peak pressure rose by more than ``PRESSURE_STEP`` of its Hertz pressure is redone at
     half the step (step control: the explicit update would otherwise overshoot the wear's own
     levelling of the flank), and the step grows back by half after each accepted block.
+
+    A run that leaves the model's scope raises :class:`OutOfScope` carrying the accepted
+    blocks as ``err.history``: ``(s, cycles, pinion, gear)``, the grid and
+    :attr:`WearResult.history`, the wear as far as the model can follow it.
     """
     if not (isinstance(cycles, int | float) and np.isfinite(cycles) and cycles >= 0):
         raise ValueError(f"cycles = {cycles!r} must be a finite number >= 0 (pinion cycles)")
@@ -320,33 +324,37 @@ def simulate_wear(
 
     f1, f2 = np.zeros_like(flank.grid), np.zeros_like(flank.grid)  # wear on the flank grid
     done, blocks, taken, pending = 0.0, 0, {}, list(marks)
-    rate = first = rate_at(f1, f2)
-    check_shakedown(rate.contact.p_max, s, limit, f1[path], f2[path], done)
-    allowed = step
     ends, wear1, wear2 = [done], [f1[path].copy()], [f2[path].copy()]
-    while True:
-        while pending and pending[0] <= done:
-            taken[pending.pop(0)] = (f1[path].copy(), f2[path].copy())
-        if done >= cycles or (blocks and until is not None
-                              and until(np.array(ends), np.array(wear1))):
-            break
-        peak = max(rate.flank1.max(), rate.flank2.max())
-        block = cycles - done if peak <= 0 else min(cycles - done, allowed / peak)
-        if pending:
-            block = min(block, pending[0] - done)
-        n1, n2 = f1 + rate.flank1 * block, f2 + rate.flank2 * block
-        end = cycles if cycles - (done + block) <= 1e-9 * cycles else done + block
-        new = rate_at(n1, n2)
-        if _overshoots(rate.contact, new.contact) and peak * block > MIN_UPDATE * step:
-            allowed = 0.5 * min(allowed, peak * block)  # redo the block, shorter
-            continue
-        f1, f2, rate, done = n1, n2, new, end
+    try:
+        rate = first = rate_at(f1, f2)
         check_shakedown(rate.contact.p_max, s, limit, f1[path], f2[path], done)
-        allowed = min(step, 1.5 * allowed)
-        blocks += 1
-        ends.append(done)
-        wear1.append(f1[path].copy())
-        wear2.append(f2[path].copy())
+        allowed = step
+        while True:
+            while pending and pending[0] <= done:
+                taken[pending.pop(0)] = (f1[path].copy(), f2[path].copy())
+            if done >= cycles or (blocks and until is not None
+                                  and until(np.array(ends), np.array(wear1))):
+                break
+            peak = max(rate.flank1.max(), rate.flank2.max())
+            block = cycles - done if peak <= 0 else min(cycles - done, allowed / peak)
+            if pending:
+                block = min(block, pending[0] - done)
+            n1, n2 = f1 + rate.flank1 * block, f2 + rate.flank2 * block
+            end = cycles if cycles - (done + block) <= 1e-9 * cycles else done + block
+            new = rate_at(n1, n2)
+            if _overshoots(rate.contact, new.contact) and peak * block > MIN_UPDATE * step:
+                allowed = 0.5 * min(allowed, peak * block)  # redo the block, shorter
+                continue
+            f1, f2, rate, done = n1, n2, new, end
+            check_shakedown(rate.contact.p_max, s, limit, f1[path], f2[path], done)
+            allowed = min(step, 1.5 * allowed)
+            blocks += 1
+            ends.append(done)
+            wear1.append(f1[path].copy())
+            wear2.append(f2[path].copy())
+    except OutOfScope as err:  # the wear as far as the model follows it
+        err.history = (s, np.array(ends), np.array(wear1), np.array(wear2))
+        raise
     w1, w2 = f1[path], f2[path]
     return WearResult(geom, s, w1, w2, float(done), blocks, first, rate, taken,
                       (np.array(ends), np.array(wear1), np.array(wear2)))

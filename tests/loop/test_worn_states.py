@@ -1,5 +1,6 @@
 """The declared model's worn states: one dynamically coupled wear run per operating point, read
-at any cycle count, kept for the next need of the same operating point."""
+at any cycle count, kept for the next need of the same operating point, ending where the model
+leaves its scope."""
 
 from __future__ import annotations
 
@@ -11,15 +12,19 @@ import pytest
 
 from physics.dynamics.evolution import root_wear_evolution
 from physics.gear.stiffness import mesh_stiffness
+from physics.loop import worn_states
+from physics.loop.table_loop import beyond_reach
 from physics.loop.worn_states import (
     GRID_REACH,
+    cycles_for_wear,
     records_cycles,
     records_history,
     wear_grid_cycles,
     wear_history,
+    wear_reach,
     worn_models,
 )
-from physics.params import scenario_from_config
+from physics.params import OutOfScope, scenario_from_config
 
 
 @pytest.fixture(scope="module")
@@ -65,3 +70,43 @@ def test_records_of_known_wear_sit_at_their_wear_and_the_grid_reaches_beyond(scn
     assert not np.allclose(models[grid[-1]].k_a, models[0.0].k_a)  # worn teeth, other mesh
     new = pd.DataFrame({"cycles": [0.0, np.nan], "wear_mm": [np.nan, 0.0]})
     assert records_history(scn, new) is None and list(records_cycles(None, new)) == [0.0, 0.0]
+
+
+def test_a_run_that_leaves_the_scope_ends_there_and_serves_every_deeper_need(scn, monkeypatch):
+    """The run stops where the model leaves its scope (the wear it followed kept, the reason
+    given); a deeper need gets that run, not a new one, and reads its reach; a depth beyond it
+    is refused naming the reason."""
+    scn = dataclasses.replace(scn, operating=dataclasses.replace(  # a point no other test runs
+        scn.operating, torque_Nm=scn.operating.torque_Nm + 2.0))
+    s = np.linspace(-1e-3, 1e-3, 5)
+    followed = (s, np.array([0.0, 1e6, 2e6]), np.outer([0.0, 1e-6, 3e-6], np.ones(5)),
+                np.zeros((3, 5)))
+    runs = []
+
+    def leaves(*args, **kwargs):
+        runs.append(args)
+        err = OutOfScope("the worn flanks no longer meet as one line contact")
+        err.history = followed
+        raise err
+
+    monkeypatch.setattr(worn_states, "simulate_dynamic_wear", leaves)
+    h = wear_history(scn, lambda c, root: root[-1] >= 1.0)
+    assert h.left_scope == "the worn flanks no longer meet as one line contact"
+    np.testing.assert_array_equal(h.root_mm, [0.0, 1e-3, 3e-3])
+    assert wear_reach(scn, np.array([0.0, 0.002, 0.9])) == (3e-3, h.left_scope)
+    assert wear_reach(scn, np.array([0.0, 0.002])) == (np.inf, None)
+    with pytest.raises(OutOfScope, match=r"reaches only 0.003 mm .* below 0.9 mm .* leaves its "
+                                         r"scope: the worn flanks no longer meet"):
+        cycles_for_wear(scn, np.array([0.0, 0.9]))
+    assert len(runs) == 1
+
+
+def test_a_tables_rows_beyond_the_models_reach_are_left_out_and_three_must_remain():
+    wear = np.array([0.0, 0.1, 0.2, 0.3, 0.9])
+    assert beyond_reach(wear, np.inf, None) is None
+    out = beyond_reach(wear, 0.25, "past the shakedown limit")
+    assert out == {"reach_mm": 0.25, "reason": "past the shakedown limit", "rows": [3, 4],
+                   "wear_mm": [0.3, 0.9]}
+    with pytest.raises(OutOfScope, match=r"2 of 5 rows lie within the 0.15 mm .* needs 3; "
+                                         r"past the shakedown limit"):
+        beyond_reach(wear, 0.15, "past the shakedown limit")

@@ -258,6 +258,27 @@ def test_the_history_is_the_runs_own_wear_and_does_not_depend_on_where_it_ends(b
     np.testing.assert_array_equal(g_short, gear[:len(c_short)])
 
 
+
+def test_a_run_that_leaves_the_scope_carries_the_wear_the_model_followed(baseline):
+    """A mesh force that grows with the wear (by half at 1 um) drives the flanks
+    past the shakedown limit after a few blocks: the error carries every accepted block, the
+    same blocks a run to the last of them makes, each below the limit."""
+    dry = _with(baseline, "tribology", regime="dry")
+    f0 = 2 * dry.operating.torque_Nm / (dry.gear.module_mm * 1e-3 * dry.gear.z1
+                                        * math.cos(math.radians(dry.gear.pressure_angle_deg)))
+
+    def force(s, w1, w2):
+        return np.full_like(s, f0 * (1 + 5e5 * max(w1.max(), w2.max())))
+
+    with pytest.raises(OutOfScope, match="shakedown limit") as err:
+        simulate_wear(dry, 1e9, force=force)
+    s, cycles, pinion, gear = err.value.history
+    assert len(cycles) >= 4 and cycles[0] == 0.0 and np.all(np.diff(cycles) > 0)
+    assert pinion.shape == gear.shape == (len(cycles), len(s))
+    followed = simulate_wear(dry, float(cycles[-1]), force=force)
+    np.testing.assert_allclose(followed.history[0], cycles, rtol=1e-12)
+    np.testing.assert_allclose(followed.pinion, pinion[-1], rtol=1e-9)
+
 def test_updates_whenever_wear_changes_by_the_threshold(baseline):
     dry = _with(baseline, "tribology", regime="dry")
     res = simulate_wear(dry, 1.5e7)
