@@ -111,7 +111,8 @@ def _reached(h: WearHistory, root_mm: float, what: str) -> None:
 def records_history(scn: Scenario, rows: pd.DataFrame) -> WearHistory | None:
     """The run of one operating point that covers its records (their stated cycles, else
     their stated wear) and the grid of wear states beyond the most worn (``GRID_REACH`` times
-    its root wear); None where no record is worn."""
+    its root wear, or as far as the model follows); None where no record is worn. Records
+    beyond the model's reach are refused (:class:`OutOfScope`)."""
     stated = rows.cycles.to_numpy(float)
     c_max = float(np.nanmax(stated, initial=0.0))
     w_max = float(np.nanmax(rows.wear_mm.to_numpy(float)[np.isnan(stated)], initial=0.0))
@@ -123,7 +124,13 @@ def records_history(scn: Scenario, rows: pd.DataFrame) -> WearHistory | None:
         return c[-1] >= c_max and root[-1] >= GRID_REACH * top
 
     h = wear_history(scn, enough)
-    _reached(h, GRID_REACH * max(w_max, h.root_at(c_max)), "the wear-state grid's top")
+    if h.left_scope is None:
+        _reached(h, GRID_REACH * max(w_max, h.root_at(c_max)), "the wear-state grid's top")
+        return h
+    _reached(h, w_max, "the most worn record")
+    if c_max > h.cycles[-1]:
+        raise OutOfScope(f"records at {c_max:.3g} cycles lie beyond the {h.cycles[-1]:.3g} "
+                         f"cycles at which the model leaves its scope: {h.left_scope}")
     return h
 
 
@@ -157,12 +164,13 @@ def records_cycles(h: WearHistory | None, rows: pd.DataFrame) -> np.ndarray:
 def wear_grid_cycles(h: WearHistory | None, cycles_max: float, n: int) -> list[float]:
     """Cycle counts of ``n`` wear states of one operating point whose pinion root wear is
     spread evenly from 0 to ``GRID_REACH`` times the model's at ``cycles_max`` (the most worn
-    record); none if no record is worn. Even in wear, not in cycles: the lubricated law wears
-    the root fastest while it runs in, so states even in cycles leave the records below that
-    without a state to read them by."""
+    record), or to the run's end where the model leaves its scope before; none if no record
+    is worn. Even in wear, not in cycles: the lubricated law wears the root fastest while it
+    runs in, so states even in cycles leave the records below that without a state to read
+    them by."""
     if cycles_max <= 0:
         return []
-    top = GRID_REACH * h.root_at(cycles_max)
+    top = min(GRID_REACH * h.root_at(cycles_max), float(h.root_mm[-1]))
     return [float(c) for c in h.cycles_at(np.linspace(0.0, top, n))]
 
 

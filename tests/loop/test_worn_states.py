@@ -74,7 +74,8 @@ def test_records_of_known_wear_sit_at_their_wear_and_the_grid_reaches_beyond(scn
 
 def test_a_run_that_leaves_the_scope_ends_there_and_serves_every_deeper_need(scn, monkeypatch):
     """The run stops where the model leaves its scope (the wear it followed kept, the reason
-    given); a deeper need gets that run, not a new one, and reads its reach; a depth beyond it
+    given); a deeper need gets that run, not a new one, and reads its reach; records within it
+    are read (the grid of wear states ends at the reach); a depth or a cycle count beyond it
     is refused naming the reason."""
     scn = dataclasses.replace(scn, operating=dataclasses.replace(  # a point no other test runs
         scn.operating, torque_Nm=scn.operating.torque_Nm + 2.0))
@@ -98,6 +99,15 @@ def test_a_run_that_leaves_the_scope_ends_there_and_serves_every_deeper_need(scn
     with pytest.raises(OutOfScope, match=r"reaches only 0.003 mm .* below 0.9 mm .* leaves its "
                                          r"scope: the worn flanks no longer meet"):
         cycles_for_wear(scn, np.array([0.0, 0.9]))
+    # records: those within the reach are read, the grid of wear states ends at the reach
+    within = pd.DataFrame({"cycles": [np.nan, 1.9e6], "wear_mm": [2.8e-3, np.nan]})
+    assert records_history(scn, within) is h
+    grid = wear_grid_cycles(h, 1.9e6, 4)  # 1.2 times 2.8 um lies beyond the reach
+    np.testing.assert_allclose([h.root_at(c) for c in grid], [0.0, 1e-3, 2e-3, 3e-3])
+    for deep, what in (({"cycles": [np.nan], "wear_mm": [0.9]}, "below 0.9 mm"),
+                       ({"cycles": [3e6], "wear_mm": [np.nan]}, r"records at 3e\+06 cycles")):
+        with pytest.raises(OutOfScope, match=what):
+            records_history(scn, pd.DataFrame(deep))
     assert len(runs) == 1
 
 
