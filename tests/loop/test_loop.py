@@ -676,8 +676,10 @@ def test_a_table_of_wear_beyond_the_models_reach_runs_on_the_rows_within_it(tmp_
 
 @pytest.mark.slow
 def test_loop_adds_nothing_to_a_clean_bundle(tmp_path, scn):
+    # the default fit: cut short (max_nfev=10), the calibration leaves a misfit that the
+    # smallest pit of the library (0.5 um over 0.05 of the face) takes up in a few entries
     path, _ = make_bundle(tmp_path / "clean", scn, None, seed=5, records=8)
-    report = run_loop(read_bundle(path), scn, LoopSettings(max_nfev=10))
+    report = run_loop(read_bundle(path), scn, LoopSettings())
     assert report["chosen_effect"] is None
     assert report["error_before"] < 1.6  # the calibrated model is at the noise
 
@@ -686,7 +688,13 @@ def test_loop_adds_nothing_to_a_clean_bundle(tmp_path, scn):
 @pytest.mark.parametrize("name", ["gear_runout", "friction", "tip_relief", "tooth_defect",
                                   "torque_ripple"])
 def test_loop_names_the_undeclared_effect(tmp_path, scn, name):
-    path, _ = make_bundle(tmp_path / name, scn, name, seed=7, records=10)
+    """Named, and the held-out error halved or brought to within 10 % of the data-generating
+    model's own (where the effect raises it less than twofold, as a tip relief does, halving
+    is not attainable: docs/loop.md)."""
+    path, truth = make_bundle(tmp_path / name, scn, name, seed=7, records=10)
     report = run_loop(read_bundle(path), scn, LoopSettings(max_nfev=15))
     assert report["chosen_effect"] == name
-    assert report["error_after"] <= 0.5 * report["error_before"]
+    rec = report.signals["rec"]
+    floor = rms(residuals(rec, rec.test, model_signals(rec, rec.test, truth["nuisance"],
+                                                       EFFECTS[name], truth["values"])))
+    assert report["error_after"] <= max(0.5 * report["error_before"], 1.1 * floor)
