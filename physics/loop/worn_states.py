@@ -134,18 +134,23 @@ def records_history(scn: Scenario, rows: pd.DataFrame) -> WearHistory | None:
     return h
 
 
+def _towards(scn: Scenario, wear_mm: np.ndarray) -> tuple[WearHistory, float]:
+    """The run of ``scn`` towards the deepest of ``wear_mm`` [mm] (to it, or to where the
+    model leaves its scope) and that depth."""
+    target = float(np.max(wear_mm))
+    return wear_history(scn, lambda _, root: root[-1] >= target), target
+
+
 def wear_reach(scn: Scenario, wear_mm: np.ndarray) -> tuple[float, str | None]:
     """The deepest pinion root wear [mm] the model follows towards the deepest of ``wear_mm``
     at ``scn`` and, where it stops short, why (the scope it leaves; else None)."""
-    target = float(np.max(wear_mm))
-    h = wear_history(scn, lambda _, root: root[-1] >= target)
+    h, target = _towards(scn, wear_mm)
     return (math.inf, None) if h.root_mm[-1] >= target else (float(h.root_mm[-1]), h.left_scope)
 
 
 def cycles_for_wear(scn: Scenario, wear_mm: np.ndarray) -> np.ndarray:
     """Cycle counts at which the model's pinion root wear reaches ``wear_mm``."""
-    target = float(np.max(wear_mm))
-    h = wear_history(scn, lambda _, root: root[-1] >= target)
+    h, target = _towards(scn, wear_mm)
     _reached(h, target, "the most worn state")
     return h.cycles_at(wear_mm)
 

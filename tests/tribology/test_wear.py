@@ -10,6 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from physics.gear.geometry import mesh_geometry
 from physics.gear.load_sharing import pair_loads
 from physics.gear.stiffness import iso6336_single_pair_stiffness
 from physics.params import (
@@ -21,7 +22,12 @@ from physics.params import (
     Tribology,
     WearSolver,
 )
-from physics.tribology.wear import check_shakedown, film_deficiency, simulate_wear
+from physics.tribology.wear import (
+    check_shakedown,
+    film_deficiency,
+    quasi_static_force,
+    simulate_wear,
+)
 
 CYCLES = 1e6
 
@@ -260,12 +266,11 @@ def test_the_history_is_the_runs_own_wear_and_does_not_depend_on_where_it_ends(b
 
 
 def test_a_run_that_leaves_the_scope_carries_the_wear_the_model_followed(baseline):
-    """A mesh force that grows with the wear (by half at 1 um) drives the flanks
-    past the shakedown limit after a few blocks: the error carries every accepted block, the
-    same blocks a run to the last of them makes, each below the limit."""
+    """A mesh force that grows with the wear (by half at 1 um) drives the flanks past the
+    shakedown limit after a few blocks: the error carries every accepted block, the same
+    blocks a run to the last of them makes."""
     dry = _with(baseline, "tribology", regime="dry")
-    f0 = 2 * dry.operating.torque_Nm / (dry.gear.module_mm * 1e-3 * dry.gear.z1
-                                        * math.cos(math.radians(dry.gear.pressure_angle_deg)))
+    f0 = quasi_static_force(dry, mesh_geometry(dry.gear))
 
     def force(s, w1, w2):
         return np.full_like(s, f0 * (1 + 5e5 * max(w1.max(), w2.max())))
