@@ -271,8 +271,10 @@ def test_the_benchmark_refuses_a_bad_count(tmp_path, monkeypatch, capsys):
     assert not _tree(tmp_path)
 
 
-@pytest.mark.parametrize("override, named", [("model.interval=2", "must lie in (0, 1)"),
-                                             ("foo.bar=1", "Could not override 'foo.bar'")])
+@pytest.mark.parametrize("override, named", [
+    ("model.interval=2", "must lie in (0, 1)"),
+    ("foo.bar=1", "Could not override 'foo.bar'"),
+    ("data.inputs=[dte_peak_to_peak,cycles]", "independent simulator's test rows do not have")])
 def test_the_benchmark_refuses_a_bad_override_before_work(tmp_path, monkeypatch, capsys,
                                                           override, named):
     """A train.py override the benchmark passes to every network is checked by composing and
