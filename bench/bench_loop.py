@@ -1,8 +1,8 @@
 """Confusion matrix and timing of the measured-data loop on bundles with an undeclared effect.
 
     python bench/bench_loop.py [--generator own|independent] [--seeds 3] [--null-seeds 6]
-                               [--records 12] [--jobs 2] [--model-form] [--both] [--reference]
-                               [--own-history N] [--out DIR] [--timing-only]
+                               [--records 12] [--jobs 2] [--model-form] [--starts 1] [--both]
+                               [--reference] [--own-history N] [--out DIR] [--timing-only]
 
 For every effect of the library (acceleration bundles; ``sensor``, which only DTE records show,
 on DTE bundles) and for bundles without any effect (of both quantities: what a clean bundle of
@@ -109,9 +109,9 @@ def references(generator: str, both: bool, records: int, tmp: Path
     return out
 
 
-def one(job: tuple[str, str | None, int, int, bool, str, tuple[str, ...], str,
+def one(job: tuple[str, str | None, int, int, dict, str, tuple[str, ...], str,
                    FormReference | None, int]) -> dict:
-    generator, name, seed, records, model_form, tmp, quantities, out, reference, history = job
+    generator, name, seed, records, loop, tmp, quantities, out, reference, history = job
     base = base_scenario(generator)
     quantity = "both" if quantities == BOTH else quantities[0]
     label = report_label(generator, name, seed, quantity)
@@ -123,7 +123,7 @@ def one(job: tuple[str, str | None, int, int, bool, str, tuple[str, ...], str,
     else:
         path, truth = make_bundle(folder, base, name, seed, quantity=quantity, records=records,
                                   onset=ONSET if history else None)
-    settings = LoopSettings(seed=seed, model_form=model_form)
+    settings = LoopSettings(seed=seed, **loop)
     bundle = read_bundle(path)
     t = time.perf_counter()
     if history:  # the unit's own first records: the reference, left out of the analysis
@@ -148,7 +148,7 @@ def one(job: tuple[str, str | None, int, int, bool, str, tuple[str, ...], str,
             "seconds": seconds, **best_candidate(r)}
 
 
-def solo_timing(generator: str, model_form: bool, tmp: Path, both: bool = False,
+def solo_timing(generator: str, loop: dict, tmp: Path, both: bool = False,
                 reference: FormReference | None = None) -> None:
     """Time one bundle alone on the machine (the pool's bundles share its cores): the own
     generator's of 20 records of 1 s, the independent one's of 12 records of 0.5 s (the
@@ -162,7 +162,7 @@ def solo_timing(generator: str, model_form: bool, tmp: Path, both: bool = False,
                                           quantities=BOTH if both else ("accel_m_s2",), seed=99)
     bundle = read_bundle(path)
     t, cpu = time.perf_counter(), time.process_time()
-    run_loop(bundle, base, LoopSettings(model_form=model_form), reference=reference)
+    run_loop(bundle, base, LoopSettings(**loop), reference=reference)
     wall, cpu = time.perf_counter() - t, time.process_time() - cpu
     ref = REFERENCE_S.get((generator, both, reference is not None))
     print(f"one bundle of {len(bundle.records)} records alone: {wall:.1f} s ({cpu:.1f} s of "
@@ -184,6 +184,8 @@ def main() -> None:
     ap.add_argument("--jobs", type=int, default=2, help="bundles analysed in parallel")
     ap.add_argument("--model-form", action="store_true",
                     help="calibrate the declared model's form uncertainty (loop.model_form=true)")
+    ap.add_argument("--starts", type=int, default=LoopSettings.starts, metavar="N",
+                    help="best explored points each candidate's fit starts from (loop.starts)")
     ap.add_argument("--both", action="store_true",
                     help="independent generator: DTE and acceleration records in every bundle")
     ap.add_argument("--reference", action="store_true",
@@ -203,13 +205,18 @@ def main() -> None:
     if args.both and args.generator != "independent":
         ap.error("--both needs --generator independent (the own generator writes one quantity "
                  "per bundle)")
+    loop = {"model_form": args.model_form, "starts": args.starts}  # LoopSettings of every run
+    try:
+        LoopSettings(**loop)
+    except ValueError as err:
+        ap.error(f"--starts {args.starts}: {err}")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:
         refs = (references(args.generator, args.both, args.records, Path(tmp))
                 if args.reference else {})
         if not args.own_history:
-            solo_timing(args.generator, args.model_form, Path(tmp), args.both,
+            solo_timing(args.generator, loop, Path(tmp), args.both,
                         refs.get("both" if args.both else "accel_m_s2"))
         if args.timing_only:
             return
@@ -224,9 +231,9 @@ def main() -> None:
         def ref(q: tuple[str, ...]) -> FormReference | None:
             return refs.get("both" if q == BOTH else q[0])
 
-        jobs = [(args.generator, n, s, args.records, args.model_form, tmp, q, str(out), ref(q),
+        jobs = [(args.generator, n, s, args.records, loop, tmp, q, str(out), ref(q),
                  args.own_history) for n in names for s in range(args.seeds) for q in sensors(n)]
-        jobs += [(args.generator, None, 100 + s, args.records, args.model_form, tmp, q, str(out),
+        jobs += [(args.generator, None, 100 + s, args.records, loop, tmp, q, str(out),
                   ref(q), args.own_history)
                  for s in range(args.null_seeds) for q in sensors(None)]
         spawn = multiprocessing.get_context("spawn")  # numba's OpenMP threads do not survive fork

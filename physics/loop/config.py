@@ -38,6 +38,10 @@ class LoopSettings:
     refine: int = bounded(100, 1, 100, "screened candidates refined jointly with the nuisance",
                           whole=True)
     explore: int = 32  # Sobol points searched before each refinement (0 or a power of 2)
+    # best explored points each candidate's least squares starts from, the lowest fit kept
+    # (the calibration with ``model_form``: :data:`~physics.loop.fit.CALIBRATION_STARTS`)
+    starts: int = bounded(1, 1, 100, "explored points each candidate's fit starts from",
+                          whole=True)
     floor_db: float = bounded(0.3, 0.0, 100.0, "model error floor added to each entry's scatter",
                               closed=True)
     # the model discrepancy: weight of the pooled variance in each entry family's estimate, in

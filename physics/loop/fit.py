@@ -259,7 +259,8 @@ def search(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[s
     the model form: the best ``CALIBRATION_STARTS``, the lowest fit kept), the effect's
     parameters jointly with the identifiable nuisance. The declared model and every refined
     candidate get the same search."""
-    starts = explore(rec, eff, c, free_nuisance)[:CALIBRATION_STARTS if wide(rec, eff) else 1]
+    n = (CALIBRATION_STARTS if wide(rec, eff) else 1) if eff is None else rec.settings.starts
+    starts = explore(rec, eff, c, free_nuisance)[:n]
     free = eff.bounds() if eff is not None else []
     free += [(n, *BOUNDS[n]) for n in free_nuisance]
     fits = [least_squares(rec, eff, s.option, s.values | s.nuisance, free,

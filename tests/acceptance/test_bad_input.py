@@ -289,3 +289,17 @@ def test_the_benchmark_refuses_a_bad_override_before_work(tmp_path, monkeypatch,
     err = capsys.readouterr().err
     assert f"--override {override}: " in err and named in err
     assert not _tree(tmp_path)
+
+
+@pytest.mark.parametrize("args, named", [(["--starts", "0"], "loop.starts = 0"),
+                                         (["--own-history", "2", "--reference"],
+                                          "--own-history takes no --reference")])
+def test_the_loop_bench_refuses_bad_settings_before_work(tmp_path, args, named):
+    """The loop bench checks its settings (the loop's own validation) before any bundle is
+    made: one line naming the flag, exit 2, no output folder."""
+    proc = subprocess.run([sys.executable, str(ROOT / "bench" / "bench_loop.py"), *args,
+                           "--out", str(tmp_path / "out")], capture_output=True, text=True,
+                          cwd=tmp_path, env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert proc.returncode == 2
+    assert named in proc.stderr.splitlines()[-1]
+    assert not (tmp_path / "out").exists()

@@ -565,10 +565,27 @@ def test_search_never_ends_above_its_start(clean_records, scn):
     assert fitted.nuisance["profile_error_um"] == start["profile_error_um"]  # not free: kept
 
 
-@pytest.mark.parametrize("explore, refine", [(24, 3), (-2, 3), (16, 0)])
-def test_bad_search_settings_are_refused(explore, refine):
-    with pytest.raises(ValueError, match=r"loop\.(explore|refine) = "):
-        LoopSettings(explore=explore, refine=refine)
+def test_a_second_start_never_ends_above_one(clean_records):
+    # the candidate's fit from the best explored point alone, and from the best two with the
+    # lower fit kept: the first start is among the two, so two never end higher
+    rec, truth = clean_records
+    eff = EFFECTS["friction"]
+    c = Candidate(eff.name, {}, eff.defaults(), truth["nuisance"], math.inf, 1)
+
+    def fitted(starts: int) -> Candidate:
+        settings = LoopSettings(seed=3, explore=4, max_nfev=3, starts=starts)
+        return search(dataclasses.replace(rec, settings=settings), eff, c, ["damping_ratio"])
+
+    one, two = fitted(1), fitted(2)
+    assert two.train_rss <= one.train_rss
+    assert train_cost(rec, two.nuisance, eff, two.values) == pytest.approx(two.train_rss)
+
+
+@pytest.mark.parametrize("bad", [{"explore": 24}, {"explore": -2}, {"refine": 0},
+                                 {"starts": 0}, {"starts": 1.5}])
+def test_bad_search_settings_are_refused(bad):
+    with pytest.raises(ValueError, match=rf"loop\.{next(iter(bad))} = "):
+        LoopSettings(**bad)
 
 
 def test_backlash_growth_leaves_records_without_contact_loss_unchanged(tmp_path, scn):
