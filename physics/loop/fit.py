@@ -255,12 +255,15 @@ def explore(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[
 def search(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[str]
            ) -> Candidate:
     """The model's (the declared one's, ``eff`` None, or with an effect) parameters fitted on
-    the train records: the best explored start refined by least squares (the calibration with
-    the model form: the best ``CALIBRATION_STARTS``, the lowest fit kept), the effect's
-    parameters jointly with the identifiable nuisance. The declared model and every refined
-    candidate get the same search."""
-    n = (CALIBRATION_STARTS if wide(rec, eff) else 1) if eff is None else rec.settings.starts
-    starts = explore(rec, eff, c, free_nuisance)[:n]
+    the train records: the best explored start refined by least squares (a candidate: the best
+    ``loop.starts``; the calibration with the model form: the best ``CALIBRATION_STARTS``; the
+    lowest fit kept), the effect's parameters jointly with the identifiable nuisance. The
+    declared model and every refined candidate get the same search."""
+    if eff is None:
+        n_starts = CALIBRATION_STARTS if wide(rec, eff) else 1
+    else:
+        n_starts = rec.settings.starts
+    starts = explore(rec, eff, c, free_nuisance)[:n_starts]
     free = eff.bounds() if eff is not None else []
     free += [(n, *BOUNDS[n]) for n in free_nuisance]
     fits = [least_squares(rec, eff, s.option, s.values | s.nuisance, free,
