@@ -326,8 +326,9 @@ def report_test(surrogate: Surrogate, dm: WearDataModule, out: Path) -> dict:
                                      surrogate.schema.target_unit)
     if line:
         log.warning(line)
-    fig = parity_figure(true, rows[f"{t}_pred"].to_numpy(),
-                        rows[f"{t}_std"].to_numpy() * surrogate.interval_scale,
+    reading = rows[f"{t}_pred"].to_numpy()  # the bars: the interval as predicted (novelty too)
+    fig = parity_figure(true, reading, np.stack([reading - rows[f"{t}_lower"].to_numpy(),
+                                                 rows[f"{t}_upper"].to_numpy() - reading]),
                         title.replace("; network", ";\nnetwork"), t, name="network")
     add_baselines(fig.axes[0], true, readings)
     atomic_write(out / "parity.png", lambda p: fig.savefig(p, dpi=120, format="png"))
@@ -427,8 +428,9 @@ def cross_validate(job: TrainJob) -> float:
 
 def parity_figure(true: np.ndarray, pred: np.ndarray, half: np.ndarray | None, title: str,
                   label: str, ax=None, name: str = "surrogate"):
-    """Predicted against true wear with the identity line (and intervals if given); ``name``
-    labels the points in the legend."""
+    """Predicted against true wear with the identity line (and intervals if given: ``half``
+    widths, or a (2, rows) array of the widths below and above); ``name`` labels the points in
+    the legend."""
     fig = None
     if ax is None:
         fig, ax = pyplot().subplots(figsize=(5, 5))
