@@ -7,6 +7,7 @@ import json
 import logging
 import math
 import os
+import textwrap
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -329,7 +330,7 @@ def report_test(surrogate: Surrogate, dm: WearDataModule, out: Path) -> dict:
     reading = rows[f"{t}_pred"].to_numpy()  # the bars: the interval as predicted (novelty too)
     fig = parity_figure(true, reading, np.stack([reading - rows[f"{t}_lower"].to_numpy(),
                                                  rows[f"{t}_upper"].to_numpy() - reading]),
-                        title.replace("; network", ";\nnetwork"), t, name="network")
+                        title, t, name="network")
     add_baselines(fig.axes[0], true, readings)
     atomic_write(out / "parity.png", lambda p: fig.savefig(p, dpi=120, format="png"))
     pyplot().close(fig)
@@ -439,6 +440,8 @@ def parity_figure(true: np.ndarray, pred: np.ndarray, half: np.ndarray | None, t
               else 0.0)
     lim = [0, top * 1.05]
     ax.plot(lim, lim, "k--", lw=1)
-    ax.set(xlim=lim, ylim=lim, xlabel=f"true {label}", ylabel=f"predicted {label}", title=title)
+    lines = [w for part in title.split("\n") for w in textwrap.wrap(part, 70)]  # to the axes
+    ax.set(xlim=lim, ylim=lim, xlabel=f"true {label}", ylabel=f"predicted {label}",
+           title="\n".join(lines))
     ax.title.set_fontsize(8)
     return fig if fig is not None else ax.figure
