@@ -274,7 +274,8 @@ def test_the_benchmark_refuses_a_bad_count(tmp_path, monkeypatch, capsys):
 @pytest.mark.parametrize("override, named", [
     ("model.interval=2", "must lie in (0, 1)"),
     ("foo.bar=1", "Could not override 'foo.bar'"),
-    ("data.inputs=[dte_peak_to_peak,cycles]", "independent simulator's test rows do not have")])
+    ("data.inputs=[dte_peak_to_peak,cycles]", "data.inputs is set by each of the benchmark's"),
+    ("+seed=3", "seed is set by each")])
 def test_the_benchmark_refuses_a_bad_override_before_work(tmp_path, monkeypatch, capsys,
                                                           override, named):
     """A train.py override the benchmark passes to every network is checked by composing and
