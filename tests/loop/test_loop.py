@@ -29,6 +29,7 @@ from physics.loop import (
     declared_modes,
     declared_nuisance,
     effect,
+    fit,
     free_directions,
     identifiable,
     model_signals,
@@ -565,18 +566,30 @@ def test_search_never_ends_above_its_start(clean_records, scn):
     assert fitted.nuisance["profile_error_um"] == start["profile_error_um"]  # not free: kept
 
 
-def test_a_second_start_never_ends_above_one(clean_records):
+def test_a_second_start_never_ends_above_one(clean_records, monkeypatch):
     # the candidate's fit from the best explored point alone, and from the best two with the
     # lower fit kept: the first start is among the two, so two never end higher
     rec, truth = clean_records
     eff = EFFECTS["friction"]
     c = Candidate(eff.name, {}, eff.defaults(), truth["nuisance"], math.inf, 1)
+    starts_fitted = []
+    least_squares = fit.least_squares
+
+    def counted(*args, **kwargs):
+        starts_fitted.append(args[3])
+        return least_squares(*args, **kwargs)
+
+    monkeypatch.setattr(fit, "least_squares", counted)
 
     def fitted(starts: int) -> Candidate:
         settings = LoopSettings(seed=3, explore=4, max_nfev=3, starts=starts)
         return search(dataclasses.replace(rec, settings=settings), eff, c, ["damping_ratio"])
 
-    one, two = fitted(1), fitted(2)
+    one = fitted(1)
+    assert len(starts_fitted) == 1
+    two = fitted(2)
+    # the second search refines the same first start and one more, a point of its own
+    assert len(starts_fitted) == 3 and starts_fitted[1] == starts_fitted[0] != starts_fitted[2]
     assert two.train_rss <= one.train_rss
     assert train_cost(rec, two.nuisance, eff, two.values) == pytest.approx(two.train_rss)
 
