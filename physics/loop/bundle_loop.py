@@ -29,7 +29,10 @@ into its run folder.
    :mod:`physics.loop.form_error`: a sister gearbox's clean records at the same operating
    points and sensors), the declared model is first calibrated on those, and its mean residual per
    group and entry there, the model's own form error, is removed from the measured signatures
-   before this calibration. A parameter that does not move the residuals (the pinion run-out on the
+   before this calibration. Where the reference is this unit's own earliest records
+   (``reference=first:N``), their calibration is held instead (:func:`physics.loop.fit.held`):
+   the same unit's nuisance and measurement chain, which nothing may recalibrate to absorb
+   what changed since. A parameter that does not move the residuals (the pinion run-out on the
    line of action: a shaft-rate error is dynamically inert in the torsional model; the modulation's
    phase, which no amplitude of the signature sees unless another once-per-revolution feature is in
    the model; the backlash in acceleration records whose flanks never part) is held at its declared
@@ -126,7 +129,7 @@ from physics.loop.config import LoopSettings
 from physics.loop.declared import TORQUE, declared_modes, declared_nuisance
 from physics.loop.detection import detection_limits
 from physics.loop.discrepancy import entry_family, with_discrepancy
-from physics.loop.fit import calibrate, screened
+from physics.loop.fit import calibrate, held, screened
 from physics.loop.form_error import FormReference
 from physics.loop.records import Records, prepare
 from physics.loop.report import LoopReport
@@ -195,7 +198,10 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
     rec = prepare(bundle, base, settings)
     if reference is not None:
         rec = reference.subtracted(rec)
-    nuisance, free_nuisance = calibrate(rec, start)
+    if reference is not None and reference.same_unit:
+        rec, nuisance, free_nuisance = held(rec, reference.calibration)
+    else:
+        nuisance, free_nuisance = calibrate(rec, start)
     judged = with_discrepancy(rec, nuisance)
     declared = Reader("the declared model", nuisance)
     first = attribute(rec, judged, None, {}, nuisance, free_nuisance, candidates, declared,
@@ -262,7 +268,8 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
         wear_error_before_pct=wear_before.error if wear_before else None,
         wear_error_after_pct=wear_after.error if wear_after else None,
         calibration=nuisance,
-        calibrated_on="the train records",
+        calibrated_on=("this unit's earliest records, held for the later ones" if rec.held
+                       else "the train records"),
         nuisance_after=after_nui,
         null_bic=first.null_bic,
         ranking=ranking,
@@ -274,8 +281,9 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
             "error_after_db": rms(np.concatenate(residuals_db(rec, rec.test, after_test))),
             "error_before_with_discrepancy": rms(residuals(judged, rec.test, base_test)),
             "error_after_with_discrepancy": rms(residuals(judged, rec.test, after_test)),
-            "not_identifiable": [n for n in (*screened(settings), *TORQUE)
-                                 if n in nuisance and n not in free_nuisance],
+            "not_identifiable": [] if rec.held else [
+                n for n in (*screened(settings), *TORQUE)
+                if n in nuisance and n not in free_nuisance],
             "not_searched": left_out,
             "detection_limits": limits,
             "assumed": assumed(bundle, base, nuisance),

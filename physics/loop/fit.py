@@ -77,10 +77,11 @@ def with_level(rec: Records, nuisance: dict, eff: Effect | None, values: dict) -
     ``m_h`` divides every amplitude, so in dB it is an offset of the entries that scale with the
     record (all but kurtosis and crest factors): one step of their mean residual, weighted by the
     inverse variance of each entry (:attr:`~physics.loop.records.Group.sd`). The noise does not
-    scale with it, so this is a starting value, not the fit. DTE records do not see ``m_h``.
+    scale with it, so this is a starting value, not the fit. DTE records do not see ``m_h``, nor
+    do records of a unit whose calibration is held (:func:`held`).
     """
     acc = is_accel(rec, rec.train)
-    if not acc.any():
+    if rec.held or not acc.any():
         return nuisance
     res = residuals_db(rec, rec.train, model_signals(rec, rec.train, nuisance, eff, values))
     num = den = 0.0
@@ -184,7 +185,8 @@ def screen_effect(rec: Records, eff: Effect, option: dict, nuisance: dict) -> Ca
         if best is None or cost < best.train_rss:
             best = Candidate(eff.name, option, vals, nui, cost, len(eff.params))
     free = eff.bounds()
-    free += [("housing_mass_kg", *NUISANCE["housing_mass_kg"])] if accel_in(rec) else []
+    free += ([("housing_mass_kg", *NUISANCE["housing_mass_kg"])]
+             if accel_in(rec) and not rec.held else [])
     fitted, rss = least_squares(rec, eff, option, best.values | best.nuisance, free, SCREEN_NFEV)
     vals, nui = split_fitted(fitted)
     return dataclasses.replace(best, values=vals, nuisance=nui, train_rss=rss)
@@ -297,3 +299,20 @@ def calibrate(rec: Records, start: dict) -> tuple[dict, list[str]]:
         free += ["housing_mass_kg", *[n for n in SUPPORT if n in start]]
     c = Candidate("declared", {}, {}, start, train_cost(rec, start, None, {}), 0)
     return search(rec, None, c, free).nuisance, free
+
+
+def held(rec: Records, calibration: dict) -> tuple[Records, dict, list[str]]:
+    """The unit's own calibration on its earliest records (``calibration``, of
+    :func:`calibrate` there: ``reference=first:N`` or ``before:X``) held for its later records
+    ``rec``: its damping, run-out, profile error, run-out modulation and measurement chain are
+    the same unit's, so nothing recalibrated can absorb what changed since (a DTE gain, a
+    friction the damping would take, a level the housing's ``m_h`` would). Returns ``rec``
+    marked held (``m_h`` levelled by no candidate either), the nuisance and its free names:
+    none, or the torque factor alone where the manifest leaves the torque unknown (an
+    operating condition, not the unit's)."""
+    rec = dataclasses.replace(rec, held=True)
+    if rec.torque_unknown is None or not rec.torque_unknown.any():
+        return rec, dict(calibration), []
+    start = {"torque_factor": 1.0} | calibration
+    c = Candidate("declared", {}, {}, start, train_cost(rec, start, None, {}), 0)
+    return rec, search(rec, None, c, list(TORQUE)).nuisance, list(TORQUE)

@@ -68,6 +68,12 @@ class FormReference:
     #: units' difference
     spread: dict[tuple, np.ndarray] | None = None
 
+    @property
+    def same_unit(self) -> bool:
+        """Whether the reference is this unit's own earliest records (then its
+        :attr:`calibration` is held for the later ones, :func:`physics.loop.fit.held`)."""
+        return self.spread is not None
+
     def check(self, bundle: Bundle) -> None:
         """Refuse a bundle this reference cannot serve (:func:`check_reference`)."""
         check_reference(bundle, self.gear, list(self.offsets))

@@ -81,6 +81,9 @@ class Records:
     # records whose manifest leaves the torque unknown: the configured torque times the
     # calibrated ``torque_factor`` (:data:`~physics.loop.declared.TORQUE`)
     torque_unknown: np.ndarray | None = None
+    # the unit's calibration held at its own first records' (:func:`physics.loop.fit.held`):
+    # ``m_h`` is not levelled again, by the declared model or any candidate
+    held: bool = False
 
     def group(self, i: int) -> Group:
         """The group of record ``i``."""

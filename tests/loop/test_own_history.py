@@ -4,6 +4,7 @@ bundle's life named against them."""
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +20,8 @@ from physics.loop import (
     run_loop,
     split_history,
 )
+from physics.loop.fit import held, with_level
+from physics.loop.records import prepare
 from physics.params import scenario_from_config
 from physics.testbeds import make_bundle
 
@@ -105,6 +108,8 @@ def test_an_effect_that_appears_over_the_life_is_named_against_the_first_records
                for k, d in ref.spread.items())
     report = run_loop(analysed, scn, settings, reference=ref)
     assert report["verdict"] == "effect" and report["chosen_effect"] == "torque_ripple"
+    # the same unit: its first records' calibration is held, nothing recalibrated
+    assert report["calibration"] == ref.calibration and report.signals["rec"].held
     assert report["error_after"] < 0.5 * report["error_before"]
     judged = ref.judging(report.signals["rec"])  # the unexplained test's discrepancy
     assert all(np.array_equal(g.discrepancy_sd, ref.spread[g.key]) for g in judged.groups)
@@ -113,6 +118,29 @@ def test_an_effect_that_appears_over_the_life_is_named_against_the_first_records
     assert summary["reference_records"] == ["r00", "r01"]
     assert not set(summary["reference_records"]) & set(report.details["train_records"]
                                                        + report.details["test_records"])
+
+
+def test_the_units_calibration_is_held_for_its_later_records(tmp_path):
+    """Against its own first records the unit's nuisance and measurement chain are those
+    records' calibration, held: recalibrated on the later records they would absorb what
+    changed since. ``m_h`` is levelled by nothing; a torque the manifest leaves unknown (an
+    operating condition) is the one parameter refitted."""
+    scn = scenario_from_config({"case": 3})
+    path, _ = make_bundle(tmp_path / "b", scn, None, seed=3, records=6, duration_s=0.5)
+    settings = LoopSettings(max_nfev=3, explore=8)
+    ref, analysed = own_reference(read_bundle(path), "first:2", scn, settings)
+    rec = prepare(analysed, scn, settings)
+    kept, nuisance, free = held(rec, ref.calibration)
+    assert kept.held and not rec.held
+    assert nuisance == ref.calibration and free == []
+    moved = nuisance | {"housing_mass_kg": 10 * nuisance["housing_mass_kg"]}
+    assert with_level(kept, moved, None, {}) == moved
+    # the same records not held: the level pulls m_h back towards the measured records'
+    assert with_level(rec, moved, None, {})["housing_mass_kg"] < moved["housing_mass_kg"] / 3
+    unknown = dataclasses.replace(rec, torque_unknown=np.ones(len(rec.models), bool))
+    _, nuisance, free = held(unknown, ref.calibration)
+    assert free == ["torque_factor"] and 0.2 <= nuisance.pop("torque_factor") <= 5
+    assert nuisance == ref.calibration
 
 
 def test_the_app_cuts_the_units_first_records_off_as_its_reference(tmp_path, monkeypatch,
