@@ -95,6 +95,7 @@ class FormReference:
     def summary(self) -> dict:
         """For the report: each group's reference records and RMS mean residual [dB]."""
         return {"source": self.source, "reference_records": list(self.names),
+                "calibration_held": self.same_unit,
                 "records": {group_label(k): n for k, n in self.records.items()},
                 "rms_offset_db": {group_label(k): rms(v) for k, v in self.offsets.items()},
                 "calibration": self.calibration}

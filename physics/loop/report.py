@@ -202,7 +202,9 @@ def markdown(r: dict) -> str:
                         for g, v in ref["rms_offset_db"].items())
         lines.append(f"Read against {ref.get('source', 'a reference gearbox')}: the declared "
                      f"model's mean residual there (RMS per group: {per}) was removed from the "
-                     "measured signatures before the calibration.")
+                     "measured signatures" + ("; its calibration there is held for these records."
+                                              if ref.get("calibration_held") else
+                                              " before the calibration."))
     for name, why in (r.get("not_searched") or {}).items():
         lines.append(f"Not searched, the records cannot show it: {name} ({why}).")
     known = r.get("assumed") or {}

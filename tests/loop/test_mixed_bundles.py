@@ -610,6 +610,7 @@ def test_the_form_reference_moves_each_group_by_its_own_mean(mixed, sister):
     # a sister unit's records say nothing of the two units' difference: the bundle's own
     # discrepancy judges the unexplained residual
     assert sister.spread is None and sister.judging(rec) is rec
+    assert not sister.same_unit and not summary["calibration_held"]  # another unit: recalibrated
 
 
 def test_a_reference_that_cannot_serve_the_bundle_is_refused(mixed, sister):

@@ -115,7 +115,7 @@ def test_an_effect_that_appears_over_the_life_is_named_against_the_first_records
     assert all(np.array_equal(g.discrepancy_sd, ref.spread[g.key]) for g in judged.groups)
     summary = report.details["form_reference"]
     assert summary["source"] == "this unit's own earliest records (first:2)"
-    assert summary["reference_records"] == ["r00", "r01"]
+    assert summary["reference_records"] == ["r00", "r01"] and summary["calibration_held"]
     assert not set(summary["reference_records"]) & set(report.details["train_records"]
                                                        + report.details["test_records"])
 
