@@ -86,6 +86,7 @@ from physics.dynamics.model_form import FACTORS
 from physics.estimators.empirical_inverse import EmpiricalInverse, wear_errors
 from physics.files import atomic_write, pyplot
 from physics.signals.features import features
+from physics.signals.order_analysis import mesh_harmonic_levels
 from physics.testbeds import IndependentPair, simulate_record, wear_depths
 from surrogate import settings
 from surrogate.baselines import fit_estimator, typical_wear
@@ -252,6 +253,8 @@ SEEDED = ("case3", "case3_mean", "case3_baseline", "all_baseline")
 #: the independent simulator's operating points and wear states
 INDEPENDENT_POINTS = ((2000.0, 300.0), (1800.0, 290.0))
 INDEPENDENT_WEAR_MM = (0.0, 0.003, 0.006, 0.009, 0.012, 0.015)
+#: the independent simulator's records' sampling rate [Hz] (the physics dataset's)
+INDEPENDENT_FS = 40960.0
 #: the fleet of independent gearboxes: these fields of ``IndependentPair`` times U(1 -+ spread)
 FLEET_FIELDS = ("runout1_um", "mesh_damping_ratio", "single_stiffness_N_mm_um",
                 "housing_mass_kg", "half_backlash_um")
@@ -312,13 +315,15 @@ def independent_rows(seed: int = 0, pair: IndependentPair | None = None) -> pd.D
         for w, wear in enumerate(INDEPENDENT_WEAR_MM):
             rng = np.random.default_rng([seed, k, w])
             rec = {q: simulate_record(pair, n1_rpm=n1, torque_Nm=torque, wear_mm=wear,
-                                      quantity=q, rng=rng)[None]
+                                      quantity=q, fs_hz=INDEPENDENT_FS, rng=rng)[None]
                    for q in ("dte_m", "accel_m_s2")}
             f_dte, f_acc = features(rec["dte_m"]), features(rec["accel_m_s2"])
+            f_mesh = mesh_harmonic_levels(rec["dte_m"], INDEPENDENT_FS, pair.mesh_frequency_hz(n1))
             rows.append({"case": 3 if (n1, torque) == (2000.0, 300.0) else 1, "cycles": np.nan,
                          "n1_rpm": n1, "torque_Nm": torque, **wear_depths(pair, wear),
                          **{f"dte_{n}": float(v[0]) for n, v in f_dte.items()},
-                         **{f"acc_{n}": float(v[0]) for n, v in f_acc.items()}})
+                         **{f"acc_{n}": float(v[0]) for n, v in f_acc.items()},
+                         **{f"dte_{n}": float(v[0]) for n, v in f_mesh.items()}})
     return pd.DataFrame(rows)
 
 

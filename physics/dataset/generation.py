@@ -73,10 +73,12 @@ from physics.params import (
 from physics.scope import check_record
 from physics.signals.features import FEATURES, feature_units, features
 from physics.signals.measurement import add_noise, housing_acceleration, transfer_path
+from physics.signals.order_analysis import MESH_ORDERS, mesh_harmonic_levels
 from physics.tribology.asperity_table import check_scenario
 
 log = logging.getLogger(__name__)
-SCHEMA_VERSION = 1
+#: the rows' layout; part of the digest, so chunks of another layout are not reused
+SCHEMA_VERSION = 2
 #: columns besides the features, with their units
 BASE_COLUMNS = {
     "case": "1", "replicate": "1", "cycles": "1", "n1_rpm": "r/min", "torque_Nm": "N m",
@@ -277,6 +279,8 @@ def run_unit(base: Scenario, spec: DatasetSpec, case: int, replicate: int,
                         scn.dynamics.sample_rate_hz, d["transfer_fn_hz"], d["transfer_zeta"])
     acc = add_noise(acc, d["snr_db"], rng)
     dte_f, acc_f = features(dte), features(acc)
+    dte_h = mesh_harmonic_levels(dte, scn.dynamics.sample_rate_hz,
+                                 scn.operating.n1_rpm / 60 * scn.gear.z1)
     wear = np.array(wear) * 1e3
     rows = pd.DataFrame({
         "case": case, "replicate": replicate, "cycles": cycles,
@@ -286,6 +290,7 @@ def run_unit(base: Scenario, spec: DatasetSpec, case: int, replicate: int,
         **{k: d[k] for k in NUISANCE_COLUMNS},
         **{f"dte_{k}": dte_f[k] for k in FEATURES},
         **{f"acc_{k}": acc_f[k] for k in FEATURES},
+        **{f"dte_{k}": v for k, v in dte_h.items()},
     })
     numbers = rows.select_dtypes("number")
     bad = ~np.isfinite(numbers.to_numpy(float))
@@ -302,6 +307,7 @@ def units() -> dict[str, str]:
     out = dict(BASE_COLUMNS) | NUISANCE_COLUMNS
     out.update({f"dte_{k}": u for k, u in feature_units("m").items()})
     out.update({f"acc_{k}": u for k, u in feature_units("m/s^2").items()})
+    out.update({f"dte_mesh{k}_db": "dB" for k in MESH_ORDERS})
     return out
 
 
@@ -463,7 +469,8 @@ class DatasetJob:
 
 def dataset_digest(base: Scenario, spec: DatasetSpec) -> str:
     """Hash of everything that determines the rows (the physics and the dataset spec)."""
-    return config_hash({"scenario": dataclasses.asdict(base), "data": dataclasses.asdict(spec)})
+    return config_hash({"scenario": dataclasses.asdict(base), "data": dataclasses.asdict(spec),
+                        "schema_version": SCHEMA_VERSION})
 
 
 def plan_dataset(base: Scenario, spec: DatasetSpec, out_dir: str | Path, name: str = "dataset",

@@ -16,6 +16,9 @@ measurement and model, each in decibels so that gains become offsets:
   the FM4 idea of Stewart, see McFadden, J. Vib. Acoust. 109 (1987) 168);
 - for DTE records (which keep their mean), the mean.
 
+:func:`mesh_harmonic_levels` gives the levels of mesh harmonics 2-6 relative to the first, the
+DTE's wear features of the dataset (``dte_mesh<k>_db``).
+
 A record is cut into segments of ``segment_s``; :func:`signature_segments` gives one signature per
 segment (their scatter is the entries' noise), :func:`mean_signatures` their mean, for a batch
 of records at once.
@@ -63,6 +66,30 @@ def _blocked_basis(n: int, fs: float, freqs: tuple[float, ...]
 def line_amplitudes(x: np.ndarray, fs: float, freqs: np.ndarray) -> np.ndarray:
     """Amplitudes of sinusoids at ``freqs`` [Hz] in ``x`` (..., n): Hann-windowed projection."""
     return _amplitudes(x, float(fs), tuple(float(f) for f in freqs))
+
+
+#: the mesh harmonics whose level relative to the first is a dataset feature
+MESH_ORDERS = (2, 3, 4, 5, 6)
+
+
+def mesh_harmonic_levels(x: np.ndarray, fs: float, f_mesh: float,
+                         orders: tuple[int, ...] = MESH_ORDERS) -> dict[str, np.ndarray]:
+    """Level [dB] of each mesh harmonic ``k f_mesh`` (``k`` in ``orders``) of the records
+    ``x`` (..., n) relative to the first: ``mesh<k>_db = 20 log10(A_k / A_1)``, the amplitudes
+    by :func:`line_amplitudes` (constant speed).
+
+    A ratio of one record's own lines: independent of its gain (a sensor's scale, the mesh
+    stiffness level, the load) and of an offset (the DTE's unknown constant). Wear reshapes
+    the flanks, and with them the transmission error's harmonic content, which the levels of
+    the mesh harmonics follow (Feng, Ji, Ni & Beer, Mech. Syst. Signal Process. 182 (2023)
+    109605, sec. 4: the mesh harmonics and sidebands as wear indicators)."""
+    freqs = float(f_mesh) * np.array([1, *orders], float)
+    if not (np.isfinite(freqs).all() and 0 < freqs[0] and freqs[-1] < fs / 2):
+        raise ValueError(f"mesh harmonics {orders} of f_mesh = {f_mesh!r} Hz must lie in "
+                         f"(0, fs/2 = {fs / 2:g}) Hz; lower the orders or raise fs")
+    a = np.maximum(line_amplitudes(np.asarray(x, float), fs, freqs), np.finfo(np.float32).tiny)
+    return {f"mesh{k}_db": 20 * np.log10(a[..., i + 1] / a[..., 0])
+            for i, k in enumerate(orders)}
 
 
 def _amplitudes(x: np.ndarray, fs: float, freqs: tuple[float, ...]) -> np.ndarray:

@@ -1,0 +1,57 @@
+"""The DTE's mesh-harmonic levels (dataset features ``dte_mesh<k>_db``): a hand calculation on
+a sum of sinusoids, their invariance to a record's gain and offset, and their response to wear
+in the dataset."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from physics.signals.order_analysis import MESH_ORDERS, mesh_harmonic_levels
+
+FS, FM = 40960.0, 600.0
+T = np.arange(4096) / FS  # 0.1 s, the dataset's records
+
+
+def _record(amps: np.ndarray, phases: np.ndarray) -> np.ndarray:
+    return sum(a * np.sin(2 * np.pi * (k + 1) * FM * T + p)
+               for k, (a, p) in enumerate(zip(amps, phases, strict=True)))
+
+
+def test_levels_of_a_sum_of_sinusoids_are_its_amplitude_ratios():
+    amps = np.array([10.0, 3.0, 1.0, 0.5, 0.2, 0.1]) * 1e-6
+    x = _record(amps, np.linspace(0.3, 2.0, 6))
+    got = mesh_harmonic_levels(x, FS, FM)
+    assert list(got) == [f"mesh{k}_db" for k in MESH_ORDERS]
+    for k in MESH_ORDERS:  # 20 log10(A_k / A_1), by hand
+        assert got[f"mesh{k}_db"] == pytest.approx(20 * np.log10(amps[k - 1] / amps[0]),
+                                                   abs=0.01)
+
+
+@settings(max_examples=25, deadline=None)
+@given(gain=st.floats(1e-3, 1e3), offset=st.floats(-1e-3, 1e-3),
+       seed=st.integers(0, 2**16))
+def test_levels_ignore_the_records_gain_and_offset(gain, offset, seed):
+    """A sensor's scale and the DTE's unknown constant (an encoder pair) leave them alone."""
+    rng = np.random.default_rng(seed)
+    x = _record(rng.uniform(0.1, 10.0, 6) * 1e-6, rng.uniform(0, 2 * np.pi, 6))
+    a, b = mesh_harmonic_levels(x, FS, FM), mesh_harmonic_levels(gain * x + offset, FS, FM)
+    for k in a:
+        assert b[k] == pytest.approx(a[k], abs=1e-3)
+
+
+def test_a_batch_is_read_record_by_record():
+    rng = np.random.default_rng(1)
+    xs = np.stack([_record(rng.uniform(0.1, 10, 6), rng.uniform(0, 6, 6)) for _ in range(3)])
+    batch = mesh_harmonic_levels(xs, FS, FM)
+    for i, x in enumerate(xs):
+        one = mesh_harmonic_levels(x, FS, FM)
+        assert all(batch[k][i] == pytest.approx(one[k], abs=1e-4) for k in one)
+
+
+@pytest.mark.parametrize("f_mesh", [0.0, -600.0, FS / 10, float("nan")])
+def test_harmonics_beyond_nyquist_or_no_mesh_are_refused(f_mesh):
+    with pytest.raises(ValueError, match=r"must lie in \(0, fs/2"):
+        mesh_harmonic_levels(np.sin(T), FS, f_mesh)
