@@ -34,6 +34,8 @@ def table(groups: int = 6, rows: int = 5, seed: int = 0) -> pd.DataFrame:
         "dte_kurtosis": 2.5 + rng.normal(0, 0.1, n), "acc_kurtosis": 3 + rng.normal(0, 0.1, n),
         "acc_crest": 4 + rng.normal(0, 0.1, n), "acc_margin": 6 + rng.normal(0, 0.1, n),
         "acc_impulse": 5 + rng.normal(0, 0.1, n), "acc_shape": 1.3 + rng.normal(0, 0.01, n),
+        **{f"dte_mesh{k}_db": -10 * k + 1e3 * wear + rng.normal(0, 0.1, n)
+           for k in range(2, 7)},
         "n1_rpm": 2000.0, "torque_Nm": 300.0, "root_wear_mm": wear})
 
 
