@@ -594,6 +594,10 @@ class WearDataModule(L.LightningDataModule):
             columns = list(dataset_units())
             counts = dict.fromkeys(self.cases, int(self.generate["replicates"]))
         missing = [c for c in [*self.inputs, self.target] if c not in columns]
+        if missing and set(missing) <= set(dataset_units()):  # a file of an older layout
+            raise ValueError(f"data.inputs/data.target: columns {missing} are not in "
+                             f"{self.source}, built by an older version of the dataset "
+                             "API that did not write them; delete it to build it again")
         if missing:
             raise ValueError(f"data.inputs/data.target: columns {missing} are not in "
                              f"{self.source}; choose from {sorted(columns)}")

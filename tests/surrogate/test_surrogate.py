@@ -12,6 +12,7 @@ import pandas as pd
 import pytest
 import torch
 from hydra import compose, initialize_config_module
+from hydra.errors import InstantiationException
 from hydra.utils import get_class, instantiate
 from hypothesis import strategies as st
 
@@ -209,6 +210,17 @@ def test_a_dataset_built_with_other_settings_is_named_not_silently_used(dataset,
                        dataset.parent, dataset.stem, progress=False)
     diff = stale_dataset(dataset, job)
     assert "data.replicates: 4 -> 5" in diff and "chunks" not in diff
+
+
+def test_a_dataset_of_an_older_layout_is_refused_naming_the_fix(dataset, tmp_path):
+    """A dataset file written before the mesh-harmonic levels existed lacks columns the
+    default inputs need: refused before any work, with the fix (delete it to rebuild)."""
+    old = tmp_path / "old.parquet"
+    pd.read_parquet(dataset).drop(columns=["dte_mesh3_db"]).to_parquet(old)
+    cfg = train_cfg(tmp_path, old, "case=3", "data.test_replicates=1")
+    with pytest.raises(InstantiationException, match=r"\['dte_mesh3_db'\] are not in .*older "
+                       r"version of the dataset API.*delete it to build it again"):
+        instantiate(cfg.data)
 
 
 def test_ensemble_members_differ_and_the_mixture_is_right():
