@@ -85,6 +85,7 @@ from physics.dataset.generation import NuisanceRanges
 from physics.dynamics.model_form import FACTORS
 from physics.estimators.empirical_inverse import EmpiricalInverse, wear_errors
 from physics.files import atomic_write, pyplot
+from physics.params import Dynamics
 from physics.signals.features import features
 from physics.signals.order_analysis import mesh_harmonic_levels
 from physics.testbeds import IndependentPair, simulate_record, wear_depths
@@ -254,7 +255,7 @@ SEEDED = ("case3", "case3_mean", "case3_baseline", "all_baseline")
 INDEPENDENT_POINTS = ((2000.0, 300.0), (1800.0, 290.0))
 INDEPENDENT_WEAR_MM = (0.0, 0.003, 0.006, 0.009, 0.012, 0.015)
 #: the independent simulator's records' sampling rate [Hz] (the physics dataset's)
-INDEPENDENT_FS = 40960.0
+INDEPENDENT_FS = Dynamics().sample_rate_hz
 #: the fleet of independent gearboxes: these fields of ``IndependentPair`` times U(1 -+ spread)
 FLEET_FIELDS = ("runout1_um", "mesh_damping_ratio", "single_stiffness_N_mm_um",
                 "housing_mass_kg", "half_backlash_um")

@@ -70,7 +70,7 @@ from physics.params import (
     scenario_from_config,
     validate_fields,
 )
-from physics.scope import check_record
+from physics.scope import check_record, mesh_frequency_hz
 from physics.signals.features import FEATURES, feature_units, features
 from physics.signals.measurement import add_noise, housing_acceleration, transfer_path
 from physics.signals.order_analysis import MESH_ORDERS, mesh_harmonic_levels
@@ -279,8 +279,7 @@ def run_unit(base: Scenario, spec: DatasetSpec, case: int, replicate: int,
                         scn.dynamics.sample_rate_hz, d["transfer_fn_hz"], d["transfer_zeta"])
     acc = add_noise(acc, d["snr_db"], rng)
     dte_f, acc_f = features(dte), features(acc)
-    dte_h = mesh_harmonic_levels(dte, scn.dynamics.sample_rate_hz,
-                                 scn.operating.n1_rpm / 60 * scn.gear.z1)
+    dte_h = mesh_harmonic_levels(dte, scn.dynamics.sample_rate_hz, mesh_frequency_hz(scn))
     wear = np.array(wear) * 1e3
     rows = pd.DataFrame({
         "case": case, "replicate": replicate, "cycles": cycles,
