@@ -73,12 +73,16 @@ from physics.params import (
 from physics.scope import check_record, mesh_frequency_hz
 from physics.signals.features import FEATURES, feature_units, features
 from physics.signals.measurement import add_noise, housing_acceleration, transfer_path
-from physics.signals.order_analysis import MESH_ORDERS, mesh_harmonic_levels
+from physics.signals.order_analysis import (
+    MESH_ORDERS,
+    mesh_harmonic_levels,
+    mesh_harmonic_phases,
+)
 from physics.tribology.asperity_table import check_scenario
 
 log = logging.getLogger(__name__)
 #: the rows' layout; part of the digest, so chunks of another layout are not reused
-SCHEMA_VERSION = 2
+SCHEMA_VERSION = 3
 #: columns besides the features, with their units
 BASE_COLUMNS = {
     "case": "1", "replicate": "1", "cycles": "1", "n1_rpm": "r/min", "torque_Nm": "N m",
@@ -279,7 +283,9 @@ def run_unit(base: Scenario, spec: DatasetSpec, case: int, replicate: int,
                         scn.dynamics.sample_rate_hz, d["transfer_fn_hz"], d["transfer_zeta"])
     acc = add_noise(acc, d["snr_db"], rng)
     dte_f, acc_f = features(dte), features(acc)
-    dte_h = mesh_harmonic_levels(dte, scn.dynamics.sample_rate_hz, mesh_frequency_hz(scn))
+    f_mesh = mesh_frequency_hz(scn)
+    dte_h = (mesh_harmonic_levels(dte, scn.dynamics.sample_rate_hz, f_mesh)
+             | mesh_harmonic_phases(dte, scn.dynamics.sample_rate_hz, f_mesh))
     wear = np.array(wear) * 1e3
     rows = pd.DataFrame({
         "case": case, "replicate": replicate, "cycles": cycles,
@@ -307,6 +313,7 @@ def units() -> dict[str, str]:
     out.update({f"dte_{k}": u for k, u in feature_units("m").items()})
     out.update({f"acc_{k}": u for k, u in feature_units("m/s^2").items()})
     out.update({f"dte_mesh{k}_db": "dB" for k in MESH_ORDERS})
+    out.update({f"dte_mesh{k}_{f}": "1" for k in MESH_ORDERS for f in ("cos", "sin")})
     return out
 
 

@@ -16,8 +16,9 @@ measurement and model, each in decibels so that gains become offsets:
   the FM4 idea of Stewart, see McFadden, J. Vib. Acoust. 109 (1987) 168);
 - for DTE records (which keep their mean), the mean.
 
-:func:`mesh_harmonic_levels` gives the levels of mesh harmonics 2-6 relative to the first, the
-DTE's wear features of the dataset (``dte_mesh<k>_db``).
+:func:`mesh_harmonic_levels` and :func:`mesh_harmonic_phases` give the levels and phases of mesh
+harmonics 2-6 relative to the first, the DTE's wear features of the dataset
+(``dte_mesh<k>_db``, ``dte_mesh<k>_cos``, ``dte_mesh<k>_sin``).
 
 A record is cut into segments of ``segment_s``; :func:`signature_segments` gives one signature per
 segment (their scatter is the entries' noise), :func:`mean_signatures` their mean, for a batch
@@ -72,6 +73,17 @@ def line_amplitudes(x: np.ndarray, fs: float, freqs: np.ndarray) -> np.ndarray:
 MESH_ORDERS = (2, 3, 4, 5, 6)
 
 
+def _mesh_lines(x: np.ndarray, fs: float, f_mesh: float, orders: tuple[int, ...]
+                ) -> np.ndarray:
+    """Complex projections (:func:`_projections`) of the records ``x`` at the mesh frequency
+    and at ``orders`` of it (last axis: first, then ``orders``); refused beyond Nyquist."""
+    freqs = float(f_mesh) * np.array([1, *orders], float)
+    if not (np.isfinite(freqs).all() and 0 < freqs[0] and freqs[-1] < fs / 2):
+        raise ValueError(f"mesh harmonics {orders} of f_mesh = {f_mesh!r} Hz must lie in "
+                         f"(0, fs/2 = {fs / 2:g}) Hz; lower the orders or raise fs")
+    return _projections(np.asarray(x, float), float(fs), tuple(float(f) for f in freqs))
+
+
 def mesh_harmonic_levels(x: np.ndarray, fs: float, f_mesh: float,
                          orders: tuple[int, ...] = MESH_ORDERS) -> dict[str, np.ndarray]:
     """Level [dB] of each mesh harmonic ``k f_mesh`` (``k`` in ``orders``) of the records
@@ -83,16 +95,43 @@ def mesh_harmonic_levels(x: np.ndarray, fs: float, f_mesh: float,
     the flanks, and with them the transmission error's harmonic content, which the levels of
     the mesh harmonics follow (Feng, Ji, Ni & Beer, Mech. Syst. Signal Process. 182 (2023)
     109605, sec. 4: the mesh harmonics and sidebands as wear indicators)."""
-    freqs = float(f_mesh) * np.array([1, *orders], float)
-    if not (np.isfinite(freqs).all() and 0 < freqs[0] and freqs[-1] < fs / 2):
-        raise ValueError(f"mesh harmonics {orders} of f_mesh = {f_mesh!r} Hz must lie in "
-                         f"(0, fs/2 = {fs / 2:g}) Hz; lower the orders or raise fs")
-    a = np.maximum(line_amplitudes(np.asarray(x, float), fs, freqs), np.finfo(np.float32).tiny)
+    a = np.maximum(np.abs(_mesh_lines(x, fs, f_mesh, orders)), np.finfo(np.float32).tiny)
     return {f"mesh{k}_db": 20 * np.log10(a[..., i + 1] / a[..., 0])
             for i, k in enumerate(orders)}
 
 
+def mesh_harmonic_phases(x: np.ndarray, fs: float, f_mesh: float,
+                         orders: tuple[int, ...] = MESH_ORDERS) -> dict[str, np.ndarray]:
+    """The phase of each mesh harmonic ``k f_mesh`` of the records ``x`` (..., n) relative to
+    the first, ``d_k = phi_k - k phi_1``, as ``mesh<k>_cos = cos d_k`` and ``mesh<k>_sin = sin
+    d_k`` (a point on the unit circle: no wrap at +-pi for a network to learn across).
+
+    The levels (:func:`mesh_harmonic_levels`) are half of each line; the phases are the other
+    half, and together they are the shape of the transmission error over one mesh period, the
+    sum of the flanks' deviations from the involute and their deflection (J. D. Smith, Gear
+    Noise and Vibration, 2nd ed., Marcel Dekker 2003), which wear reshapes. ``d_k`` does not
+    depend on where the record starts (a delay ``tau`` adds ``k w tau`` to ``phi_k`` and ``w
+    tau`` to ``phi_1``), on a positive gain or on an offset; it is the phase a bispectrum's
+    harmonic coupling measures (Nikias & Raghuveer, Proc. IEEE 75 (1987) 869). A record of
+    the opposite sign convention adds ``(1 - k) pi``: the even orders' cos and sin change sign.
+    The dataset's DTE is positive where the pinion leads the gear on the line of action, ``x =
+    r_b1 theta1 - r_b2 theta2`` less the errors (:mod:`physics.dynamics.model`); negate a
+    record that counts the other way before reading it."""
+    z = _mesh_lines(x, fs, f_mesh, orders)
+    out = {}
+    for i, k in enumerate(orders):
+        d = np.angle(z[..., i + 1]) - k * np.angle(z[..., 0])
+        out[f"mesh{k}_cos"], out[f"mesh{k}_sin"] = np.cos(d), np.sin(d)
+    return out
+
+
 def _amplitudes(x: np.ndarray, fs: float, freqs: tuple[float, ...]) -> np.ndarray:
+    return np.abs(_projections(x, fs, freqs))
+
+
+def _projections(x: np.ndarray, fs: float, freqs: tuple[float, ...]) -> np.ndarray:
+    """Complex Hann-windowed projections of ``x`` (..., n) at ``freqs``: amplitude and phase
+    of each line at the record's first sample."""
     weights, block, rotate = _blocked_basis(x.shape[-1], fs, freqs)
     a, b = rotate.shape[0], block.shape[0]
     y = np.zeros((*x.shape[:-1], a * b), np.float32)
@@ -100,7 +139,7 @@ def _amplitudes(x: np.ndarray, fs: float, freqs: tuple[float, ...]) -> np.ndarra
     y *= weights
     proj = y.reshape(*x.shape[:-1], a, b) @ block  # (..., blocks, 2 lines)
     lines = len(freqs)
-    return np.abs(((proj[..., :lines] + 1j * proj[..., lines:]) * rotate).sum(axis=-2))
+    return ((proj[..., :lines] + 1j * proj[..., lines:]) * rotate).sum(axis=-2)
 
 
 @lru_cache(maxsize=16)

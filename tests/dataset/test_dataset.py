@@ -52,9 +52,13 @@ def test_rows_columns_and_sidecar(single):
     assert list(df.columns) == list(units())
     assert df.select_dtypes("number").notna().all().all()
     side = json.loads(single.with_suffix(".json").read_text())
-    assert side["rows"] == len(df) and side["schema_version"] == 2
+    assert side["rows"] == len(df) and side["schema_version"] == 3
     assert side["units"]["dte_rms"] == "m" and side["units"]["acc_rms"] == "m/s^2"
     assert all(side["units"][f"dte_mesh{k}_db"] == "dB" for k in (2, 3, 4, 5, 6))
+    assert all(side["units"][f"dte_mesh{k}_{f}"] == "1" for k in (2, 3, 4, 5, 6)
+               for f in ("cos", "sin"))
+    for k in (2, 3, 4, 5, 6):  # a point on the unit circle
+        assert np.allclose(df[f"dte_mesh{k}_cos"] ** 2 + df[f"dte_mesh{k}_sin"] ** 2, 1.0)
     assert side["config"]["data"]["seed"] == 0 and "package_version" in side
     assert side["config"]["scenario"]["tribology"]["regime"] == "mixed"
     for _, traj in df.groupby(["case", "replicate"]):

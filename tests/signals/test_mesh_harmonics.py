@@ -1,6 +1,6 @@
-"""The DTE's mesh-harmonic levels (dataset features ``dte_mesh<k>_db``): a hand calculation on
-a sum of sinusoids, their invariance to a record's gain and offset, and their response to wear
-in the dataset."""
+"""The DTE's mesh-harmonic levels and phases (dataset features ``dte_mesh<k>_db``,
+``dte_mesh<k>_cos``, ``dte_mesh<k>_sin``): hand calculations on a sum of sinusoids, their
+invariance to a record's gain, offset and start, and the sign convention's effect."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from physics.signals.order_analysis import MESH_ORDERS, mesh_harmonic_levels
+from physics.signals.order_analysis import MESH_ORDERS, mesh_harmonic_levels, mesh_harmonic_phases
 
 FS, FM = 40960.0, 600.0
 T = np.arange(4096) / FS  # 0.1 s, the dataset's records
@@ -52,6 +52,50 @@ def test_a_batch_is_read_record_by_record():
 
 
 @pytest.mark.parametrize("f_mesh", [0.0, -600.0, FS / 10, float("nan")])
-def test_harmonics_beyond_nyquist_or_no_mesh_are_refused(f_mesh):
+@pytest.mark.parametrize("read", [mesh_harmonic_levels, mesh_harmonic_phases])
+def test_harmonics_beyond_nyquist_or_no_mesh_are_refused(f_mesh, read):
     with pytest.raises(ValueError, match=r"must lie in \(0, fs/2"):
-        mesh_harmonic_levels(np.sin(T), FS, f_mesh)
+        read(np.sin(T), FS, f_mesh)
+
+
+def test_phases_of_a_sum_of_sinusoids_are_its_relative_phases():
+    """``d_k = phi_k - k phi_1`` of ``sum a_k sin(k w t + p_k)``, by hand: the projection on
+    ``exp(i w t)`` gives a sine of phase ``p`` the phase ``pi / 2 - p``, so ``d_k = -(p_k - k
+    p_1 + (k - 1) pi / 2)``."""
+    amps = np.array([10.0, 3.0, 1.0, 0.5, 0.2, 0.1]) * 1e-6
+    rng = np.random.default_rng(3)
+    for _ in range(4):
+        p = rng.uniform(-np.pi, np.pi, 6)
+        got = mesh_harmonic_phases(_record(amps, p), FS, FM)
+        assert list(got) == [f"mesh{k}_{f}" for k in MESH_ORDERS for f in ("cos", "sin")]
+        for k in MESH_ORDERS:
+            d = -(p[k - 1] - k * p[0] + (k - 1) * np.pi / 2)
+            z = got[f"mesh{k}_cos"] + 1j * got[f"mesh{k}_sin"]
+            assert abs(z - np.exp(1j * d)) < 2e-3
+
+
+@settings(max_examples=25, deadline=None)
+@given(gain=st.floats(1e-3, 1e3), offset=st.floats(-1e-3, 1e-3),
+       delay=st.integers(0, 2000), seed=st.integers(0, 2**16))
+def test_phases_ignore_the_records_gain_offset_and_start(gain, offset, delay, seed):
+    """A positive gain, the DTE's constant and where the record starts leave them alone: a
+    later start of ``delay`` samples is the same waveform."""
+    rng = np.random.default_rng(seed)
+    amps, p = rng.uniform(0.1, 10.0, 6) * 1e-6, rng.uniform(0, 2 * np.pi, 6)
+    long = np.arange(len(T) + delay) / FS
+    x = sum(a * np.sin(2 * np.pi * (k + 1) * FM * long + q)
+            for k, (a, q) in enumerate(zip(amps, p, strict=True)))
+    a = mesh_harmonic_phases(x[:len(T)], FS, FM)
+    b = mesh_harmonic_phases(gain * x[delay:] + offset, FS, FM)
+    for k in a:
+        assert b[k] == pytest.approx(a[k], abs=2e-3)
+
+
+def test_a_record_of_the_other_sign_turns_the_even_orders_half_way():
+    rng = np.random.default_rng(5)
+    x = _record(rng.uniform(0.1, 10.0, 6) * 1e-6, rng.uniform(0, 2 * np.pi, 6))
+    a, b = mesh_harmonic_phases(x, FS, FM), mesh_harmonic_phases(-x, FS, FM)
+    for k in MESH_ORDERS:
+        sign = 1 if k % 2 else -1
+        for f in ("cos", "sin"):
+            assert b[f"mesh{k}_{f}"] == pytest.approx(sign * a[f"mesh{k}_{f}"], abs=1e-4)
