@@ -312,6 +312,11 @@ class Dynamics:
       (d = 36 mm, m = 2); it acts on the line of action as ``e sin(alpha_w)`` at shaft rate.
     - ``profile_error_um`` 3.0: half the profile form tolerance of ISO 1328-1 grade 6 (6 um), the
       amplitude of the mesh-rate (short-period) error.
+    - ``form_deviation_um`` 0, ``form_waves`` 1, ``form_phase_rad`` 0: the pinion flank's own
+      profile form deviation, a wave along the active profile in the mesh's gap
+      (:func:`physics.gear.accuracy.form_deviation`); 0 is the thesis's involute flank, whose
+      manufacturing error is the mesh-rate sinusoid above alone. The dataset draws it
+      (:class:`physics.dataset.generation.NuisanceRanges`).
     - ``inertia*_kg_m2``: null computes solid steel discs of the face width between the bore and
       the pitch circle.
     - ``sample_rate_hz`` 40960: the thesis's test rig (4.3).
@@ -358,6 +363,12 @@ class Dynamics:
                                       closed=True)
     eccentricity1_um: float = bounded(7.5, 0.0, 1000.0, closed=True)
     profile_error_um: float = bounded(3.0, 0.0, 1000.0, closed=True)
+    form_deviation_um: float = bounded(0.0, 0.0, 1000.0, "half the peak-to-valley of the "
+                                       "pinion flank's form deviation; 0: the involute",
+                                       closed=True)
+    form_waves: float = bounded(1.0, 0.0, 100.0, "half-waves of the form deviation over the "
+                                "active profile")
+    form_phase_rad: float = bounded(0.0, -100.0, 100.0, "phase of the form deviation's wave")
     inertia1_kg_m2: float | None = bounded(None, 0.0, 1e3, "null: a solid steel disc")
     inertia2_kg_m2: float | None = bounded(None, 0.0, 1e3, "null: a solid steel disc")
     sample_rate_hz: float = bounded(40960.0, 100.0, 1e7)

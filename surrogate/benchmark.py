@@ -564,7 +564,8 @@ def run(out: Path, root: Path, extra: list[str], seeds: int = 5
 #: middle part of each source's span, the lubricated wear law alone and the declared model's
 #: form
 NARROW_RANGES = {"damping_ratio": [0.03, 0.12], "eccentricity1_um": [5.0, 15.0],
-                 "profile_error_um": [1.5, 4.5], "half_backlash_um": [30.0, 70.0],
+                 "profile_error_um": [1.5, 4.5], "form_deviation_um": [1.5, 4.5],
+                 "half_backlash_um": [30.0, 70.0],
                  "boundary_share": [0.0, 0.0], **{f: [1.0, 1.0] for f in FACTORS}}
 #: the training ranges :func:`narrow_ranges` compares, each as its changes to the defaults:
 #: the narrow ones, the default tolerances (damping, run-out, profile, backlash) with the

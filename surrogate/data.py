@@ -45,16 +45,14 @@ SENSORS = ("dte", "acc")
 #: the features of each sensor that a gearbox's unknown offsets and scales leave alone. A DTE
 #: record's mean is the half backlash plus the static deflection (tens of um, set by tolerances
 #: the user does not know; an encoder pair measures the DTE only up to a constant), so of the
-#: DTE the mean-free peak-to-peak value, the kurtosis and the levels and phases of mesh
-#: harmonics 2-6 relative to the first (of the record's own lines, so free of its gain and
-#: start; together the shape of one mesh period, which wear reshapes:
-#: :func:`physics.signals.order_analysis.mesh_harmonic_levels` and ``mesh_harmonic_phases``)
-#: are used; the housing acceleration's level scales with the housing's effective mass and the
-#: transfer path, so of it only the dimensionless shape features are used (Table 13 definitions
-#: in :mod:`physics.signals.features`; docs/surrogate.md measures the gain on gearboxes away
-#: from the training ones)
-INVARIANT = {"dte": ("peak_to_peak", "kurtosis", *(f"mesh{k}_db" for k in MESH_ORDERS),
-                     *(f"mesh{k}_{f}" for k in MESH_ORDERS for f in ("cos", "sin"))),
+#: DTE the mean-free peak-to-peak value, the kurtosis and the levels of mesh harmonics 2-6
+#: relative to the first (ratios of the record's own lines, which wear moves by several dB:
+#: :func:`physics.signals.order_analysis.mesh_harmonic_levels`) are used; the housing
+#: acceleration's level scales with the housing's effective mass and the transfer path, so of it
+#: only the dimensionless shape features are used (Table 13 definitions in
+#: :mod:`physics.signals.features`; docs/surrogate.md measures the gain on gearboxes away from
+#: the training ones, and the harmonics' phases, dataset columns too, as an alternative)
+INVARIANT = {"dte": ("peak_to_peak", "kurtosis", *(f"mesh{k}_db" for k in MESH_ORDERS)),
              "acc": ("kurtosis", "crest", "margin", "impulse", "shape")}
 #: the default inputs: the invariant features of both sensors
 DEFAULT_INPUTS = [f"{q}_{f}" for q in SENSORS for f in INVARIANT[q]]

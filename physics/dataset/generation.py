@@ -89,14 +89,17 @@ BASE_COLUMNS = {
     "eta0_Pa_s": "Pa s", "sigma_um": "um", "root_wear_mm": "mm", "max_wear_mm": "mm",
     "mean_wear_mm": "mm",
 }
+#: the pinion flank's form deviation (:func:`physics.gear.accuracy.form_deviation`)
+FORM = ("form_deviation_um", "form_waves", "form_phase_rad")
 #: the dynamics parameters a trajectory draws (:class:`NuisanceRanges`)
 DYNAMIC_NUISANCE = ("damping_ratio", "eccentricity1_um", "profile_error_um", "half_backlash_um",
-                    "housing_mass_kg", *FACTORS)
+                    "housing_mass_kg", *FACTORS, *FORM)
 #: the drawn nuisance kept as columns (for analysis; not network inputs), with their units
 NUISANCE_COLUMNS = {"damping_ratio": "1", "eccentricity1_um": "um", "profile_error_um": "um",
                     "half_backlash_um": "um", "housing_mass_kg": "kg", "transfer_fn_hz": "Hz",
                     "transfer_zeta": "1", "snr_db": "dB", "wear_coeff_factor": "1",
-                    "boundary_share": "1", **{f: "1" for f in FACTORS}}
+                    "boundary_share": "1", **{f: "1" for f in FACTORS},
+                    "form_deviation_um": "um", "form_waves": "1", "form_phase_rad": "rad"}
 
 
 @dataclass(frozen=True)
@@ -142,6 +145,14 @@ class NuisanceRanges:
       and couplings (a lower resonance) while lateral modes couple in: about twice that
       scatter either way.
 
+    - ``form_deviation_um`` 1.4-8.0 um, ``form_waves`` 1-6, ``form_phase_rad`` 0-2 pi: the
+      pinion flank's profile form deviation (:func:`physics.gear.accuracy.form_deviation`),
+      half its peak-to-valley over the span of ``profile_error_um`` (half ``f_f_alpha`` of
+      grades 4-9), one to six half-waves over the active profile (from a bulge or hollow to
+      grinding or feed waviness; an assumption, no source states the span), at any phase: the
+      unit-to-unit shape of the transmission error over a mesh period, which the mesh-rate
+      sinusoid alone leaves the same for every gearbox.
+
     What training over these spans costs on gearboxes inside narrow ranges, and buys beyond
     them: docs/surrogate.md (Training ranges).
     """
@@ -161,6 +172,9 @@ class NuisanceRanges:
     stiffness_factor: list[float] = field(default_factory=lambda: [0.6, 1.6])
     double_contact_factor: list[float] = field(default_factory=lambda: [0.7, 1.5])
     resonance_factor: list[float] = field(default_factory=lambda: [0.6, 1.6])
+    form_deviation_um: list[float] = field(default_factory=lambda: [1.4, 8.0])
+    form_waves: list[float] = field(default_factory=lambda: [1.0, 6.0])
+    form_phase_rad: list[float] = field(default_factory=lambda: [0.0, 2 * math.pi])
 
     #: the physical limits each range must lie in
     LIMITS: ClassVar[dict[str, tuple[float, float]]] = {
@@ -168,7 +182,9 @@ class NuisanceRanges:
         "profile_error_um": (0.0, 1000.0), "half_backlash_um": (0.0, 1e4),
         "housing_mass_kg": (1e-3, 1e5), "transfer_fn_hz": (10.0, 20000.0),
         "transfer_zeta": (1e-3, 0.9), "snr_db": (-20.0, 200.0), "wear_coeff_factor": (1e-3, 1e3),
-        "boundary_share": (0.0, 1.0), **{f: (0.1, 10.0) for f in FACTORS}}
+        "boundary_share": (0.0, 1.0), **{f: (0.1, 10.0) for f in FACTORS},
+        "form_deviation_um": (0.0, 1000.0), "form_waves": (0.1, 100.0),
+        "form_phase_rad": (0.0, 2 * math.pi)}
     #: the ranges drawn log-uniformly (factors); the rest uniformly
     LOG: ClassVar[tuple[str, ...]] = ("wear_coeff_factor", *FACTORS)
 

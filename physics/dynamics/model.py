@@ -50,6 +50,7 @@ import numpy as np
 from scipy import signal
 
 from physics.dynamics.model_form import FACTORS, with_model_form
+from physics.gear.accuracy import form_deviation
 from physics.gear.geometry import MeshGeometry
 from physics.gear.stiffness import MeshStiffness, mesh_stiffness
 from physics.params import Dynamics, Scenario
@@ -152,6 +153,11 @@ def build_model(scn: Scenario, stiffness: MeshStiffness | None = None,
             np.zeros_like(s_grid) if wear2 is None else wear2)
         g_a = np.interp(s_a, s_grid, total)
         g_b = np.where(on_b, np.interp(s_b, s_grid, total), 0.0)
+    if dyn.form_deviation_um > 0:  # the flank's form deviation, a gap like the wear's
+        wave = (geom.s_start, geom.path_length, dyn.form_deviation_um, dyn.form_waves,
+                dyn.form_phase_rad)
+        g_a = g_a + form_deviation(s_a, *wave)
+        g_b = np.where(on_b, g_b + form_deviation(s_b, *wave), 0.0)
     rho, width = scn.material.density_kg_m3, g.face_width
     j1 = dyn.inertia1_kg_m2 or blank_inertia(geom.r1, g.bore_radius1_mm * 1e-3, width, rho)
     j2 = dyn.inertia2_kg_m2 or blank_inertia(geom.r2, g.bore_radius2_mm * 1e-3, width, rho)

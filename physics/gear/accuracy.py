@@ -1,6 +1,8 @@
 """Manufacturing tolerances of a spur pair from its accuracy grade: radial run-out, profile form,
 and the normal backlash between its minimum and its maximum. They set the spread of real
-gearboxes of one design (:class:`physics.dataset.generation.NuisanceRanges`).
+gearboxes of one design (:class:`physics.dataset.generation.NuisanceRanges`). And a flank's
+profile form deviation along its active profile (:func:`form_deviation`), the shape a profile
+form tolerance bounds.
 
 Sources (the formulas; no tabulated values are copied):
 
@@ -37,6 +39,8 @@ from __future__ import annotations
 
 import itertools
 import math
+
+import numpy as np
 
 #: ISO 1328-1:1995 size bands [mm]: reference diameter and normal module
 DIAMETER_BANDS = (5.0, 20.0, 50.0, 125.0, 280.0, 560.0, 1000.0, 1600.0, 2500.0, 4000.0,
@@ -133,3 +137,22 @@ def maximum_backlash_um(grade: int, module_mm: float, d1_mm: float, d2_mm: float
     f_a = it_tolerance_um(CENTRE_ALLOWANCE_IT[grade], centre_distance_mm) / 2
     return (minimum_backlash_um(centre_distance_mm, module_mm) + thinner * math.cos(alpha)
             + 2 * (2 * f_a) * math.sin(alpha))
+
+
+def form_deviation(s: np.ndarray, s_start: float, path_length: float, amplitude_um: float,
+                   waves: float, phase_rad: float) -> np.ndarray:
+    """The pinion flank's profile form deviation [m] at roll coordinates ``s`` (m, on the path
+    of contact from ``s_start``, ``path_length`` long), as the gap it opens at the contact (the
+    sign of wear: material missing from the involute): ``A sin(pi n u + phase)``, ``u`` the
+    position along the active profile (0 at the start of contact, 1 at its end).
+
+    ISO 1328-1:1995 (2.2.2) bounds the form deviation ``f_f_alpha`` as the distance between
+    two copies of the mean profile line that enclose the measured profile over the evaluation
+    range; the measured profiles of ground and hobbed teeth are waves of a few periods over
+    it (grinding and feed marks) on a bulge or hollow. Here one such wave: ``A`` half its
+    peak-to-valley (half of ``f_f_alpha`` at the most), ``n`` the half-waves over the active
+    profile (1: a bulge or hollow), ``phase`` where they lie. The same on every tooth: it
+    repeats at the mesh frequency and adds harmonics of it to the transmission error, as real
+    flank deviations do (:mod:`physics.dynamics.model`)."""
+    u = (np.asarray(s, float) - s_start) / path_length
+    return amplitude_um * 1e-6 * np.sin(np.pi * waves * u + phase_rad)

@@ -60,6 +60,27 @@ def test_static_limit_returns_the_static_transmission_error(ms):
     assert np.percentile(rel, 98) < 2e-2  # but for the ringing right after a stiffness jump
 
 
+def test_static_limit_follows_the_flanks_form_deviation(ms):
+    """A form deviation is a gap on every pinion flank: at a crawl the DTE is the stiffness-
+    weighted mean of the pairs' gaps plus the static deflection,
+    ``x = b + (W + k_a g_a + k_b g_b) / (k_a + k_b)``, by hand."""
+    scn = Scenario(operating=Operating(n1_rpm=5.0),
+                   dynamics=dataclasses.replace(QUIET, duration_s=1.0, transient_s=0.01,
+                                                sample_rate_hz=4096.0, form_deviation_um=3.0,
+                                                form_waves=3.0, form_phase_rad=0.7))
+    model = build_model(scn, ms)
+    assert np.ptp(model.g_a) == pytest.approx(6e-6, rel=0.02)  # the wave on the flank
+    resp = simulate(model, scn.dynamics)
+    i = model.phase_index(resp.time)
+    k_a, k_b = model.k_a[i], model.k_b[i]
+    static = model.half_backlash + (model.static_force + k_a * model.g_a[i]
+                                    + k_b * model.g_b[i]) / (k_a + k_b)
+    involute = model.half_backlash + model.static_force / (k_a + k_b)
+    err = np.abs(resp.dte[0] - static) / np.ptp(static - involute)
+    assert np.median(err) < 0.02
+    assert np.median(np.abs(resp.dte[0] - involute)) > 0.2 * np.ptp(static - involute)
+
+
 def test_dead_zone_inert_without_contact_loss(ms):
     a, b = _scn(half_backlash_um=47.5), _scn(half_backlash_um=0.0)
     ra = simulate(build_model(a, ms), a.dynamics)

@@ -1,5 +1,6 @@
 """Manufacturing tolerances by accuracy grade (physics.gear.accuracy): the ISO formulas' hand
-values, their step per grade, and the backlash between its minimum and its maximum."""
+values, their step per grade, the backlash between its minimum and its maximum, and a flank's
+form deviation."""
 
 from __future__ import annotations
 
@@ -7,9 +8,12 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from physics.gear.accuracy import (
     cumulative_pitch_tolerance_um,
+    form_deviation,
     iso_round,
     it_tolerance_um,
     maximum_backlash_um,
@@ -67,3 +71,22 @@ def test_outside_the_bands_is_refused():
         profile_form_tolerance_um(6, 0.3, 36.0)
     with pytest.raises(ValueError, match="accuracy grade"):
         runout_tolerance_um(13, 2.0, 36.0)
+
+
+def test_form_deviation_by_hand():
+    """Two half-waves from a quarter turn: +A at the start of contact, -A midway, +A at the
+    end; metres from micrometres."""
+    s = np.array([-1.0, 0.5, 2.0]) * 1e-3  # start, middle and end of a 3 mm path
+    got = form_deviation(s, -1e-3, 3e-3, 4.0, 2.0, math.pi / 2)
+    assert got == pytest.approx([4e-6, -4e-6, 4e-6], abs=1e-18)
+
+
+@settings(max_examples=50, deadline=None)
+@given(amp=st.floats(0.0, 20.0), waves=st.floats(0.5, 8.0), phase=st.floats(0, 2 * math.pi))
+def test_form_deviation_stays_within_its_tolerance_band(amp, waves, phase):
+    """Its peak-to-valley over the active profile is at most twice its amplitude (the
+    tolerance ``f_f_alpha`` bounds it), and it repeats with the amplitude's sign."""
+    s = np.linspace(0.0, 1.0, 501)
+    d = form_deviation(s, 0.0, 1.0, amp, waves, phase)
+    assert np.ptp(d) <= 2 * amp * 1e-6 * (1 + 1e-12)
+    assert np.allclose(form_deviation(s, 0.0, 1.0, -amp, waves, phase), -d)

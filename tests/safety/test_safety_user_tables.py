@@ -36,8 +36,6 @@ def table(groups: int = 6, rows: int = 5, seed: int = 0) -> pd.DataFrame:
         "acc_impulse": 5 + rng.normal(0, 0.1, n), "acc_shape": 1.3 + rng.normal(0, 0.01, n),
         **{f"dte_mesh{k}_db": -10 * k + 1e3 * wear + rng.normal(0, 0.1, n)
            for k in range(2, 7)},
-        **{f"dte_mesh{k}_cos": np.cos(0.3 * k + 1e2 * wear) for k in range(2, 7)},
-        **{f"dte_mesh{k}_sin": np.sin(0.3 * k + 1e2 * wear) for k in range(2, 7)},
         "n1_rpm": 2000.0, "torque_Nm": 300.0, "root_wear_mm": wear})
 
 

@@ -57,7 +57,8 @@ ONE_GEARBOX = NuisanceRanges(
     profile_error_um=[3.0, 3.0], half_backlash_um=[47.5, 47.5], housing_mass_kg=[20.0, 20.0],
     transfer_fn_hz=[4000.0, 4000.0], transfer_zeta=[0.05, 0.05], snr_db=[30.0, 30.0],
     wear_coeff_factor=[1.0, 1.0], boundary_share=[0.0, 0.0], stiffness_factor=[1.0, 1.0],
-    double_contact_factor=[1.0, 1.0], resonance_factor=[1.0, 1.0])
+    double_contact_factor=[1.0, 1.0], resonance_factor=[1.0, 1.0],
+    form_deviation_um=[0.0, 0.0])
 TINY = DatasetSpec(cases=(3, 4), wear_states=5, replicates=4, chunks=1, nuisance=ONE_GEARBOX)
 
 
