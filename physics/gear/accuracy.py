@@ -146,7 +146,7 @@ def form_deviation(s: np.ndarray, s_start: float, path_length: float, amplitude_
     sign of wear: material missing from the involute): ``A sin(pi n u + phase)``, ``u`` the
     position along the active profile (0 at the start of contact, 1 at its end).
 
-    ISO 1328-1:1995 (2.2.2) bounds the form deviation ``f_f_alpha`` as the distance between
+    ISO 1328-1:1995 bounds the form deviation ``f_f_alpha`` as the distance between
     two copies of the mean profile line that enclose the measured profile over the evaluation
     range; the measured profiles of ground and hobbed teeth are waves of a few periods over
     it (grinding and feed marks) on a bulge or hollow. Here one such wave: ``A`` half its
