@@ -21,6 +21,7 @@ from physics.dynamics.model import (
 )
 from physics.gear.stiffness import MeshStiffness
 from physics.params import Dynamics, Operating, Scenario
+from physics.signals.order_analysis import MESH_ORDERS, mesh_harmonic_levels, mesh_harmonic_phases
 
 QUIET = Dynamics(eccentricity1_um=0.0, profile_error_um=0.0)
 
@@ -79,6 +80,26 @@ def test_static_limit_follows_the_flanks_form_deviation(ms):
     err = np.abs(resp.dte[0] - static) / np.ptp(static - involute)
     assert np.median(err) < 0.02
     assert np.median(np.abs(resp.dte[0] - involute)) > 0.2 * np.ptp(static - involute)
+
+
+def test_a_flank_form_reshapes_the_transmission_error_and_none_leaves_the_involute(ms):
+    """The same wave on every pinion flank repeats at the mesh frequency: it moves the mesh
+    harmonics' levels and phases of the DTE (the features the surrogate reads); at amplitude 0
+    the model is the declared one, table for table."""
+    involute = build_model(_scn(), ms)
+    zero = build_model(_scn(form_deviation_um=0.0, form_waves=3.0, form_phase_rad=1.0), ms)
+    assert np.array_equal(zero.g_a, involute.g_a) and np.array_equal(zero.g_b, involute.g_b)
+    formed = _scn(form_deviation_um=3.0, form_waves=3.0, form_phase_rad=1.0)
+    fs, f_mesh = formed.dynamics.sample_rate_hz, 2000 * 18 / 60
+    a = simulate(involute, formed.dynamics).dte
+    b = simulate(build_model(formed, ms), formed.dynamics).dte
+    la, lb = mesh_harmonic_levels(a, fs, f_mesh), mesh_harmonic_levels(b, fs, f_mesh)
+    pa, pb = mesh_harmonic_phases(a, fs, f_mesh), mesh_harmonic_phases(b, fs, f_mesh)
+    turn = [np.degrees(abs(np.angle((pb[f"mesh{k}_cos"] + 1j * pb[f"mesh{k}_sin"])
+                                    / (pa[f"mesh{k}_cos"] + 1j * pa[f"mesh{k}_sin"]))))[0]
+            for k in MESH_ORDERS]
+    assert max(abs(lb[k] - la[k])[0] for k in la) > 1.0  # dB
+    assert max(turn) > 30.0  # degrees
 
 
 def test_dead_zone_inert_without_contact_loss(ms):
