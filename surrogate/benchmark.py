@@ -87,7 +87,7 @@ from physics.estimators.empirical_inverse import EmpiricalInverse, wear_errors
 from physics.files import atomic_write, pyplot
 from physics.params import Dynamics
 from physics.signals.features import features
-from physics.signals.order_analysis import mesh_harmonic_levels, mesh_harmonic_phases
+from physics.signals.order_analysis import mesh_harmonics
 from physics.testbeds import IndependentPair, simulate_record, wear_depths
 from surrogate import settings
 from surrogate.baselines import fit_estimator, typical_wear
@@ -319,9 +319,7 @@ def independent_rows(seed: int = 0, pair: IndependentPair | None = None) -> pd.D
                                       quantity=q, fs_hz=INDEPENDENT_FS, rng=rng)[None]
                    for q in ("dte_m", "accel_m_s2")}
             f_dte, f_acc = features(rec["dte_m"]), features(rec["accel_m_s2"])
-            f_m = pair.mesh_frequency_hz(n1)
-            f_mesh = (mesh_harmonic_levels(rec["dte_m"], INDEPENDENT_FS, f_m)
-                      | mesh_harmonic_phases(rec["dte_m"], INDEPENDENT_FS, f_m))
+            f_mesh = mesh_harmonics(rec["dte_m"], INDEPENDENT_FS, pair.mesh_frequency_hz(n1))
             rows.append({"case": 3 if (n1, torque) == (2000.0, 300.0) else 1, "cycles": np.nan,
                          "n1_rpm": n1, "torque_Nm": torque, **wear_depths(pair, wear),
                          **{f"dte_{n}": float(v[0]) for n, v in f_dte.items()},

@@ -73,11 +73,7 @@ from physics.params import (
 from physics.scope import check_record, mesh_frequency_hz
 from physics.signals.features import FEATURES, feature_units, features
 from physics.signals.measurement import add_noise, housing_acceleration, transfer_path
-from physics.signals.order_analysis import (
-    MESH_ORDERS,
-    mesh_harmonic_levels,
-    mesh_harmonic_phases,
-)
+from physics.signals.order_analysis import MESH_ORDERS, PHASE_PARTS, mesh_harmonics
 from physics.tribology.asperity_table import check_scenario
 
 log = logging.getLogger(__name__)
@@ -89,8 +85,9 @@ BASE_COLUMNS = {
     "eta0_Pa_s": "Pa s", "sigma_um": "um", "root_wear_mm": "mm", "max_wear_mm": "mm",
     "mean_wear_mm": "mm",
 }
-#: the pinion flank's form deviation (:func:`physics.gear.accuracy.form_deviation`)
-FORM = ("form_deviation_um", "form_waves", "form_phase_rad")
+#: the pinion flank's form deviation (:func:`physics.gear.accuracy.form_deviation`): its
+#: parameters and their units
+FORM = {"form_deviation_um": "um", "form_waves": "1", "form_phase_rad": "rad"}
 #: the dynamics parameters a trajectory draws (:class:`NuisanceRanges`)
 DYNAMIC_NUISANCE = ("damping_ratio", "eccentricity1_um", "profile_error_um", "half_backlash_um",
                     "housing_mass_kg", *FACTORS, *FORM)
@@ -98,8 +95,7 @@ DYNAMIC_NUISANCE = ("damping_ratio", "eccentricity1_um", "profile_error_um", "ha
 NUISANCE_COLUMNS = {"damping_ratio": "1", "eccentricity1_um": "um", "profile_error_um": "um",
                     "half_backlash_um": "um", "housing_mass_kg": "kg", "transfer_fn_hz": "Hz",
                     "transfer_zeta": "1", "snr_db": "dB", "wear_coeff_factor": "1",
-                    "boundary_share": "1", **{f: "1" for f in FACTORS},
-                    "form_deviation_um": "um", "form_waves": "1", "form_phase_rad": "rad"}
+                    "boundary_share": "1", **{f: "1" for f in FACTORS}, **FORM}
 
 
 @dataclass(frozen=True)
@@ -299,9 +295,7 @@ def run_unit(base: Scenario, spec: DatasetSpec, case: int, replicate: int,
                         scn.dynamics.sample_rate_hz, d["transfer_fn_hz"], d["transfer_zeta"])
     acc = add_noise(acc, d["snr_db"], rng)
     dte_f, acc_f = features(dte), features(acc)
-    f_mesh = mesh_frequency_hz(scn)
-    dte_h = (mesh_harmonic_levels(dte, scn.dynamics.sample_rate_hz, f_mesh)
-             | mesh_harmonic_phases(dte, scn.dynamics.sample_rate_hz, f_mesh))
+    dte_h = mesh_harmonics(dte, scn.dynamics.sample_rate_hz, mesh_frequency_hz(scn))
     wear = np.array(wear) * 1e3
     rows = pd.DataFrame({
         "case": case, "replicate": replicate, "cycles": cycles,
@@ -329,7 +323,7 @@ def units() -> dict[str, str]:
     out.update({f"dte_{k}": u for k, u in feature_units("m").items()})
     out.update({f"acc_{k}": u for k, u in feature_units("m/s^2").items()})
     out.update({f"dte_mesh{k}_db": "dB" for k in MESH_ORDERS})
-    out.update({f"dte_mesh{k}_{f}": "1" for k in MESH_ORDERS for f in ("cos", "sin")})
+    out.update({f"dte_mesh{k}_{f}": "1" for k in MESH_ORDERS for f in PHASE_PARTS})
     return out
 
 

@@ -16,9 +16,10 @@ measurement and model, each in decibels so that gains become offsets:
   the FM4 idea of Stewart, see McFadden, J. Vib. Acoust. 109 (1987) 168);
 - for DTE records (which keep their mean), the mean.
 
-:func:`mesh_harmonic_levels` and :func:`mesh_harmonic_phases` give the levels and phases of mesh
-harmonics 2-6 relative to the first, the DTE's wear features of the dataset
-(``dte_mesh<k>_db``, ``dte_mesh<k>_cos``, ``dte_mesh<k>_sin``).
+:func:`mesh_harmonic_levels` and :func:`mesh_harmonic_phases` (both at once:
+:func:`mesh_harmonics`) give the levels and phases of mesh harmonics 2-6 relative to the first,
+the DTE's wear features of the dataset (``dte_mesh<k>_db``, ``dte_mesh<k>_cos``,
+``dte_mesh<k>_sin``).
 
 A record is cut into segments of ``segment_s``; :func:`signature_segments` gives one signature per
 segment (their scatter is the entries' noise), :func:`mean_signatures` their mean, for a batch
@@ -69,8 +70,10 @@ def line_amplitudes(x: np.ndarray, fs: float, freqs: np.ndarray) -> np.ndarray:
     return _amplitudes(x, float(fs), tuple(float(f) for f in freqs))
 
 
-#: the mesh harmonics whose level relative to the first is a dataset feature
+#: the mesh harmonics whose level and phase relative to the first are dataset features
 MESH_ORDERS = (2, 3, 4, 5, 6)
+#: the parts of a harmonic's relative phase (:func:`mesh_harmonic_phases`)
+PHASE_PARTS = ("cos", "sin")
 
 
 def _mesh_lines(x: np.ndarray, fs: float, f_mesh: float, orders: tuple[int, ...]
@@ -95,7 +98,11 @@ def mesh_harmonic_levels(x: np.ndarray, fs: float, f_mesh: float,
     the flanks, and with them the transmission error's harmonic content, which the levels of
     the mesh harmonics follow (Feng, Ji, Ni & Beer, Mech. Syst. Signal Process. 182 (2023)
     109605, sec. 4: the mesh harmonics and sidebands as wear indicators)."""
-    a = np.maximum(np.abs(_mesh_lines(x, fs, f_mesh, orders)), np.finfo(np.float32).tiny)
+    return _levels(_mesh_lines(x, fs, f_mesh, orders), orders)
+
+
+def _levels(z: np.ndarray, orders: tuple[int, ...]) -> dict[str, np.ndarray]:
+    a = np.maximum(np.abs(z), np.finfo(np.float32).tiny)
     return {f"mesh{k}_db": 20 * np.log10(a[..., i + 1] / a[..., 0])
             for i, k in enumerate(orders)}
 
@@ -117,12 +124,23 @@ def mesh_harmonic_phases(x: np.ndarray, fs: float, f_mesh: float,
     The dataset's DTE is positive where the pinion leads the gear on the line of action, ``x =
     r_b1 theta1 - r_b2 theta2`` less the errors (:mod:`physics.dynamics.model`); negate a
     record that counts the other way before reading it."""
-    z = _mesh_lines(x, fs, f_mesh, orders)
+    return _phases(_mesh_lines(x, fs, f_mesh, orders), orders)
+
+
+def _phases(z: np.ndarray, orders: tuple[int, ...]) -> dict[str, np.ndarray]:
     out = {}
     for i, k in enumerate(orders):
         d = np.angle(z[..., i + 1]) - k * np.angle(z[..., 0])
         out[f"mesh{k}_cos"], out[f"mesh{k}_sin"] = np.cos(d), np.sin(d)
     return out
+
+
+def mesh_harmonics(x: np.ndarray, fs: float, f_mesh: float,
+                   orders: tuple[int, ...] = MESH_ORDERS) -> dict[str, np.ndarray]:
+    """:func:`mesh_harmonic_levels` and :func:`mesh_harmonic_phases` of the records ``x`` from
+    one projection of their lines."""
+    z = _mesh_lines(x, fs, f_mesh, orders)
+    return _levels(z, orders) | _phases(z, orders)
 
 
 def _amplitudes(x: np.ndarray, fs: float, freqs: tuple[float, ...]) -> np.ndarray:

@@ -9,7 +9,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from physics.signals.order_analysis import MESH_ORDERS, mesh_harmonic_levels, mesh_harmonic_phases
+from physics.signals.order_analysis import (
+    MESH_ORDERS,
+    mesh_harmonic_levels,
+    mesh_harmonic_phases,
+    mesh_harmonics,
+)
 
 FS, FM = 40960.0, 600.0
 T = np.arange(4096) / FS  # 0.1 s, the dataset's records
@@ -40,6 +45,15 @@ def test_levels_ignore_the_records_gain_and_offset(gain, offset, seed):
     a, b = mesh_harmonic_levels(x, FS, FM), mesh_harmonic_levels(gain * x + offset, FS, FM)
     for k in a:
         assert b[k] == pytest.approx(a[k], abs=1e-3)
+
+
+def test_both_at_once_are_the_levels_and_the_phases():
+    rng = np.random.default_rng(2)
+    xs = np.stack([_record(rng.uniform(0.1, 10, 6), rng.uniform(0, 6, 6)) for _ in range(2)])
+    both = mesh_harmonics(xs, FS, FM)
+    apart = mesh_harmonic_levels(xs, FS, FM) | mesh_harmonic_phases(xs, FS, FM)
+    assert list(both) == list(apart)
+    assert all(np.array_equal(both[k], apart[k]) for k in both)
 
 
 def test_a_batch_is_read_record_by_record():
