@@ -87,7 +87,7 @@ from physics.estimators.empirical_inverse import EmpiricalInverse, wear_errors
 from physics.files import atomic_write, pyplot
 from physics.params import Dynamics
 from physics.signals.features import features
-from physics.signals.order_analysis import mesh_harmonics
+from physics.signals.order_analysis import mesh_harmonics, mesh_lines
 from physics.testbeds import IndependentPair, simulate_record, wear_depths
 from surrogate import settings
 from surrogate.baselines import fit_estimator, typical_wear
@@ -143,7 +143,7 @@ def gearbox_keys(test: pd.DataFrame) -> list[str]:
 
 def network_columns(schema: FeatureSchema, test: pd.DataFrame) -> pd.DataFrame:
     """The columns of ``test`` a network reads: its inputs and the gearbox keys."""
-    return test[list(dict.fromkeys([*schema.inputs, *gearbox_keys(test)]))]
+    return test[list(dict.fromkeys([*schema.columns, *gearbox_keys(test)]))]
 
 
 def referenced(test: pd.DataFrame, wear: np.ndarray, target: str) -> tuple[float, float]:
@@ -309,17 +309,23 @@ def model_form_off(root: Path) -> pd.DataFrame:
 
 def independent_rows(seed: int = 0, pair: IndependentPair | None = None) -> pd.DataFrame:
     """Feature rows of the independent spur-pair simulator (a model form other than ours):
-    DTE and housing acceleration records at two operating points and six root wear depths,
-    labelled with the root, largest and mean depth of its wear profile (:func:`wear_depths`)."""
+    DTE and housing acceleration records of one gear set at two operating points and six root
+    wear depths, each record at its own start angle told by a once-per-revolution mark (for
+    the mesh lines), labelled with the root, largest and mean depth of its wear profile
+    (:func:`wear_depths`)."""
     rows, pair = [], pair or IndependentPair()
     for k, (n1, torque) in enumerate(INDEPENDENT_POINTS):
         for w, wear in enumerate(INDEPENDENT_WEAR_MM):
             rng = np.random.default_rng([seed, k, w])
+            angle = float(rng.uniform(0.0, 2 * np.pi))
             rec = {q: simulate_record(pair, n1_rpm=n1, torque_Nm=torque, wear_mm=wear,
-                                      quantity=q, fs_hz=INDEPENDENT_FS, rng=rng)[None]
+                                      quantity=q, fs_hz=INDEPENDENT_FS, rng=rng,
+                                      gear_set_seed=seed, start_angle_rad=angle)[None]
                    for q in ("dte_m", "accel_m_s2")}
             f_dte, f_acc = features(rec["dte_m"]), features(rec["accel_m_s2"])
             f_mesh = mesh_harmonics(rec["dte_m"], INDEPENDENT_FS, pair.mesh_frequency_hz(n1))
+            f_mesh |= mesh_lines(rec["dte_m"], INDEPENDENT_FS, pair.mesh_frequency_hz(n1),
+                                 pair.z1 * angle)
             rows.append({"case": 3 if (n1, torque) == (2000.0, 300.0) else 1, "cycles": np.nan,
                          "n1_rpm": n1, "torque_Nm": torque, **wear_depths(pair, wear),
                          **{f"dte_{n}": float(v[0]) for n, v in f_dte.items()},

@@ -36,8 +36,15 @@ from physics.dataset.generation import (
 )
 from physics.dataset.generation import units as dataset_units
 from physics.params import Scenario, operating_cases
-from physics.signals.order_analysis import MESH_ORDERS
-from surrogate.schema import FeatureSchema, baseline_changes, first_rows
+from physics.signals.order_analysis import MESH_ORDERS, VECTOR_PARTS
+from surrogate.schema import (
+    FeatureSchema,
+    baseline_changes,
+    first_rows,
+    source_columns,
+    vector_inputs,
+    vector_magnitudes,
+)
 
 log = logging.getLogger(__name__)
 #: the sensors a user may have: DTE (``dte_*`` features) and housing acceleration (``acc_*``)
@@ -235,6 +242,8 @@ def check_user_table(df: pd.DataFrame, path: Path | str, needed: list[str], grou
         if unit not in PLAUSIBLE:
             continue
         lo, hi = PLAUSIBLE[unit]
+        if name.endswith(tuple(f"_{p}" for p in VECTOR_PARTS)):
+            lo = -hi  # a part of a complex line (:func:`vector_inputs`) takes either sign
         out = (values[:, c] < lo) | (values[:, c] > hi)
         if out.any():
             r = int(np.argmax(out))
@@ -281,6 +290,11 @@ def check_user_table(df: pd.DataFrame, path: Path | str, needed: list[str], grou
                          f"(row {int(a.row) + 1}, {order} {a.t:g}) to {b.w:.6g} (row "
                          f"{int(b.row) + 1}, {order} {b.t:g}); wear does not heal: repair the "
                          f"readings or the {order} column")
+
+
+def with_vector_units(units: dict[str, str], vectors) -> dict[str, str]:
+    """``units`` with each complex-line input's unit, its parts' (``<name>_re``)."""
+    return {**units, **{v: units[f"{v}_re"] for v in vectors}}
 
 
 def read_user_table(path: str | Path, columns: dict[str, str]) -> pd.DataFrame:
@@ -526,6 +540,7 @@ class WearDataModule(L.LightningDataModule):
         self.target = target
         # the features, not the operating point, are read against the baseline record
         self.baseline = tuple(c for c in self.inputs if c not in CONDITIONS) if baseline else ()
+        self.vectors: tuple[str, ...] = ()  # the complex-line inputs, found among the columns
         self.val_replicates = None if val_replicates is None else int(val_replicates)
         self.test_replicates = int(test_replicates)
         self.holdout_case = None if holdout_case is None else int(holdout_case)
@@ -593,7 +608,9 @@ class WearDataModule(L.LightningDataModule):
         else:
             columns = list(dataset_units())
             counts = dict.fromkeys(self.cases, int(self.generate["replicates"]))
-        missing = [c for c in [*self.inputs, self.target] if c not in columns]
+        self.set_vectors(columns)
+        self.units = with_vector_units(dataset_units(), self.vectors)
+        missing = [c for c in [*self.sources, self.target] if c not in columns]
         if missing and set(missing) <= set(dataset_units()):  # a file of an older layout
             raise ValueError(f"data.inputs/data.target: columns {missing} are not in "
                              f"{self.source}, built by an older version of the dataset "
@@ -615,9 +632,10 @@ class WearDataModule(L.LightningDataModule):
             raise ValueError("data.holdout_case applies to the physics dataset; in a table of "
                              "your own name the test groups by value: data.group_by=COLUMN "
                              "data.test_groups=[...]")
-        needed = [*self.inputs, self.target]
         raw = read_user_table(table, columns)
-        self.units = table_units(table, columns, units, needed)
+        self.set_vectors(list(raw.columns))
+        needed = [*self.sources, self.target]
+        self.units = with_vector_units(table_units(table, columns, units, needed), self.vectors)
         self.group, self.group_by = group, group_by or group
         self.table = user_rows(raw, table, group, needed, self.target, self.units, group_by)
         self.cases = [0]
@@ -692,7 +710,8 @@ class WearDataModule(L.LightningDataModule):
         if self.table is not None:
             self.frames = self.split()
             self.schema = FeatureSchema.fit(self.network_rows("train"), self.inputs,
-                                            self.units, self.target, self.baseline)
+                                            self.units, self.target, self.baseline,
+                                            self.vectors)
             return
         df = self.table if self.table is not None else load_dataset(
             self.dataset, self.generate, self.jobs)
@@ -700,7 +719,7 @@ class WearDataModule(L.LightningDataModule):
         if unknown:
             raise ValueError(f"cases {unknown} are not in {self.dataset} (it holds "
                              f"{sorted(df.case.unique().tolist())}); regenerate it with them")
-        missing = [c for c in [*self.inputs, self.target] if c not in df.columns]
+        missing = [c for c in [*self.sources, self.target] if c not in df.columns]
         if missing:
             raise ValueError(f"columns {missing} are not in {self.dataset}; choose from "
                              f"{list(df.columns)}")
@@ -709,8 +728,8 @@ class WearDataModule(L.LightningDataModule):
             self.check_baselines(df)
         self.frames = split_trajectories(df, self.val_replicates, self.test_replicates,
                                          self.seed, self.holdout_case)
-        self.schema = FeatureSchema.fit(self.network_rows("train"), self.inputs,
-                                        dataset_units(), self.target, self.baseline)
+        self.schema = FeatureSchema.fit(self.network_rows("train"), self.inputs, self.units,
+                                        self.target, self.baseline, self.vectors)
 
     def check_baselines(self, df: pd.DataFrame) -> None:
         """Each trajectory's first row must be its baseline record, its least worn (the
@@ -746,13 +765,25 @@ class WearDataModule(L.LightningDataModule):
         row = self.labels[ids].iloc[int(df.row.iloc[r])]
         return {k: v.item() if isinstance(v, np.generic) else v for k, v in row.items()}
 
+    def set_vectors(self, columns: list[str]) -> None:
+        """Find the complex-line inputs among ``columns`` (:func:`vector_inputs`)."""
+        self.vectors = vector_inputs(self.inputs, columns)
+
+    @property
+    def sources(self) -> list[str]:
+        """The columns the inputs are read from (a line input from its two parts)."""
+        return source_columns(self.inputs, self.vectors)
+
     def network_rows(self, split: str) -> pd.DataFrame:
-        """The rows of ``split`` as the network reads them: with ``baseline``, the features as
-        changes since each trajectory's first row (:func:`baseline_changes`)."""
-        rows = self.frames[split]
+        """The rows of ``split`` as the network reads them: line inputs as magnitudes
+        (:func:`vector_magnitudes`) and, with ``baseline``, the features as changes since each
+        trajectory's first row (:func:`baseline_changes`; a line's as its vector change)."""
+        rows, keys = self.frames[split], ["case", "replicate"]
+        if self.vectors:
+            rows = vector_magnitudes(rows, self.vectors, keys if self.baseline else None)
         if not self.baseline:
             return rows
-        return baseline_changes(rows, list(self.baseline), ["case", "replicate"],
+        return baseline_changes(rows, [c for c in self.baseline if c not in self.vectors], keys,
                                 fixed=[c for c in self.inputs if c not in self.baseline])
 
     def tensors(self, split: str) -> TensorDataset:

@@ -95,7 +95,7 @@ def predict_file(ckpt: str | Path, source: str | Path, target: str | Path) -> pd
 def execute(job: PredictJob) -> pd.DataFrame:
     df = job.table
     pred = job.surrogate.predict(df, list(job.gearbox))
-    keep = [c for c in df.columns if c not in job.surrogate.schema.inputs
+    keep = [c for c in df.columns if c not in job.surrogate.schema.columns
             and c not in pred.columns]  # labels, ids, other features: passed through
     result = pd.concat([df[keep], pred], axis=1)
     atomic_write(job.output, lambda p: result.to_csv(p, index=False))

@@ -8,8 +8,9 @@ import numpy as np
 import pandas as pd
 
 from physics.dataset.generation import NUISANCE_COLUMNS
+from physics.signals.order_analysis import VECTOR_PARTS
 
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
 #: a value this many times outside the training envelope (or its inverse) means a wrong unit
 UNIT_FACTOR = 30.0
 
@@ -31,10 +32,19 @@ class FeatureSchema:
     #: the inputs read as changes since the gearbox's baseline record (:func:`baseline_changes`,
     #: ``data.baseline``); empty: every input as measured
     baseline: tuple[str, ...] = ()
+    #: the inputs that are complex lines, given as two columns ``<name>_re`` and ``<name>_im``
+    #: and read as their magnitude (:func:`vector_magnitudes`)
+    vectors: tuple[str, ...] = ()
+
+    @property
+    def columns(self) -> list[str]:
+        """The columns an input table must hold: the inputs, each vector as its two parts."""
+        return source_columns(self.inputs, self.vectors)
 
     @classmethod
     def fit(cls, train: pd.DataFrame, inputs: list[str], units: dict[str, str],
-            target: str, baseline: tuple[str, ...] = ()) -> FeatureSchema:
+            target: str, baseline: tuple[str, ...] = (),
+            vectors: tuple[str, ...] = ()) -> FeatureSchema:
         """The schema of a network trained on ``train`` (with ``baseline``: the rows as
         :func:`baseline_changes` gives them, so the scaling and envelope are of the changes)."""
         x = train[inputs].to_numpy(float)
@@ -43,7 +53,8 @@ class FeatureSchema:
         return cls(tuple(inputs), tuple(units[c] for c in inputs), target, units[target],
                    tuple(x.mean(axis=0).tolist()), tuple(std.tolist()),
                    tuple(x.min(axis=0).tolist()), tuple(x.max(axis=0).tolist()),
-                   float(train[target].std()) or 1.0, baseline=tuple(baseline))
+                   float(train[target].std()) or 1.0, baseline=tuple(baseline),
+                   vectors=tuple(vectors))
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -74,8 +85,12 @@ class FeatureSchema:
                     "(gearbox=... on the command line, predict(df, gearbox=[...]) in Python), "
                     "with the rows of each gearbox in time order and the first its baseline "
                     "record (when new)")
+        if self.vectors:
+            df = vector_magnitudes(df, self.vectors, keys if self.baseline else None)
+        if self.baseline:
             present = [c for c in self.inputs if c in df.columns]  # check() names the others
-            df = baseline_changes(df, [c for c in present if c in self.baseline], keys,
+            df = baseline_changes(df, [c for c in present if c in self.baseline
+                                       and c not in self.vectors], keys,
                                   fixed=[c for c in present if c not in self.baseline])
         return df.drop(columns=[c for c in keys if c not in self.inputs
                                 and c not in KEEP_COLUMNS])
@@ -152,6 +167,51 @@ class FeatureSchema:
         return (x - np.asarray(self.mean)) / np.asarray(self.std)
 
 
+def vector_inputs(inputs: list[str], columns: list[str]) -> tuple[str, ...]:
+    """The ``inputs`` that are complex lines: not columns themselves, but their parts
+    ``<name>_re`` and ``<name>_im`` are (the dataset's ``dte_line<k>``,
+    :func:`physics.signals.order_analysis.mesh_lines`)."""
+    have = set(columns)
+    return tuple(c for c in inputs if c not in have
+                 and all(f"{c}_{p}" in have for p in VECTOR_PARTS))
+
+
+def source_columns(inputs, vectors) -> list[str]:
+    """``inputs`` with each of ``vectors`` replaced by its two parts."""
+    return [part for c in inputs
+            for part in ([f"{c}_{p}" for p in VECTOR_PARTS] if c in vectors else [c])]
+
+
+def vector_magnitudes(df: pd.DataFrame, vectors, gearbox: list[str] | None = None
+                      ) -> pd.DataFrame:
+    """``df`` with a column per name of ``vectors``: the magnitude of the complex line whose
+    parts are ``<name>_re`` and ``<name>_im`` or, with ``gearbox``, of its change since the
+    gearbox's first row (:func:`first_rows`): the vector change of a synchronous component
+    against its reference record (ISO 10816-1:1995, Annex D), which for a line referenced to
+    a once-per-revolution mark is free of the offset of that mark and, the transmission error
+    being linear in the flanks' deviations, of the flank form the gearbox was made with
+    (:func:`physics.signals.order_analysis.mesh_lines`)."""
+    parts = [f"{c}_{p}" for c in vectors for p in VECTOR_PARTS]
+    missing = [c for c in parts if c not in df.columns]
+    if missing:
+        raise ValueError(f"input lacks column(s) {missing}: a line input (e.g. dte_line1) is "
+                         "given as its real and imaginary parts, <name>_re and <name>_im, "
+                         "against a once-per-revolution mark")
+    z = df[parts].to_numpy(float).reshape(len(df), len(vectors), 2)
+    if gearbox:
+        z = z - z[baseline_of_rows(df, gearbox)]
+    out = df.copy()
+    out[list(vectors)] = np.hypot(z[..., 0], z[..., 1])
+    return out
+
+
+def baseline_of_rows(df: pd.DataFrame, gearbox: list[str]) -> np.ndarray:
+    """The position of each row's baseline record, its gearbox's first row."""
+    first = first_rows(df, gearbox)
+    # groups numbered in order of first appearance: the first rows are groups 0, 1, 2, ...
+    return np.flatnonzero(first)[df.groupby(gearbox, sort=False).ngroup().to_numpy()]
+
+
 def first_rows(df: pd.DataFrame, gearbox: list[str]) -> np.ndarray:
     """True for the first row (in the table's order) of each gearbox, the rows sharing the
     values of the ``gearbox`` columns: its baseline record. Raises for a missing key."""
@@ -176,9 +236,7 @@ def baseline_changes(df: pd.DataFrame, columns: list[str], gearbox: list[str],
     shape the change). Condition monitoring reads a machine against its own reference value
     in the same way (ISO 20816-1:2016, evaluation criterion II: the change of broadband
     vibration magnitude from a reference value; used here for every feature by analogy)."""
-    first = first_rows(df, gearbox)
-    # groups numbered in order of first appearance: the first rows are groups 0, 1, 2, ...
-    of_row = np.flatnonzero(first)[df.groupby(gearbox, sort=False).ngroup().to_numpy()]
+    of_row = baseline_of_rows(df, gearbox)
     for name in [*fixed, *(["cycles"] if "cycles" in df.columns else [])]:
         values = df[name].to_numpy(float)
         base = values[of_row]

@@ -99,7 +99,8 @@ def prepare(cfg: DictConfig) -> TrainJob:
     if init is not None and list(init.schema.inputs) != data.inputs:
         raise ValueError(f"init_from = {cfg.init_from}: that network takes "
                          f"{list(init.schema.inputs)}, this run's data gives {data.inputs}; "
-                         "choose the same data.sensors and data.operating_point")
+                         "choose the same data.inputs (or data.sensors and "
+                         "data.operating_point)")
     if init is not None:
         theirs = dict(zip(init.schema.inputs, init.schema.units, strict=True))
         other = {c: (theirs[c], data.units[c]) for c in data.inputs if theirs[c] != data.units[c]}
@@ -295,7 +296,8 @@ def report_test(surrogate: Surrogate, dm: WearDataModule, out: Path) -> dict:
     the true and predicted wear of every model) and ``parity.png``; logs the figures, and one
     line where the network is not better than the linear model."""
     test, t, keys = dm.frames["test"], surrogate.schema.target, ["case", "replicate"]
-    pred = surrogate.predict(test[[*surrogate.schema.inputs, *keys]], gearbox=keys)
+    pred = surrogate.predict(test[list(dict.fromkeys([*surrogate.schema.columns, *keys]))],
+                             gearbox=keys)
     schema = surrogate.schema
     x_train = schema.scale(dm.network_rows("train")[list(schema.inputs)].to_numpy(float))
     x_test = schema.scale(dm.network_rows("test")[list(schema.inputs)].to_numpy(float))

@@ -73,12 +73,19 @@ from physics.params import (
 from physics.scope import check_record, mesh_frequency_hz
 from physics.signals.features import FEATURES, feature_units, features
 from physics.signals.measurement import add_noise, housing_acceleration, transfer_path
-from physics.signals.order_analysis import MESH_ORDERS, PHASE_PARTS, mesh_harmonics
+from physics.signals.order_analysis import (
+    LINE_ORDERS,
+    MESH_ORDERS,
+    PHASE_PARTS,
+    VECTOR_PARTS,
+    mesh_harmonics,
+    mesh_lines,
+)
 from physics.tribology.asperity_table import check_scenario
 
 log = logging.getLogger(__name__)
 #: the rows' layout; part of the digest, so chunks of another layout are not reused
-SCHEMA_VERSION = 3
+SCHEMA_VERSION = 4
 #: columns besides the features, with their units
 BASE_COLUMNS = {
     "case": "1", "replicate": "1", "cycles": "1", "n1_rpm": "r/min", "torque_Nm": "N m",
@@ -295,7 +302,12 @@ def run_unit(base: Scenario, spec: DatasetSpec, case: int, replicate: int,
                         scn.dynamics.sample_rate_hz, d["transfer_fn_hz"], d["transfer_zeta"])
     acc = add_noise(acc, d["snr_db"], rng)
     dte_f, acc_f = features(dte), features(acc)
-    dte_h = mesh_harmonics(dte, scn.dynamics.sample_rate_hz, mesh_frequency_hz(scn))
+    f_mesh = mesh_frequency_hz(scn)
+    dte_h = mesh_harmonics(dte, scn.dynamics.sample_rate_hz, f_mesh)
+    # every record of a trajectory starts at t = transient_s, where the mesh phase (zero at
+    # t = 0) is 2 pi f_mesh t: the tachometer's reference shared by the trajectory's records
+    dte_l = mesh_lines(dte, scn.dynamics.sample_rate_hz, f_mesh,
+                       2 * np.pi * f_mesh * response.time[0])
     wear = np.array(wear) * 1e3
     rows = pd.DataFrame({
         "case": case, "replicate": replicate, "cycles": cycles,
@@ -306,6 +318,7 @@ def run_unit(base: Scenario, spec: DatasetSpec, case: int, replicate: int,
         **{f"dte_{k}": dte_f[k] for k in FEATURES},
         **{f"acc_{k}": acc_f[k] for k in FEATURES},
         **{f"dte_{k}": v for k, v in dte_h.items()},
+        **{f"dte_{k}": v for k, v in dte_l.items()},
     })
     numbers = rows.select_dtypes("number")
     bad = ~np.isfinite(numbers.to_numpy(float))
@@ -324,6 +337,7 @@ def units() -> dict[str, str]:
     out.update({f"acc_{k}": u for k, u in feature_units("m/s^2").items()})
     out.update({f"dte_mesh{k}_db": "dB" for k in MESH_ORDERS})
     out.update({f"dte_mesh{k}_{f}": "1" for k in MESH_ORDERS for f in PHASE_PARTS})
+    out.update({f"dte_line{k}_{p}": "m" for k in LINE_ORDERS for p in VECTOR_PARTS})
     return out
 
 

@@ -19,7 +19,8 @@ measurement and model, each in decibels so that gains become offsets:
 :func:`mesh_harmonic_levels` and :func:`mesh_harmonic_phases` (both at once:
 :func:`mesh_harmonics`) give the levels and phases of mesh harmonics 2-6 relative to the first,
 the DTE's wear features of the dataset (``dte_mesh<k>_db``, ``dte_mesh<k>_cos``,
-``dte_mesh<k>_sin``).
+``dte_mesh<k>_sin``); :func:`mesh_lines` the complex lines 1-6 against a once-per-revolution mark
+(``dte_line<k>_re``, ``dte_line<k>_im``), whose change since a gearbox's first record is its wear's.
 
 A record is cut into segments of ``segment_s``; :func:`signature_segments` gives one signature per
 segment (their scatter is the entries' noise), :func:`mean_signatures` their mean, for a batch
@@ -141,6 +142,43 @@ def mesh_harmonics(x: np.ndarray, fs: float, f_mesh: float,
     one projection of their lines."""
     z = _mesh_lines(x, fs, f_mesh, orders)
     return _levels(z, orders) | _phases(z, orders)
+
+
+#: the mesh harmonics whose complex amplitudes are dataset features (:func:`mesh_lines`)
+LINE_ORDERS = (1, *MESH_ORDERS)
+#: the parts of a line's complex amplitude in a table: ``<name>_re``, ``<name>_im``
+VECTOR_PARTS = ("re", "im")
+
+
+def mesh_lines(x: np.ndarray, fs: float, f_mesh: float, start_phase_rad: np.ndarray | float,
+               orders: tuple[int, ...] = LINE_ORDERS) -> dict[str, np.ndarray]:
+    """The complex amplitude of each mesh harmonic ``k f_mesh`` (``k`` in ``orders``) of the
+    records ``x`` (..., n) referenced to the mesh phase zero: ``line<k>_re`` and ``line<k>_im``,
+    the real and imaginary parts of ``A_k exp(i (phi_k - k start_phase_rad))``, in the records'
+    unit, where ``A_k exp(i phi_k)`` is the Hann-windowed line at the record's first sample
+    (:func:`line_amplitudes`, constant speed) and ``start_phase_rad`` the mesh phase there
+    (``z1`` times the pinion angle since a once-per-revolution mark: a tachometer's reading).
+
+    Referenced so, two records of one gearbox give lines whose difference is what changed
+    between them (order tracking keeps the phase of each order against the shaft: McFadden &
+    Smith, Tribology Int. 17 (1984) 3). The transmission error is linear in the flanks'
+    deviations from the involute at a given load (J. D. Smith, Gear Noise and Vibration, 2nd
+    ed., Marcel Dekker 2003, ch. 2), so the change since a gearbox's first record is the
+    wear's part of its lines, free of the flank form and profile errors it was made with:
+    the vector change that condition monitoring trends for a machine's synchronous
+    components (ISO 10816-1:1995, Annex D: a change of a component's amplitude and phase
+    against its reference value can matter where the magnitude alone hardly moves)."""
+    if orders[0] != 1:
+        raise ValueError(f"orders = {orders} must start with the mesh frequency itself (1)")
+    # the projection on exp(+i w t) reads a cos(w t + p) as a e^(-i p): its conjugate is the
+    # phasor a e^(i p)
+    z = np.conj(_mesh_lines(x, fs, f_mesh, orders[1:]))
+    k = np.asarray(orders, float)
+    z = z * np.exp(-1j * k * np.asarray(start_phase_rad, float)[..., None])
+    out = {}
+    for i, order in enumerate(orders):
+        out[f"line{order}_re"], out[f"line{order}_im"] = z[..., i].real, z[..., i].imag
+    return out
 
 
 def _amplitudes(x: np.ndarray, fs: float, freqs: tuple[float, ...]) -> np.ndarray:

@@ -754,12 +754,17 @@ def simulate_record(pair: IndependentPair | None = None, n1_rpm: float = 2000.0,
                     torque_Nm: float = 300.0, wear_mm: float = 0.0, quantity: str = "dte_m",
                     fs_hz: float = 40960.0, duration_s: float = 0.5, effect: str | None = None,
                     effect_size: float = 1.0, snr_db: float = 30.0,
-                    rng: np.random.Generator | None = None) -> np.ndarray:
+                    rng: np.random.Generator | None = None, gear_set_seed: int | None = None,
+                    start_angle_rad: float | None = None) -> np.ndarray:
     """One record (1-D float64): DTE [m, mean included] or housing acceleration [m/s^2, mean
     removed] of the independent model at one operating point and wear depth.
 
     ``rng`` (default ``numpy.random.default_rng(0)``) draws the gear set's error phases, the
-    record's start angle and the noise, in that order.
+    record's start angle and the noise, in that order. ``gear_set_seed``: the error phases
+    drawn from this seed instead (one gear set for every record that names it);
+    ``start_angle_rad``: the pinion's angle at the record's first sample (what a
+    once-per-revolution mark tells; the mesh phase there is ``z1`` times it) instead of a
+    drawn one.
     """
     pair = IndependentPair() if pair is None else pair
     if not isinstance(pair, IndependentPair):
@@ -770,8 +775,13 @@ def simulate_record(pair: IndependentPair | None = None, n1_rpm: float = 2000.0,
         raise _bad("effect", effect, f"does not show in {quantity} records; it acts on "
                    f"{_EFFECTS[name][2]}")
     rng = np.random.default_rng(0) if rng is None else rng
-    phases = _Phases.draw(pair, rng)
-    theta0 = float(rng.uniform(0.0, 12 * np.pi))
+    phases = _Phases.draw(pair, rng if gear_set_seed is None
+                          else np.random.default_rng(gear_set_seed))
+    if start_angle_rad is None:
+        theta0 = float(rng.uniform(0.0, 12 * np.pi))
+    else:  # the record starts transient_s (in whole samples) after t = 0
+        lead_s = round(pair.transient_s * fs_hz) / fs_hz
+        theta0 = float(start_angle_rad) - 2 * np.pi * n1_rpm / 60.0 * lead_s
     dte, acc = _respond(pair, float(n1_rpm), float(torque_Nm), float(wear_mm), float(fs_hz),
                         float(duration_s), name, values, phases, theta0)
     return _finish(dte, acc, quantity, pair, name, values, snr_db, rng)[0]

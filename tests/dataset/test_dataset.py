@@ -13,6 +13,7 @@ import pytest
 from omegaconf import OmegaConf
 
 from physics.dataset.generation import (
+    SCHEMA_VERSION,
     DatasetSpec,
     NuisanceRanges,
     build_dataset,
@@ -52,7 +53,7 @@ def test_rows_columns_and_sidecar(single):
     assert list(df.columns) == list(units())
     assert df.select_dtypes("number").notna().all().all()
     side = json.loads(single.with_suffix(".json").read_text())
-    assert side["rows"] == len(df) and side["schema_version"] == 3
+    assert side["rows"] == len(df) and side["schema_version"] == SCHEMA_VERSION
     assert side["units"]["dte_rms"] == "m" and side["units"]["acc_rms"] == "m/s^2"
     assert all(side["units"][f"dte_mesh{k}_db"] == "dB" for k in (2, 3, 4, 5, 6))
     assert all(side["units"][f"dte_mesh{k}_{f}"] == "1" for k in (2, 3, 4, 5, 6)

@@ -15,6 +15,7 @@ import pytest
 from scipy import stats
 
 from physics.loop import read_bundle
+from physics.signals.order_analysis import mesh_lines
 from physics.testbeds import (
     EFFECT_NAMES,
     IndependentPair,
@@ -207,6 +208,20 @@ def test_deterministic_and_seeded_noise():
     assert np.mean(noise**2) / np.var(clean) == pytest.approx(1e-3, rel=0.1)
     acc = _rec(seed=3, snr_db=30.0, quantity="accel_m_s2")
     assert abs(acc.mean()) < 1e-9 * np.std(acc) * acc.size
+
+
+def test_a_once_per_revolution_mark_gives_one_gear_sets_records_the_same_lines():
+    """Records of one gear set (``gear_set_seed``) started at other angles, each told by its
+    mark (``start_angle_rad``), read the same mesh lines at the mark's mesh phase; a worn gear
+    set's differ."""
+    def lines(angle, gear_set=7, wear=0.0, seed=1):
+        x = _rec(seed, gear_set_seed=gear_set, start_angle_rad=angle, wear_mm=wear)
+        z = mesh_lines(x, FS, FM, 18 * angle)
+        return np.array([z[f"line{k}_re"] + 1j * z[f"line{k}_im"] for k in (1, 2, 3)])
+
+    a, b = lines(0.3), lines(2.9, seed=2)
+    assert np.abs(b - a).max() < 1e-3 * np.abs(a).max()
+    assert np.abs(lines(0.3, wear=0.01) - a).max() > 0.05 * np.abs(a).max()
 
 
 def test_bundle_is_read_by_the_project_reader(tmp_path):

@@ -12,6 +12,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from surrogate.data import CONDITIONS, DEFAULT_INPUTS
 from surrogate.inference import Surrogate, check_gearboxes
 from surrogate.training import train
 
@@ -25,7 +26,10 @@ def model(tmp_path_factory) -> Path:
     tmp = tmp_path_factory.mktemp("baseline")
     df = table(groups=8).rename(columns={"root_wear_mm": "mean_wear_mm"})
     df.to_csv(tmp / "mine.csv", index=False)
-    assert np.isfinite(train(train_cfg(tmp, "experiment=baseline", val_replicates=2)))
+    # the table's features (the default inputs), read as changes since each baseline record
+    inputs = ",".join([*DEFAULT_INPUTS, *CONDITIONS])
+    assert np.isfinite(train(train_cfg(tmp, "experiment=baseline", f"data.inputs=[{inputs}]",
+                                       val_replicates=2)))
     return tmp / "run" / "wear_surrogate.pt"
 
 

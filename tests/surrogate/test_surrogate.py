@@ -25,6 +25,7 @@ from physics.dataset.generation import (
 )
 from physics.dynamics.model_form import FACTORS
 from physics.params import Dynamics, Scenario, WearSolver
+from physics.signals.order_analysis import LINE_ORDERS
 from surrogate import predict, settings
 from surrogate.data import (
     BUILD_CHUNKS,
@@ -45,7 +46,7 @@ from surrogate.inference import (
 from surrogate.model import WearRegressor
 from surrogate.network import EnsembleMLP, mixture
 from surrogate.predict import gearbox_columns, predict_file
-from surrogate.schema import FeatureSchema, baseline_changes
+from surrogate.schema import FeatureSchema, baseline_changes, vector_magnitudes
 from surrogate.training import train
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -630,16 +631,39 @@ def test_baseline_changes_are_zero_at_each_baseline_and_blind_to_a_gearboxs_leve
     pd.testing.assert_frame_equal(out.drop(columns="a"), df.drop(columns="a"))
 
 
+@hypothesis.settings(max_examples=40, deadline=None)
+@hypothesis.given(gearboxes=st.integers(1, 4), rows=st.integers(1, 5), seed=st.integers(0, 2**16))
+def test_a_lines_vector_change_ignores_the_gearboxs_own_line_and_its_marks_angle(gearboxes, rows,
+                                                                                 seed):
+    """A line ``c_g + w(t)`` (the flank form's constant vector and the wear's), its phase
+    turned by another once-per-revolution mark's angle per gearbox: the magnitude of the
+    change since the first row is ``|w(t) - w(t_0)|``, zero at the first row; without a
+    gearbox, the line's own magnitude."""
+    rng = np.random.default_rng(seed)
+    g = np.repeat(np.arange(gearboxes), rows)
+    w = rng.normal(size=g.size) + 1j * rng.normal(size=g.size)
+    z = (rng.normal(size=gearboxes)[g] + 1j * rng.normal(size=gearboxes)[g] + w) * np.exp(
+        1j * rng.uniform(0, 2 * np.pi, gearboxes)[g])
+    df = pd.DataFrame({"g": g, "x_re": z.real, "x_im": z.imag})
+    out = vector_magnitudes(df, ["x"], ["g"])
+    first = w[g * rows]  # each gearbox's first row
+    np.testing.assert_allclose(out.x, np.abs(w - first), atol=1e-9)
+    np.testing.assert_allclose(vector_magnitudes(df, ["x"]).x, np.abs(z), atol=1e-12)
+    assert set(out.columns) == {"g", "x_re", "x_im", "x"}
+
+
 def test_a_baseline_network_reads_changes_and_needs_the_gearbox(dataset, tmp_path):
-    """``experiment=baseline``: the features, not the operating point, enter as changes since
-    each trajectory's unworn record; the model then reads a gearbox whatever its features'
-    level before wear, and refuses rows it cannot reference."""
+    """``experiment=baseline``: the DTE's mesh lines, not the operating point, enter as their
+    vector change since each trajectory's unworn record; the model then reads a gearbox
+    whatever its lines before wear (its flank form, its profile error), and refuses rows it
+    cannot reference."""
     cfg = train_cfg(tmp_path, dataset, "case=3", "experiment=baseline", "data.test_replicates=1",
                     "trainer.max_epochs=20", "model.members=2", "logger=csv")
     assert np.isfinite(train(cfg))
     s = Surrogate.load(tmp_path / "run" / "wear_surrogate.pt")
+    lines = [f"dte_line{k}" for k in LINE_ORDERS]
     assert s.schema.target == "mean_wear_mm"
-    assert set(s.schema.baseline) == set(DEFAULT_INPUTS)
+    assert set(s.schema.baseline) == set(s.schema.vectors) == set(lines)
     assert {"n1_rpm", "torque_Nm"} <= set(s.schema.inputs) - set(s.schema.baseline)
     assert pd.read_csv(tmp_path / "run" / "test_predictions.csv").mean_wear_mm_pred.notna().all()
     # the interval is calibrated on the worn validation rows: the baseline records are not
@@ -647,7 +671,7 @@ def test_a_baseline_network_reads_changes_and_needs_the_gearbox(dataset, tmp_pat
     dm = instantiate(cfg.data)
     dm.setup()
     val = dm.frames["val"]
-    worn = baseline_changes(val, list(s.schema.baseline), ["case", "replicate"])[val.cycles > 0]
+    worn = vector_magnitudes(val, lines, ["case", "replicate"])[val.cycles > 0]
     x = worn[list(s.schema.inputs)].to_numpy(float)
     mean, std = s.predict_array(x)
     # normalised conformal: the residuals over the ensemble's spread widened by the novelty
@@ -656,21 +680,26 @@ def test_a_baseline_network_reads_changes_and_needs_the_gearbox(dataset, tmp_pat
         conformal_scale(mean, sigma, worn.mean_wear_mm.to_numpy(), 0.9), rel=1e-5)
     df = pd.read_parquet(dataset)
     df = df[df.case == 3].reset_index(drop=True)
-    cols, keys = list(s.schema.inputs), ["case", "replicate"]
+    cols, keys = s.schema.columns, ["case", "replicate"]
+    assert cols == [f"{c}_{p}" for c in lines for p in ("re", "im")] + ["n1_rpm", "torque_Nm"]
     with pytest.raises(ValueError, match="name the column"):
         s.predict(df[cols])
     with pytest.raises(ValueError, match=r"gearbox column\(s\) \['rig'\]"):
         s.predict(df[cols], gearbox=["rig"])
+    with pytest.raises(ValueError, match=r"dte_line3_im.*real and imaginary parts"):
+        s.predict(df[[*cols, *keys]].drop(columns="dte_line3_im"), gearbox=keys)
     wear = s.predict(df[[*cols, *keys]], gearbox=keys).mean_wear_mm_pred
-    # another level per gearbox before wear (its own run-out, profile error): the same reading
-    shift = df.replicate.map({r: 1 + 0.3 * r for r in df.replicate.unique()}).to_numpy()
-    other = df.assign(**{c: df[c] + 1e-6 * shift for c in DEFAULT_INPUTS if c.startswith("dte")},
-                      **{c: df[c] + 0.2 * shift for c in DEFAULT_INPUTS if c.startswith("acc")})
+    # another flank form per gearbox adds a constant vector to each of its lines: the same
+    # reading
+    rng = np.random.default_rng(0)
+    form = {r: rng.normal(0, 3e-6, (len(lines), 2)) for r in df.replicate.unique()}
+    add = np.stack(df.replicate.map(form).to_list()).reshape(len(df), -1)
+    other = df.assign(**{c: df[c] + add[:, j] for j, c in enumerate(cols[:2 * len(lines)])})
     np.testing.assert_allclose(s.predict(other[[*cols, *keys]], gearbox=keys).mean_wear_mm_pred,
                                wear, rtol=1e-5, atol=1e-9)
     # the baseline rows all read as a row of no change at their operating point
-    zero = df.assign(**dict.fromkeys(DEFAULT_INPUTS, 0.0))
-    mean, _ = s.predict_array(zero[cols].to_numpy(float))
+    zero = df.assign(**dict.fromkeys(lines, 0.0))
+    mean, _ = s.predict_array(zero[list(s.schema.inputs)].to_numpy(float))
     base = (df.cycles == 0).to_numpy()
     np.testing.assert_allclose(wear[base], np.maximum(mean[base], 0), rtol=1e-5, atol=1e-9)
     # the predict app keeps the gearbox columns it was given
@@ -688,6 +717,7 @@ def test_a_baseline_network_reads_changes_and_needs_the_gearbox(dataset, tmp_pat
     with pytest.raises(ValueError, match=r"data\.baseline=true"):
         train(train_cfg(tmp_path / "b", dataset, "case=3",
                         f"init_from={tmp_path / 'run' / 'wear_surrogate.pt'}",
+                        f"data.inputs=[{','.join(s.schema.inputs)}]",
                         "data.target=mean_wear_mm", "data.test_replicates=1"))
 
 
