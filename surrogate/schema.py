@@ -67,11 +67,12 @@ class FeatureSchema:
         return cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in d.items()})
 
     def network_rows(self, df: pd.DataFrame, gearbox: list[str] | None = None) -> pd.DataFrame:
-        """``df`` as the network reads it: for a baseline model its :attr:`baseline` columns
-        as changes since the first row of each gearbox (:func:`baseline_changes`; the rows
-        sharing the values of the ``gearbox`` columns, its other inputs, the operating point,
-        fixed); gearbox columns that are neither inputs nor identifying columns
-        (:data:`KEEP_COLUMNS`) are dropped."""
+        """``df`` as the network reads it: its :attr:`vectors` as magnitudes and, for a
+        baseline model, its :attr:`baseline` columns as changes since the first row of each
+        gearbox (:func:`baseline_changes`, a line's as its vector change,
+        :func:`vector_magnitudes`; the rows sharing the values of the ``gearbox`` columns, its
+        other inputs, the operating point, fixed); gearbox columns that are neither inputs nor
+        identifying columns (:data:`KEEP_COLUMNS`) are dropped."""
         keys = list(gearbox or [])
         missing = [c for c in keys if c not in df.columns]
         if missing:

@@ -15,6 +15,7 @@ _SOURCES = {
     "physics.signals.order_analysis": (
         "line_amplitudes", "power_spectrum", "white_noise_std", "synchronous_average",
         "line_frequencies", "band_edges", "signature_names", "signatures", "signature_segments",
-        "mean_signatures"),
+        "mean_signatures", "mesh_harmonic_levels", "mesh_harmonic_phases", "mesh_harmonics",
+        "mesh_lines", "MESH_ORDERS", "LINE_ORDERS", "PHASE_PARTS", "VECTOR_PARTS"),
 }
 __all__, __getattr__, __dir__ = lazy_exports(__name__, _SOURCES)
