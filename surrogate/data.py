@@ -608,7 +608,8 @@ class WearDataModule(L.LightningDataModule):
         else:
             columns = list(dataset_units())
             counts = dict.fromkeys(self.cases, int(self.generate["replicates"]))
-        self.set_vectors(columns)
+        # the dataset's line inputs, also where a file of an older layout lacks their parts
+        self.set_vectors([*columns, *dataset_units()])
         self.units = with_vector_units(dataset_units(), self.vectors)
         missing = [c for c in [*self.sources, self.target] if c not in columns]
         if missing and set(missing) <= set(dataset_units()):  # a file of an older layout

@@ -223,6 +223,12 @@ def test_a_dataset_of_an_older_layout_is_refused_naming_the_fix(dataset, tmp_pat
     with pytest.raises(InstantiationException, match=r"\['dte_mesh3_db'\] are not in .*older "
                        r"version of the dataset API.*delete it to build it again"):
         instantiate(cfg.data)
+    # before the mesh lines: the baseline network's inputs, named by their parts
+    pd.read_parquet(dataset).drop(columns=["dte_line2_re", "dte_line2_im"]).to_parquet(old)
+    cfg = train_cfg(tmp_path, old, "case=3", "experiment=baseline", "data.test_replicates=1")
+    with pytest.raises(InstantiationException, match=r"\['dte_line2_re', 'dte_line2_im'\] are not "
+                       r"in .*older version of the dataset API"):
+        instantiate(cfg.data)
 
 
 def test_ensemble_members_differ_and_the_mixture_is_right():
