@@ -7,8 +7,8 @@ figures can mislead); ``all`` (``case=all``) and ``all_mean`` (its mean-wear twi
 ``all_acc`` (all cases, housing acceleration only), ``loco2`` / ``loco5`` (all cases but one),
 and the baseline networks ``case3_baseline`` and ``all_baseline`` (once per seed),
 ``loco2_baseline`` and ``loco5_baseline`` (``experiment=baseline``: the mean wear depth from
-the features' changes since each gearbox's first, unworn record, which every test set has:
-:func:`gearbox_keys`).
+the vector change of the DTE's mesh lines since each gearbox's first, unworn record, which
+every test set has: :func:`gearbox_keys`).
 Every model and estimator is scored on its own target (root wear unless named). Test sets:
 
 - ``heldout_trajectories``: the model's own test trajectories (never seen in training);
@@ -87,7 +87,7 @@ from physics.estimators.empirical_inverse import EmpiricalInverse, wear_errors
 from physics.files import atomic_write, pyplot
 from physics.params import Dynamics
 from physics.signals.features import features
-from physics.signals.order_analysis import mesh_harmonics, mesh_lines
+from physics.signals.order_analysis import mesh_harmonics
 from physics.testbeds import IndependentPair, simulate_record, wear_depths
 from surrogate import settings
 from surrogate.baselines import fit_estimator, typical_wear
@@ -208,7 +208,9 @@ def evaluate(name: str, surrogate: Surrogate, est: EmpiricalInverse, typical: fl
              **wear_errors(np.full_like(true, typical), true), "interval_coverage": np.nan,
              "flag_rate": np.nan}]
     if speed:
-        x = np.repeat(test[list(surrogate.schema.inputs)].to_numpy(float),
+        rows = surrogate.schema.network_rows(network_columns(surrogate.schema, test),
+                                             gearbox_keys(test))
+        x = np.repeat(rows[list(surrogate.schema.inputs)].to_numpy(float),
                       -(-1_000_000 // len(test)), axis=0)[:1_000_000]
         rows[0]["rows_per_s"], rows[0]["latency_us"] = throughput(
             lambda a: surrogate.predict_array(a)[0], x)
@@ -323,9 +325,8 @@ def independent_rows(seed: int = 0, pair: IndependentPair | None = None) -> pd.D
                                       gear_set_seed=seed, start_angle_rad=angle)[None]
                    for q in ("dte_m", "accel_m_s2")}
             f_dte, f_acc = features(rec["dte_m"]), features(rec["accel_m_s2"])
-            f_mesh = mesh_harmonics(rec["dte_m"], INDEPENDENT_FS, pair.mesh_frequency_hz(n1))
-            f_mesh |= mesh_lines(rec["dte_m"], INDEPENDENT_FS, pair.mesh_frequency_hz(n1),
-                                 pair.z1 * angle)
+            f_mesh = mesh_harmonics(rec["dte_m"], INDEPENDENT_FS, pair.mesh_frequency_hz(n1),
+                                    start_phase_rad=pair.z1 * angle)
             rows.append({"case": 3 if (n1, torque) == (2000.0, 300.0) else 1, "cycles": np.nan,
                          "n1_rpm": n1, "torque_Nm": torque, **wear_depths(pair, wear),
                          **{f"dte_{n}": float(v[0]) for n, v in f_dte.items()},

@@ -39,11 +39,11 @@ from physics.params import Scenario, operating_cases
 from physics.signals.order_analysis import MESH_ORDERS, VECTOR_PARTS
 from surrogate.schema import (
     FeatureSchema,
-    baseline_changes,
     first_rows,
+    network_frame,
     source_columns,
     vector_inputs,
-    vector_magnitudes,
+    vector_parts,
 )
 
 log = logging.getLogger(__name__)
@@ -182,6 +182,8 @@ def normalise_unit(unit) -> str:
     return UNIT_ALIASES.get(text, text)
 
 
+#: the endings of a complex line's parts in a table (:func:`vector_inputs`)
+LINE_PART_SUFFIXES = tuple(f"_{p}" for p in VECTOR_PARTS)
 #: per-group medians of one dimensional feature further apart than this: mixed units
 MIXED_UNITS_RATIO = 100.0
 #: the columns of a user table that order a trajectory's rows in time (after data.columns)
@@ -242,7 +244,7 @@ def check_user_table(df: pd.DataFrame, path: Path | str, needed: list[str], grou
         if unit not in PLAUSIBLE:
             continue
         lo, hi = PLAUSIBLE[unit]
-        if name.endswith(tuple(f"_{p}" for p in VECTOR_PARTS)):
+        if name.endswith(LINE_PART_SUFFIXES):
             lo = -hi  # a part of a complex line (:func:`vector_inputs`) takes either sign
         out = (values[:, c] < lo) | (values[:, c] > hi)
         if out.any():
@@ -254,7 +256,8 @@ def check_user_table(df: pd.DataFrame, path: Path | str, needed: list[str], grou
                              f"outside [{lo:g}, {hi:g}], what its unit {unit} allows; {fix}")
     codes, names = pd.factorize(keys, sort=True)
     for c, name in enumerate(needed):
-        if name == target or name in CONDITIONS or unit_of.get(name) in (None, "1"):
+        if (name == target or name in CONDITIONS or unit_of.get(name) in (None, "1")
+                or name.endswith(LINE_PART_SUFFIXES)):  # a line's part: any phase, any size
             continue
         med = pd.Series(np.abs(values[:, c])).groupby(codes).median()
         med = med[med > 0]
@@ -293,8 +296,15 @@ def check_user_table(df: pd.DataFrame, path: Path | str, needed: list[str], grou
 
 
 def with_vector_units(units: dict[str, str], vectors) -> dict[str, str]:
-    """``units`` with each complex-line input's unit, its parts' (``<name>_re``)."""
-    return {**units, **{v: units[f"{v}_re"] for v in vectors}}
+    """``units`` with each complex-line input's unit, its parts' (one unit for both)."""
+    out = dict(units)
+    for v in vectors:
+        given = {units[c] for c in vector_parts(v)}
+        if len(given) != 1:
+            raise ValueError(f"the parts {vector_parts(v)} of the line input {v} have units "
+                             f"{sorted(given)}; give both parts in one unit")
+        out[v] = given.pop()
+    return out
 
 
 def read_user_table(path: str | Path, columns: dict[str, str]) -> pd.DataFrame:
@@ -634,7 +644,8 @@ class WearDataModule(L.LightningDataModule):
                              "your own name the test groups by value: data.group_by=COLUMN "
                              "data.test_groups=[...]")
         raw = read_user_table(table, columns)
-        self.set_vectors(list(raw.columns))
+        # the dataset's line inputs too, so that a table without their parts is told to add them
+        self.set_vectors([*raw.columns, *dataset_units()])
         needed = [*self.sources, self.target]
         self.units = with_vector_units(table_units(table, columns, units, needed), self.vectors)
         self.group, self.group_by = group, group_by or group
@@ -779,13 +790,8 @@ class WearDataModule(L.LightningDataModule):
         """The rows of ``split`` as the network reads them: line inputs as magnitudes
         (:func:`vector_magnitudes`) and, with ``baseline``, the features as changes since each
         trajectory's first row (:func:`baseline_changes`; a line's as its vector change)."""
-        rows, keys = self.frames[split], ["case", "replicate"]
-        if self.vectors:
-            rows = vector_magnitudes(rows, self.vectors, keys if self.baseline else None)
-        if not self.baseline:
-            return rows
-        return baseline_changes(rows, [c for c in self.baseline if c not in self.vectors], keys,
-                                fixed=[c for c in self.inputs if c not in self.baseline])
+        return network_frame(self.frames[split], self.inputs, self.baseline, self.vectors,
+                             ["case", "replicate"])
 
     def tensors(self, split: str) -> TensorDataset:
         rows = self.network_rows(split)

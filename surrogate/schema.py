@@ -86,13 +86,7 @@ class FeatureSchema:
                     "(gearbox=... on the command line, predict(df, gearbox=[...]) in Python), "
                     "with the rows of each gearbox in time order and the first its baseline "
                     "record (when new)")
-        if self.vectors:
-            df = vector_magnitudes(df, self.vectors, keys if self.baseline else None)
-        if self.baseline:
-            present = [c for c in self.inputs if c in df.columns]  # check() names the others
-            df = baseline_changes(df, [c for c in present if c in self.baseline
-                                       and c not in self.vectors], keys,
-                                  fixed=[c for c in present if c not in self.baseline])
+        df = network_frame(df, self.inputs, self.baseline, self.vectors, keys)
         return df.drop(columns=[c for c in keys if c not in self.inputs
                                 and c not in KEEP_COLUMNS])
 
@@ -168,19 +162,37 @@ class FeatureSchema:
         return (x - np.asarray(self.mean)) / np.asarray(self.std)
 
 
+def network_frame(df: pd.DataFrame, inputs, baseline, vectors, gearbox: list[str]
+                  ) -> pd.DataFrame:
+    """``df`` with its ``vectors`` as magnitudes and its ``baseline`` inputs as changes since
+    each gearbox's first row (a line's as its vector change; the other inputs, the operating
+    point, fixed within a gearbox): what a network of these inputs reads. Inputs ``df`` lacks
+    are left for :meth:`FeatureSchema.check` to name."""
+    if vectors:
+        df = vector_magnitudes(df, vectors, gearbox if baseline else None)
+    if not baseline:
+        return df
+    present = [c for c in inputs if c in df.columns]
+    return baseline_changes(df, [c for c in present if c in baseline and c not in vectors],
+                            gearbox, fixed=[c for c in present if c not in baseline])
+
+
 def vector_inputs(inputs: list[str], columns: list[str]) -> tuple[str, ...]:
     """The ``inputs`` that are complex lines: not columns themselves, but their parts
     ``<name>_re`` and ``<name>_im`` are (the dataset's ``dte_line<k>``,
     :func:`physics.signals.order_analysis.mesh_lines`)."""
     have = set(columns)
-    return tuple(c for c in inputs if c not in have
-                 and all(f"{c}_{p}" in have for p in VECTOR_PARTS))
+    return tuple(c for c in inputs if c not in have and set(vector_parts(c)) <= have)
+
+
+def vector_parts(name: str) -> list[str]:
+    """The two columns of the complex line ``name``: ``<name>_re``, ``<name>_im``."""
+    return [f"{name}_{p}" for p in VECTOR_PARTS]
 
 
 def source_columns(inputs, vectors) -> list[str]:
     """``inputs`` with each of ``vectors`` replaced by its two parts."""
-    return [part for c in inputs
-            for part in ([f"{c}_{p}" for p in VECTOR_PARTS] if c in vectors else [c])]
+    return [part for c in inputs for part in (vector_parts(c) if c in vectors else [c])]
 
 
 def vector_magnitudes(df: pd.DataFrame, vectors, gearbox: list[str] | None = None
@@ -192,7 +204,7 @@ def vector_magnitudes(df: pd.DataFrame, vectors, gearbox: list[str] | None = Non
     a once-per-revolution mark is free of the offset of that mark and, the transmission error
     being linear in the flanks' deviations, of the flank form the gearbox was made with
     (:func:`physics.signals.order_analysis.mesh_lines`)."""
-    parts = [f"{c}_{p}" for c in vectors for p in VECTOR_PARTS]
+    parts = source_columns(vectors, vectors)
     missing = [c for c in parts if c not in df.columns]
     if missing:
         raise ValueError(f"input lacks column(s) {missing}: a line input (e.g. dte_line1) is "

@@ -110,6 +110,11 @@ def prepare(cfg: DictConfig) -> TrainJob:
                              + "; this run's data gives "
                              + ", ".join(f"{c} in {b}" for c, (_, b) in other.items())
                              + ": convert the column(s) or train from scratch")
+    if init is not None and tuple(init.schema.vectors) != data.vectors:
+        raise ValueError(f"init_from = {cfg.init_from}: that network reads "
+                         f"{list(init.schema.vectors) or 'no'} inputs as complex lines (their "
+                         f"_re and _im columns), this run's data "
+                         f"{list(data.vectors) or 'none'}; give the table the same columns")
     if init is not None and tuple(init.schema.baseline) != data.baseline:
         raise ValueError(f"init_from = {cfg.init_from}: that network reads "
                          f"{list(init.schema.baseline) or 'no'} features against a baseline "

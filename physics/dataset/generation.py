@@ -79,7 +79,6 @@ from physics.signals.order_analysis import (
     PHASE_PARTS,
     VECTOR_PARTS,
     mesh_harmonics,
-    mesh_lines,
 )
 from physics.tribology.asperity_table import check_scenario
 
@@ -303,11 +302,10 @@ def run_unit(base: Scenario, spec: DatasetSpec, case: int, replicate: int,
     acc = add_noise(acc, d["snr_db"], rng)
     dte_f, acc_f = features(dte), features(acc)
     f_mesh = mesh_frequency_hz(scn)
-    dte_h = mesh_harmonics(dte, scn.dynamics.sample_rate_hz, f_mesh)
-    # every record of a trajectory starts at t = transient_s, where the mesh phase (zero at
-    # t = 0) is 2 pi f_mesh t: the tachometer's reference shared by the trajectory's records
-    dte_l = mesh_lines(dte, scn.dynamics.sample_rate_hz, f_mesh,
-                       2 * np.pi * f_mesh * response.time[0])
+    # the records' lines against mesh phase zero (t = 0), the mesh phase of their first
+    # sample being 2 pi f_mesh time[0]: a tachometer's reference, the same for every record
+    dte_h = mesh_harmonics(dte, scn.dynamics.sample_rate_hz, f_mesh,
+                           start_phase_rad=2 * np.pi * f_mesh * response.time[0])
     wear = np.array(wear) * 1e3
     rows = pd.DataFrame({
         "case": case, "replicate": replicate, "cycles": cycles,
@@ -318,7 +316,6 @@ def run_unit(base: Scenario, spec: DatasetSpec, case: int, replicate: int,
         **{f"dte_{k}": dte_f[k] for k in FEATURES},
         **{f"acc_{k}": acc_f[k] for k in FEATURES},
         **{f"dte_{k}": v for k, v in dte_h.items()},
-        **{f"dte_{k}": v for k, v in dte_l.items()},
     })
     numbers = rows.select_dtypes("number")
     bad = ~np.isfinite(numbers.to_numpy(float))

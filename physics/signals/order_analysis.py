@@ -136,14 +136,6 @@ def _phases(z: np.ndarray, orders: tuple[int, ...]) -> dict[str, np.ndarray]:
     return out
 
 
-def mesh_harmonics(x: np.ndarray, fs: float, f_mesh: float,
-                   orders: tuple[int, ...] = MESH_ORDERS) -> dict[str, np.ndarray]:
-    """:func:`mesh_harmonic_levels` and :func:`mesh_harmonic_phases` of the records ``x`` from
-    one projection of their lines."""
-    z = _mesh_lines(x, fs, f_mesh, orders)
-    return _levels(z, orders) | _phases(z, orders)
-
-
 #: the mesh harmonics whose complex amplitudes are dataset features (:func:`mesh_lines`)
 LINE_ORDERS = (1, *MESH_ORDERS)
 #: the parts of a line's complex amplitude in a table: ``<name>_re``, ``<name>_im``
@@ -154,30 +146,48 @@ def mesh_lines(x: np.ndarray, fs: float, f_mesh: float, start_phase_rad: np.ndar
                orders: tuple[int, ...] = LINE_ORDERS) -> dict[str, np.ndarray]:
     """The complex amplitude of each mesh harmonic ``k f_mesh`` (``k`` in ``orders``) of the
     records ``x`` (..., n) referenced to the mesh phase zero: ``line<k>_re`` and ``line<k>_im``,
-    the real and imaginary parts of ``A_k exp(i (phi_k - k start_phase_rad))``, in the records'
-    unit, where ``A_k exp(i phi_k)`` is the Hann-windowed line at the record's first sample
-    (:func:`line_amplitudes`, constant speed) and ``start_phase_rad`` the mesh phase there
-    (``z1`` times the pinion angle since a once-per-revolution mark: a tachometer's reading).
+    the real and imaginary parts of ``a_k exp(i (p_k - k start_phase_rad))``, in the records'
+    unit, where ``a_k cos(2 pi k f_mesh t + p_k)`` is the harmonic, ``t`` from the record's
+    first sample, read by the Hann-windowed projection (:func:`line_amplitudes`, constant speed)
+    and ``start_phase_rad`` the mesh phase there (``z1`` times the pinion angle since a once-
+    per-revolution mark: a tachometer's reading).
 
     Referenced so, two records of one gearbox give lines whose difference is what changed
-    between them (order tracking keeps the phase of each order against the shaft: McFadden &
-    Smith, Tribology Int. 17 (1984) 3). The transmission error is linear in the flanks'
-    deviations from the involute at a given load (J. D. Smith, Gear Noise and Vibration, 2nd
-    ed., Marcel Dekker 2003, ch. 2), so the change since a gearbox's first record is the
-    wear's part of its lines, free of the flank form and profile errors it was made with:
-    the vector change that condition monitoring trends for a machine's synchronous
-    components (ISO 10816-1:1995, Annex D: a change of a component's amplitude and phase
-    against its reference value can matter where the magnitude alone hardly moves)."""
+    between them (order tracking keeps the phase of each order against a tachometer's reference:
+    R. B. Randall, Vibration-based Condition Monitoring, Wiley 2011, ch. 3). The transmission
+    error is linear in the flanks' deviations from the involute at a given load (J. D. Smith,
+    Gear Noise and Vibration, 2nd ed., Marcel Dekker 2003, ch. 2), so the change since a
+    gearbox's first record is the wear's part of its lines, free of the flank form and profile
+    errors it was made with: the vector change that condition monitoring trends for a machine's
+    synchronous components (ISO 10816-1:1995, Annex D: a change of a component's amplitude and
+    phase against its reference value can matter where the magnitude alone hardly moves)."""
     if orders[0] != 1:
         raise ValueError(f"orders = {orders} must start with the mesh frequency itself (1)")
+    return _referenced(_mesh_lines(x, fs, f_mesh, orders[1:]), orders, start_phase_rad)
+
+
+def _referenced(z: np.ndarray, orders: tuple[int, ...], start_phase_rad
+                ) -> dict[str, np.ndarray]:
     # the projection on exp(+i w t) reads a cos(w t + p) as a e^(-i p): its conjugate is the
     # phasor a e^(i p)
-    z = np.conj(_mesh_lines(x, fs, f_mesh, orders[1:]))
     k = np.asarray(orders, float)
-    z = z * np.exp(-1j * k * np.asarray(start_phase_rad, float)[..., None])
+    z = np.conj(z) * np.exp(-1j * k * np.asarray(start_phase_rad, float)[..., None])
     out = {}
     for i, order in enumerate(orders):
         out[f"line{order}_re"], out[f"line{order}_im"] = z[..., i].real, z[..., i].imag
+    return out
+
+
+def mesh_harmonics(x: np.ndarray, fs: float, f_mesh: float,
+                   orders: tuple[int, ...] = MESH_ORDERS,
+                   start_phase_rad: np.ndarray | float | None = None) -> dict[str, np.ndarray]:
+    """:func:`mesh_harmonic_levels` and :func:`mesh_harmonic_phases` of the records ``x`` from
+    one projection of their lines and, given the mesh phase of their first samples
+    (``start_phase_rad``), the lines 1 and ``orders`` of :func:`mesh_lines` from the same."""
+    z = _mesh_lines(x, fs, f_mesh, orders)
+    out = _levels(z, orders) | _phases(z, orders)
+    if start_phase_rad is not None:
+        out |= _referenced(z, (1, *orders), start_phase_rad)
     return out
 
 

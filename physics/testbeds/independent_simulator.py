@@ -599,6 +599,11 @@ class _Phases:
                        float(ph[-1]))
 
 
+def _lead_samples(pair: IndependentPair, fs_hz: float) -> int:
+    """Samples between t = 0 and a record's first sample (the settling time, rounded)."""
+    return round(pair.transient_s * fs_hz)
+
+
 def _rates(fs_hz: float, target: float) -> tuple[int, int, float]:
     """(up, down, internal rate) with internal = fs * down / up near ``target``."""
     ratio = Fraction(fs_hz / target).limit_denominator(1000)
@@ -621,7 +626,7 @@ def _respond(pair: IndependentPair, n1_rpm: float, torque_Nm: float, wear_mm: fl
     w0 = torque_Nm / rb2
     mesh = _mesh_tables(pair, w0, wear_mm * 1e-3, name, values)
     n_out = round(duration_s * fs_hz)
-    n_lead = round(pair.transient_s * fs_hz)
+    n_lead = _lead_samples(pair, fs_hz)
     n_tail = round(0.01 * fs_hz)
     n_int = math.ceil((n_lead + n_out + n_tail) * down / up) + 1
     t = np.arange(n_int) * dt
@@ -770,6 +775,11 @@ def simulate_record(pair: IndependentPair | None = None, n1_rpm: float = 2000.0,
     if not isinstance(pair, IndependentPair):
         raise _bad("pair", type(pair).__name__, "must be an IndependentPair")
     _check_record(pair, n1_rpm, torque_Nm, wear_mm, quantity, fs_hz, duration_s, snr_db)
+    if start_angle_rad is not None:
+        _check("start_angle_rad", start_angle_rad, -1e6, 1e6)
+    if gear_set_seed is not None and (not isinstance(gear_set_seed, int | np.integer)
+                                      or isinstance(gear_set_seed, bool) or gear_set_seed < 0):
+        raise _bad("gear_set_seed", gear_set_seed, "must be a whole number >= 0 or None")
     name, values = effect_values(effect, effect_size)
     if name is not None and quantity not in _EFFECTS[name][2]:
         raise _bad("effect", effect, f"does not show in {quantity} records; it acts on "
@@ -779,9 +789,9 @@ def simulate_record(pair: IndependentPair | None = None, n1_rpm: float = 2000.0,
                           else np.random.default_rng(gear_set_seed))
     if start_angle_rad is None:
         theta0 = float(rng.uniform(0.0, 12 * np.pi))
-    else:  # the record starts transient_s (in whole samples) after t = 0
-        lead_s = round(pair.transient_s * fs_hz) / fs_hz
-        theta0 = float(start_angle_rad) - 2 * np.pi * n1_rpm / 60.0 * lead_s
+    else:  # the pinion's angle at t = 0, the record's first sample lying its lead after it
+        theta0 = float(start_angle_rad) - 2 * np.pi * n1_rpm / 60.0 * _lead_samples(
+            pair, fs_hz) / fs_hz
     dte, acc = _respond(pair, float(n1_rpm), float(torque_Nm), float(wear_mm), float(fs_hz),
                         float(duration_s), name, values, phases, theta0)
     return _finish(dte, acc, quantity, pair, name, values, snr_db, rng)[0]

@@ -263,6 +263,8 @@ def test_bundle_is_read_by_the_project_reader(tmp_path):
     ({"effect": "gear_runout", "effect_size": -1.0}, "-1.0"),
     ({"effect": "transfer_path", "quantity": "dte_m"}, "'transfer_path'"),
     ({"snr_db": "30"}, "'30'"),
+    ({"start_angle_rad": float("nan")}, "nan"),
+    ({"gear_set_seed": -1}, "-1"),
 ])
 def test_bad_record_arguments_name_the_value(kwargs, named):
     with pytest.raises(ValueError, match=re.escape(named)):

@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from physics.signals.order_analysis import LINE_ORDERS, mesh_lines
+from physics.signals.order_analysis import LINE_ORDERS, mesh_harmonics, mesh_lines
 
 FS, FM = 40960.0, 600.0
 N = 4096  # 0.1 s, the dataset's records
@@ -72,6 +72,15 @@ def test_a_batch_with_its_own_start_phases_is_read_record_by_record():
         one = mesh_lines(xs[i], FS, FM, starts[i])
         for name in batch:
             assert batch[name][i] == pytest.approx(one[name], rel=1e-5, abs=1e-15)
+
+
+def test_the_harmonics_levels_phases_and_lines_come_from_one_projection():
+    rng = np.random.default_rng(4)
+    x = _record(rng.uniform(0.1, 10, 6) * 1e-6, rng.uniform(-3, 3, 6), t0=0.01)
+    both = mesh_harmonics(x, FS, FM, start_phase_rad=2 * np.pi * FM * 0.01)
+    apart = mesh_harmonics(x, FS, FM) | mesh_lines(x, FS, FM, 2 * np.pi * FM * 0.01)
+    assert list(both) == list(apart)
+    assert all(np.array_equal(both[k], apart[k]) for k in both)
 
 
 def test_lines_beyond_nyquist_or_orders_without_the_first_are_refused():

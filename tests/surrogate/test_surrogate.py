@@ -777,6 +777,36 @@ def test_a_baseline_table_must_start_each_group_at_its_baseline(dataset, tmp_pat
             gearbox_columns(bad)
 
 
+def test_a_users_table_of_mesh_lines_trains_a_baseline_network_and_is_read_by_parts(dataset,
+                                                                                    tmp_path):
+    """A user's table with the lines' parts (any phase: a part's median differs widely between
+    gearboxes, which is no unit mix) trains the baseline network; a table without the parts is
+    told to give them, parts in two units are refused, and a fine-tune must read its inputs as
+    the same lines."""
+    df = pd.read_parquet(dataset)
+    mine = df[df.case == 3].assign(rig=lambda d: d.replicate)
+    mine.to_csv(tmp_path / "mine.csv", index=False)
+    common = [f"data.table={tmp_path / 'mine.csv'}", "data.group=rig", "experiment=baseline",
+              "data.test_replicates=1", "trainer.max_epochs=5", "model.members=2",
+              "logger=csv"]
+    assert np.isfinite(train(train_cfg(tmp_path, dataset, *common)))
+    s = Surrogate.load(tmp_path / "run" / "wear_surrogate.pt")
+    assert set(s.schema.vectors) == {f"dte_line{k}" for k in LINE_ORDERS}
+    mine.drop(columns=["dte_line4_re", "dte_line4_im"]).to_csv(tmp_path / "less.csv", index=False)
+    with pytest.raises(Exception, match=r"lacks column\(s\) \['dte_line4_re', 'dte_line4_im'\]"):
+        instantiate(train_cfg(tmp_path, dataset, *common,
+                              f"data.table={tmp_path / 'less.csv'}").data)
+    with pytest.raises(Exception, match=r"dte_line2_im'\] of the line input dte_line2 have units"):
+        instantiate(train_cfg(tmp_path, dataset, *common, "data.units={dte_line2_im: um}").data)
+    flat = mine.assign(dte_line1=np.hypot(mine.dte_line1_re, mine.dte_line1_im)).drop(
+        columns=["dte_line1_re", "dte_line1_im"])
+    flat.to_csv(tmp_path / "flat.csv", index=False)
+    with pytest.raises(ValueError, match=r"as complex lines .*give the table the same columns"):
+        train(train_cfg(tmp_path / "b", dataset, *common, f"data.table={tmp_path / 'flat.csv'}",
+                        "data.units={dte_line1: m}",
+                        f"init_from={tmp_path / 'run' / 'wear_surrogate.pt'}"))
+
+
 def test_a_change_since_baseline_far_beyond_training_is_read_and_a_unit_error_is_not():
     """A baseline network's inputs are changes since the gearbox's first record: a gearbox of
     another kind may change 40 times more than the training gearboxes did (read, and left to
