@@ -121,7 +121,10 @@ class FeatureSchema:
         bad = ~np.isfinite(x)
         if bad.any():
             r, c = np.argwhere(bad)[0]
-            raise ValueError(f"row {r} column {self.inputs[c]} is {x[r, c]}: every input must "
+            name = self.inputs[c]
+            shown = (f"{name} (its parts {vector_parts(name)})" if name in self.vectors
+                     else name)
+            raise ValueError(f"row {r} column {shown} is {x[r, c]}: every input must "
                              "be finite; drop or repair such rows" + (
                                  " (of a baseline model: the change since the gearbox's "
                                  "baseline record, so a NaN in that record spoils every row "

@@ -694,6 +694,10 @@ def test_a_baseline_network_reads_changes_and_needs_the_gearbox(dataset, tmp_pat
         s.predict(df[cols], gearbox=["rig"])
     with pytest.raises(ValueError, match=r"dte_line3_im.*real and imaginary parts"):
         s.predict(df[[*cols, *keys]].drop(columns="dte_line3_im"), gearbox=keys)
+    nan = df[[*cols, *keys]].copy()
+    nan.loc[3, "dte_line2_re"] = np.nan
+    with pytest.raises(ValueError, match=r"dte_line2 \(its parts \['dte_line2_re', "):
+        s.predict(nan, gearbox=keys)
     wear = s.predict(df[[*cols, *keys]], gearbox=keys).mean_wear_mm_pred
     # another flank form per gearbox adds a constant vector to each of its lines: the same
     # reading
