@@ -2,7 +2,8 @@
 4) or the flank's mean (``data.target``).
 
 - :mod:`surrogate.schema`: the feature schema (names, units, scaling, training envelope) a model
-  carries and checks its input against;
+  carries and checks its input against, and how a network reads its rows (complex lines as
+  magnitudes, changes since each gearbox's baseline record);
 - :mod:`surrogate.data`: the Lightning data module over the physics dataset, split by trajectory;
 - :mod:`surrogate.network`: the deep ensemble of Gaussian MLPs in plain torch, and a trained
   network as inference loads it;
@@ -20,7 +21,8 @@ from physics.exports import lazy_exports
 
 #: the public names, by the module that defines each (imported on first use: physics.exports)
 _SOURCES = {
-    "surrogate.schema": ("FeatureSchema", "baseline_changes"),
+    "surrogate.schema": ("FeatureSchema", "baseline_changes", "vector_magnitudes",
+                         "network_frame"),
     "surrogate.settings": ("DataConfig", "ModelConfig", "TrainerConfig"),
     "surrogate.data": (
         "WearDataModule", "DEFAULT_INPUTS", "BUILD_CHUNKS", "load_dataset", "input_columns",
