@@ -36,12 +36,13 @@ from physics.dataset.generation import (
 )
 from physics.dataset.generation import units as dataset_units
 from physics.params import Scenario, operating_cases
-from physics.signals.order_analysis import MESH_ORDERS, VECTOR_PARTS
+from physics.signals.order_analysis import MESH_ORDERS
 from surrogate.schema import (
     FeatureSchema,
     first_rows,
     network_frame,
     source_columns,
+    vector_columns,
     vector_inputs,
     vector_parts,
 )
@@ -182,8 +183,6 @@ def normalise_unit(unit) -> str:
     return UNIT_ALIASES.get(text, text)
 
 
-#: the endings of a complex line's parts in a table (:func:`vector_inputs`)
-LINE_PART_SUFFIXES = tuple(f"_{p}" for p in VECTOR_PARTS)
 #: per-group medians of one dimensional feature further apart than this: mixed units
 MIXED_UNITS_RATIO = 100.0
 #: the columns of a user table that order a trajectory's rows in time (after data.columns)
@@ -204,7 +203,8 @@ def _shown(value) -> str:
 
 
 def check_user_table(df: pd.DataFrame, path: Path | str, needed: list[str], group: str,
-                     target: str | None = None, units: dict[str, str] | None = None) -> None:
+                     target: str | None = None, units: dict[str, str] | None = None,
+                     line_parts: tuple[str, ...] = ()) -> None:
     """A user's table checked before any training, one refusal per rule naming the column,
     the row (1-based, as the file's data rows) or the group, and the fix:
 
@@ -216,6 +216,9 @@ def check_user_table(df: pd.DataFrame, path: Path | str, needed: list[str], grou
       values and one unit per column only;
     - one unit per column: a dimensional feature whose per-group median differs more than
       :data:`MIXED_UNITS_RATIO` times between two groups mixes units;
+    - the ``line_parts`` (the real and imaginary parts of complex-line inputs,
+      :func:`~surrogate.schema.vector_inputs`) take either sign within their unit's range, and
+      their per-group medians, set by each gearbox's phase against its mark, are not compared;
     - wear (``target``, in a unit of :data:`LENGTH_UNITS`) not negative and, where an
       :data:`ORDER_COLUMNS` column is given (with a value in every row; a column left wholly
       empty counts as not given), not falling within a group in its order.
@@ -244,8 +247,8 @@ def check_user_table(df: pd.DataFrame, path: Path | str, needed: list[str], grou
         if unit not in PLAUSIBLE:
             continue
         lo, hi = PLAUSIBLE[unit]
-        if name.endswith(LINE_PART_SUFFIXES):
-            lo = -hi  # a part of a complex line (:func:`vector_inputs`) takes either sign
+        if name in line_parts:
+            lo = -hi
         out = (values[:, c] < lo) | (values[:, c] > hi)
         if out.any():
             r = int(np.argmax(out))
@@ -257,7 +260,7 @@ def check_user_table(df: pd.DataFrame, path: Path | str, needed: list[str], grou
     codes, names = pd.factorize(keys, sort=True)
     for c, name in enumerate(needed):
         if (name == target or name in CONDITIONS or unit_of.get(name) in (None, "1")
-                or name.endswith(LINE_PART_SUFFIXES)):  # a line's part: any phase, any size
+                or name in line_parts):
             continue
         med = pd.Series(np.abs(values[:, c])).groupby(codes).median()
         med = med[med > 0]
@@ -388,14 +391,14 @@ ESTIMATOR_COLUMNS = ("dte_peak_to_peak", "dte_kurtosis")
 
 def user_rows(df: pd.DataFrame, path: str | Path, group: str | None, needed: list[str],
               target: str | None = None, units: dict[str, str] | None = None,
-              group_by: str | None = None) -> pd.DataFrame:
+              group_by: str | None = None, line_parts: tuple[str, ...] = ()) -> pd.DataFrame:
     """A user's table (renamed) as the data module's rows: the ``needed`` columns as numbers,
     ``case`` 0, ``replicate`` the index of each trajectory in sorted order (a value of
     ``group``, or with ``group_by`` another column, a pair of the two), ``split_group`` the
     index of the row's ``group_by`` value in sorted order (of ``group`` without one), ``row``
     the row of the table, ``cycles`` where given (else NaN) and the estimator's features where
-    given (:data:`ESTIMATOR_COLUMNS`). Checked by :func:`check_user_table` first; the rows of
-    each trajectory are read in the table's order."""
+    given (:data:`ESTIMATOR_COLUMNS`). Checked by :func:`check_user_table` first (``line_parts``
+    as it takes them); the rows of each trajectory are read in the table's order."""
     path = Path(path)
     for option, col in (("data.group", group), ("data.group_by", group_by)):
         if col is not None and col not in df.columns:
@@ -411,7 +414,7 @@ def user_rows(df: pd.DataFrame, path: str | Path, group: str | None, needed: lis
         raise ValueError(f"data.table = {path} has no rows")
     if target is None:
         target = next((c for c in needed if dataset_units().get(c) == "mm"), None)
-    check_user_table(df, path, needed, group, target, units)
+    check_user_table(df, path, needed, group, target, units, line_parts)
     by = group_by or group
     if by != group:
         check_user_table(df, path, [], by)  # every row in a group of group_by, too
@@ -649,7 +652,8 @@ class WearDataModule(L.LightningDataModule):
         needed = [*self.sources, self.target]
         self.units = with_vector_units(table_units(table, columns, units, needed), self.vectors)
         self.group, self.group_by = group, group_by or group
-        self.table = user_rows(raw, table, group, needed, self.target, self.units, group_by)
+        self.table = user_rows(raw, table, group, needed, self.target, self.units, group_by,
+                               tuple(vector_columns(self.vectors)))
         self.cases = [0]
         self.labels = raw[[c for c in raw.columns if c not in needed]]
         if self.baseline:  # before the split: its refusal names the rule, not the counts

@@ -193,6 +193,11 @@ def vector_parts(name: str) -> list[str]:
     return [f"{name}_{p}" for p in VECTOR_PARTS]
 
 
+def vector_columns(vectors) -> list[str]:
+    """The parts of every complex line of ``vectors``, line by line."""
+    return [part for v in vectors for part in vector_parts(v)]
+
+
 def source_columns(inputs, vectors) -> list[str]:
     """``inputs`` with each of ``vectors`` replaced by its two parts."""
     return [part for c in inputs for part in (vector_parts(c) if c in vectors else [c])]
@@ -207,7 +212,7 @@ def vector_magnitudes(df: pd.DataFrame, vectors, gearbox: list[str] | None = Non
     a once-per-revolution mark is free of the offset of that mark and, the transmission error
     being linear in the flanks' deviations, of the flank form the gearbox was made with
     (:func:`physics.signals.order_analysis.mesh_lines`)."""
-    parts = source_columns(vectors, vectors)
+    parts = vector_columns(vectors)
     missing = [c for c in parts if c not in df.columns]
     if missing:
         raise ValueError(f"input lacks column(s) {missing}: a line input (e.g. dte_line1) is "
