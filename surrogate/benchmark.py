@@ -1,14 +1,14 @@
 """Surrogate against the analytic empirical-inverse estimator: ``python -m surrogate.benchmark``.
 
-Models (:data:`MODELS`): ``case3`` (``case=3``) and ``case3_mean`` (the same network of the
-pinion's mean wear depth over the path of contact, ``data.target=mean_wear_mm``), each trained
-once per seed of ``--seeds`` (the seed draws the trajectory split and the start, and one seed's
-figures can mislead); ``all`` (``case=all``) and ``all_mean`` (its mean-wear twin),
-``all_acc`` (all cases, housing acceleration only), ``loco2`` / ``loco5`` (all cases but one),
-and the baseline networks ``case3_baseline`` and ``all_baseline`` (once per seed),
-``loco2_baseline`` and ``loco5_baseline`` (``experiment=baseline``: the mean wear depth from
-the vector change of the DTE's mesh lines since each gearbox's first, unworn record, which
-every test set has: :func:`gearbox_keys`).
+Models (:data:`MODELS`): ``case3`` (the main job, ``case=3``: the mean wear depth from the
+vector change of the DTE's mesh lines since each gearbox's first, unworn record, which every
+test set has: :func:`gearbox_keys`) and ``all`` (``case=all``), ``loco2`` / ``loco5`` (all
+cases but one); their absolute twins (``data.baseline=false``, one record alone):
+``case3_absolute`` (root wear, the thesis's Table 13 features), ``case3_absolute_mean`` (its
+mean-depth twin), ``all_absolute``, ``all_absolute_mean``, ``all_acc`` (housing acceleration
+only), ``loco2_absolute`` / ``loco5_absolute``. Those of :data:`SEEDED` are trained once per
+seed of ``--seeds`` (the seed draws the trajectory split and the start, and one seed's figures
+can mislead), the others with seed 0.
 Every model and estimator is scored on its own target (root wear unless named). Test sets:
 
 - ``heldout_trajectories``: the model's own test trajectories (never seen in training);
@@ -226,16 +226,16 @@ def evaluate(name: str, surrogate: Surrogate, est: EmpiricalInverse, typical: fl
 #: trained models: name -> train.py overrides
 MODELS = {
     "case3": ["case=3"],
-    "case3_mean": ["case=3", "data.target=mean_wear_mm"],
+    "case3_absolute": ["case=3", "data.baseline=false"],
+    "case3_absolute_mean": ["case=3", "data.baseline=false", "data.target=mean_wear_mm"],
     "all": ["case=all"],
-    "all_mean": ["case=all", "data.target=mean_wear_mm"],
-    "all_acc": ["case=all", "data.sensors=[acc]"],
+    "all_absolute": ["case=all", "data.baseline=false"],
+    "all_absolute_mean": ["case=all", "data.baseline=false", "data.target=mean_wear_mm"],
+    "all_acc": ["case=all", "data.baseline=false", "data.sensors=[acc]"],
     "loco2": ["case=all", "data.holdout_case=2"],
     "loco5": ["case=all", "data.holdout_case=5"],
-    "case3_baseline": ["case=3", "experiment=baseline"],
-    "all_baseline": ["case=all", "experiment=baseline"],
-    "loco2_baseline": ["case=all", "experiment=baseline", "data.holdout_case=2"],
-    "loco5_baseline": ["case=all", "experiment=baseline", "data.holdout_case=5"],
+    "loco2_absolute": ["case=all", "data.baseline=false", "data.holdout_case=2"],
+    "loco5_absolute": ["case=all", "data.baseline=false", "data.holdout_case=5"],
 }
 #: the dry-law test set: the dataset spec's values (8 gearboxes per case)
 DRY_LAW = {"seed": 2, "replicates": 8, "nuisance": {"boundary_share": [0.99, 0.99]}}
@@ -252,7 +252,7 @@ MODEL_FORM_OFF = {
         "stiffness_factor": [0.7, 0.8], "double_contact_factor": [0.75, 0.85],
         "resonance_factor": [0.7, 0.8]}}}
 #: models trained once per seed of ``--seeds``; the others train with seed 0
-SEEDED = ("case3", "case3_mean", "case3_baseline", "all_baseline")
+SEEDED = ("case3", "all", "case3_absolute", "case3_absolute_mean")
 #: the independent simulator's operating points and wear states
 INDEPENDENT_POINTS = ((2000.0, 300.0), (1800.0, 290.0))
 INDEPENDENT_WEAR_MM = (0.0, 0.003, 0.006, 0.009, 0.012, 0.015)
@@ -395,7 +395,7 @@ def labelled_counts(root: Path, out: Path, fleet: pd.DataFrame, extra: list[str]
         table.parent.mkdir(parents=True, exist_ok=True)
         subset = mine[mine.gearbox.isin(chosen[:n + others])]
         atomic_write(table, lambda p, frame=subset: frame.to_csv(p, index=False))
-        net, labelled, held = train_on_fleet(root, table.with_suffix(""), "case3", table, extra,
+        net, labelled, held = train_on_fleet(root, table.with_suffix(""), "case3_absolute", table, extra,
                                              "dte_scratch", draw, None)
         target = net.schema.target
         (mine_net, mine_est, _), _ = evaluate(
@@ -517,7 +517,7 @@ def run(out: Path, root: Path, extra: list[str], seeds: int = 5
             rows += [{**row, "seed": seed} for row in r]
             if seed == 0:
                 plots[(name, set_name)] = plot
-        if name in ("case3", "all"):
+        if name in ("case3_absolute", "all_absolute"):
             table, mine = out / f"fleet_{name}.csv", fleet[fleet.case.isin(cases)]
             if seed == 0:  # the same gearboxes for every seed
                 atomic_write(table, lambda p, frame=mine: frame.to_csv(p, index=False))
@@ -667,10 +667,10 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--out", type=Path, default=None,
                         help="output folder (default: logs/benchmark/<time>)")
     parser.add_argument("--seeds", type=int, default=5,
-                        help="training seeds of the case-3 networks of root wear, mean "
-                             "wear and the baseline one, and of the all-case baseline one "
-                             "(their split and start; default 5); the other models train "
-                             "with seed 0")
+                        help="training seeds of the main job (case 3) and the all-case "
+                             "network, both read against each gearbox's first record, and of "
+                             "the case-3 absolute ones of root and mean wear (their split and "
+                             "start; default 5); the other models train with seed 0")
     parser.add_argument("--max-epochs", type=int, default=None,
                         help="cap the training epochs (quick looks; the default config's "
                              "early stopping otherwise)")

@@ -4,8 +4,10 @@ Rows are split by *trajectory* (one replicate of one case, all its wear states),
 of one trajectory: neighbouring wear states are nearly the same sample. Per case, a seeded
 permutation of the replicates gives ``test_replicates`` for the test set, ``val_replicates`` for
 validation (by default :func:`validation_count`) and the rest for training; ``holdout_case``
-instead puts a whole case in the test set (leave-one-case-out). The input scaling is fitted on
-the training rows only and travels with the model in its :class:`~surrogate.schema.FeatureSchema`.
+instead puts a whole case in the test set (leave-one-case-out). Of 16 or more validation
+trajectories, half choose the epoch kept and the other half calibrate the interval
+(:func:`calibration_split`). The input scaling is fitted on the training rows only and travels
+with the model in its :class:`~surrogate.schema.FeatureSchema`.
 
 A dataset built here simulates :func:`replicates_per_case` gearboxes per trained case: what a
 network learns about gearboxes it was not trained on is set by how many it was trained on
@@ -36,7 +38,7 @@ from physics.dataset.generation import (
 )
 from physics.dataset.generation import units as dataset_units
 from physics.params import Scenario, operating_cases
-from physics.signals.order_analysis import MESH_ORDERS
+from physics.signals.order_analysis import LINE_ORDERS, MESH_ORDERS
 from surrogate.schema import (
     FeatureSchema,
     first_rows,
@@ -67,13 +69,26 @@ DEFAULT_INPUTS = [f"{q}_{f}" for q in SENSORS for f in INVARIANT[q]]
 CONDITIONS = ["n1_rpm", "torque_Nm"]
 
 
-def input_columns(sensors: list[str], operating_point: bool) -> list[str]:
-    """The network's inputs for the sensors a user has (their :data:`INVARIANT` features), with
-    or without the operating point."""
+#: the baseline reading's default inputs: the DTE's mesh lines 1-6, each a complex amplitude
+#: against a once-per-revolution mark (dataset columns ``dte_line<k>_re``, ``_im``), read as
+#: their vector change since the baseline record (docs/surrogate.md, Method, Baseline mode)
+BASELINE_INPUTS = [f"dte_line{k}" for k in LINE_ORDERS]
+
+
+def input_columns(sensors: list[str], operating_point: bool, baseline: bool = False
+                  ) -> list[str]:
+    """The network's default inputs, with or without the operating point: read against the
+    baseline record, the DTE's mesh lines (:data:`BASELINE_INPUTS`); read absolutely, the
+    :data:`INVARIANT` features of the sensors a user has."""
     unknown = sorted(set(sensors) - set(SENSORS))
     if unknown or not sensors or len(set(sensors)) != len(sensors):
         raise ValueError(f"data.sensors = {list(sensors)} must name one or both of {SENSORS}")
-    cols = [f"{q}_{f}" for q in SENSORS if q in sensors for f in INVARIANT[q]]
+    if baseline and "dte" not in sensors:
+        raise ValueError(f"data.sensors = {list(sensors)}: the reading against the baseline "
+                         "record takes the DTE's mesh lines; without a DTE read absolutely "
+                         "(data.baseline=false) or name the inputs (data.inputs=[...])")
+    cols = (BASELINE_INPUTS if baseline else
+            [f"{q}_{f}" for q in SENSORS if q in sensors for f in INVARIANT[q]])
     return cols + (CONDITIONS if operating_point else [])
 
 
@@ -92,8 +107,12 @@ def cases_of(case: str | int) -> list[int]:
 #: shifted gearboxes scatters over training seeds with fewer (docs/surrogate.md, Alternatives
 #: considered)
 MIN_REPLICATES = 128
-#: the fewest validation trajectories per case: they calibrate the 90 % interval
+#: the fewest validation trajectories per case: they choose the epoch and calibrate the
+#: 90 % interval
 MIN_VALIDATION = 8
+#: validation trajectories from which on half of them calibrate the interval apart from those
+#: that choose the epoch (:func:`calibration_split`): each half then holds MIN_VALIDATION
+MIN_APART = 2 * MIN_VALIDATION
 #: chunks of a dataset built here (fewer where it has fewer trajectories): the build's
 #: processes take chunks as they finish, so many small ones keep both cores busy to the end
 #: (with the dataset API's 5, one of 2 processes idles through the last fifth of a build)
@@ -509,6 +528,26 @@ def split_table(rows: pd.DataFrame, test_codes: list[int] | None, val_codes: lis
     return {k: parts[k].reset_index(drop=True) for k in ("train", "val", "test")}
 
 
+def calibration_split(frames: dict[str, pd.DataFrame], seed: int,
+                      keys: tuple[str, ...] = ("case", "replicate")) -> dict[str, pd.DataFrame]:
+    """``frames`` with its validation trajectories cut in two: ``val``, which choose the epoch
+    kept (early stopping, the checkpoint), and ``cal``, which calibrate the interval. A
+    split-conformal interval covers its level only on data that chose nothing of the model
+    (Angelopoulos & Bates, "A gentle introduction to conformal prediction", 2021, sec. 2.3):
+    validation rows that also chose the epoch have smaller errors than a new gearbox's, and
+    the interval under-covers (docs/surrogate.md, Where it does not know). With fewer than
+    :data:`MIN_APART` validation trajectories both are the same rows."""
+    val = frames["val"]
+    ids = pd.MultiIndex.from_frame(val[list(keys)])
+    trajectories = ids.unique().sort_values()
+    if len(trajectories) < MIN_APART:
+        return {**frames, "cal": val}
+    perm = np.random.default_rng([seed, 1]).permutation(len(trajectories))
+    is_cal = ids.isin(trajectories[perm[:len(trajectories) // 2]])
+    return {**frames, "val": val[~is_cal].reset_index(drop=True),
+            "cal": val[is_cal].reset_index(drop=True)}
+
+
 def split_trajectories(df: pd.DataFrame, val_replicates: int | None, test_replicates: int,
                        seed: int, holdout_case: int | None = None) -> dict[str, pd.DataFrame]:
     """Train/val/test rows, split by (case, replicate) trajectory; see the module text.
@@ -534,8 +573,8 @@ class WearDataModule(L.LightningDataModule):
 
     def __init__(self, dataset: str, case: str | int = 3,
                  sensors: tuple[str, ...] = SENSORS, operating_point: bool = True,
-                 inputs: list[str] | None = None, target: str = "root_wear_mm",
-                 baseline: bool = False, val_replicates: int | None = None,
+                 inputs: list[str] | None = None, target: str | None = None,
+                 baseline: bool | None = None, val_replicates: int | None = None,
                  test_replicates: int = 8,
                  holdout_case: int | None = None, batch_size: int = 64, seed: int = 0,
                  generate: dict | None = None, jobs: int = 2, table: str | None = None,
@@ -549,8 +588,12 @@ class WearDataModule(L.LightningDataModule):
         if table is None and holdout_case is not None and int(holdout_case) not in self.cases:
             raise ValueError(f"data.holdout_case = {holdout_case} must be one of the cases "
                              f"{self.cases}")
-        self.inputs = list(inputs) if inputs else input_columns(list(sensors), operating_point)
-        self.target = target
+        # the main job reads against each gearbox's first record; a user's table absolutely
+        # unless it says its first rows are baselines
+        baseline = table is None if baseline is None else bool(baseline)
+        self.inputs = (list(inputs) if inputs else
+                       input_columns(list(sensors), operating_point, baseline))
+        self.target = target or ("mean_wear_mm" if baseline else "root_wear_mm")
         # the features, not the operating point, are read against the baseline record
         self.baseline = tuple(c for c in self.inputs if c not in CONDITIONS) if baseline else ()
         self.vectors: tuple[str, ...] = ()  # the complex-line inputs, found among the columns
@@ -704,11 +747,19 @@ class WearDataModule(L.LightningDataModule):
         dm.schema, dm.frames = None, {}
         return dm
 
+    @property
+    def calibration_apart(self) -> bool:
+        """Whether the interval is calibrated on validation trajectories that chose nothing
+        (:func:`calibration_split`), not on those that also chose the epoch."""
+        return self.frames["cal"] is not self.frames["val"]
+
     def split_summary(self) -> str:
-        """Rows and trajectories of each part of the split, in the table's terms."""
+        """Rows and trajectories of each part of the split, in the table's terms (``cal``: the
+        validation trajectories that calibrate the interval, where they are apart)."""
+        parts = {k: f for k, f in self.frames.items() if k != "cal" or self.calibration_apart}
         if self.table is None:
             return ", ".join(f"{k} {len(f)} rows ({f.groupby(['case', 'replicate']).ngroups} "
-                             "trajectories)" for k, f in self.frames.items())
+                             "trajectories)" for k, f in parts.items())
         by = self.group_by
 
         def values(f: pd.DataFrame) -> str:
@@ -716,7 +767,7 @@ class WearDataModule(L.LightningDataModule):
             shown = [self.group_values[c] for c in codes[:8]]
             return f"{by} {shown}{' ...' if len(codes) > 8 else ''}"
 
-        return ", ".join(f"{k} {len(f)} rows ({values(f)})" for k, f in self.frames.items())
+        return ", ".join(f"{k} {len(f)} rows ({values(f)})" for k, f in parts.items())
 
     def setup(self, stage: str | None = None) -> None:
         """Read (building it if missing) and split the data, once: Lightning calls this at
@@ -724,7 +775,7 @@ class WearDataModule(L.LightningDataModule):
         if self.schema is not None:
             return
         if self.table is not None:
-            self.frames = self.split()
+            self.frames = calibration_split(self.split(), self.seed)
             self.schema = FeatureSchema.fit(self.network_rows("train"), self.inputs,
                                             self.units, self.target, self.baseline,
                                             self.vectors)
@@ -742,8 +793,9 @@ class WearDataModule(L.LightningDataModule):
         df = df[df.case.isin(self.cases)]
         if self.baseline:
             self.check_baselines(df)
-        self.frames = split_trajectories(df, self.val_replicates, self.test_replicates,
-                                         self.seed, self.holdout_case)
+        self.frames = calibration_split(
+            split_trajectories(df, self.val_replicates, self.test_replicates, self.seed,
+                               self.holdout_case), self.seed)
         self.schema = FeatureSchema.fit(self.network_rows("train"), self.inputs, self.units,
                                         self.target, self.baseline, self.vectors)
 

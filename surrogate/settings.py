@@ -25,18 +25,25 @@ class DataConfig:
     _target_: str = "surrogate.data.WearDataModule"
     dataset: str = MISSING  # the parquet dataset; built with physics.dataset if missing
     case: str = "3"  # operating case of Table 11 (1-5) or all
-    sensors: list[str] = field(default_factory=lambda: ["dte", "acc"])  # dte, acc or both
+    #: dte, acc or both: whose Table 13 features the absolute reading takes by default
+    sensors: list[str] = field(default_factory=lambda: ["dte", "acc"])
     operating_point: bool = True  # speed and torque as inputs (a user knows them)
-    inputs: list[str] | None = None  # explicit input columns instead (a user's own table)
+    #: explicit input columns (a user's own table); null: the reading's default inputs: the
+    #: DTE's mesh lines 1-6 when read against the baseline record, else data.sensors'
+    #: Table 13 features; with data.operating_point, speed and torque beside
+    inputs: list[str] | None = None
     #: the wear column to read: root_wear_mm (the thesis's), or mean_wear_mm (the flank's mean
-    #: depth over the path of contact; docs/surrogate.md, Method, Target)
-    target: str = "root_wear_mm"
+    #: depth over the path of contact; docs/surrogate.md, Method, Target); null: the mean depth
+    #: when read against the baseline record, the root wear otherwise
+    target: str | None = None
     #: read the features as changes since each gearbox's baseline record (its first: unworn in
     #: the physics dataset, the first row of each group in a user's table); the operating point
-    #: stays as measured. Needs that record at inference (docs/surrogate.md, Method, Baseline mode)
-    baseline: bool = False
+    #: stays as measured. Needs that record at inference (docs/surrogate.md, Method, Baseline
+    #: mode). null: true on the physics dataset (the main job), false on a user's table
+    baseline: bool | None = None
     # whole trajectories (case, replicate) per case, never rows of one; the validation ones
-    # calibrate the interval. null: a tenth of each case's trajectories, at least 8
+    # choose the epoch and calibrate the interval (of 16 or more, half each).
+    # null: a tenth of each case's trajectories, at least 8
     val_replicates: int | None = None
     test_replicates: int = 8
     holdout_case: int | None = None  # a case number: leave that case out (test on it alone)

@@ -24,7 +24,7 @@ from physics import interrupt
 from physics.estimators.empirical_inverse import wear_errors
 from physics.files import atomic_write, check_inside, pyplot
 from surrogate import baselines, settings
-from surrogate.data import WearDataModule
+from surrogate.data import MIN_APART, WearDataModule
 from surrogate.inference import Surrogate, conformal_scale, export
 from surrogate.novelty import Novelty, envelope_report
 
@@ -90,8 +90,8 @@ def prepare(cfg: DictConfig) -> TrainJob:
     OmegaConf.to_object(cfg.model).check()
     OmegaConf.to_object(cfg.trainer).check()
     trainer = make_trainer(cfg)
-    data = _instantiate(cfg.data, "data")
     init = Surrogate.load(cfg.init_from) if cfg.get("init_from") else None
+    data = _instantiate(cfg.data if init is None else read_as(cfg.data, init), "data")
     if init is None and cfg.model.get("trainable", "all") != "all":
         raise ValueError(f"model.trainable = {cfg.model.trainable!r} trains the output layers of "
                          "a pre-trained network and needs init_from=<run>/wear_surrogate.pt; "
@@ -121,6 +121,20 @@ def prepare(cfg: DictConfig) -> TrainJob:
                          f"record, this run's data {list(data.baseline) or 'none'}; set "
                          f"data.baseline={str(bool(init.schema.baseline)).lower()}")
     return TrainJob(cfg, data, trainer, Path(cfg.paths.output_dir), init)
+
+
+def read_as(data: DictConfig, init: Surrogate) -> DictConfig:
+    """The data settings of a fine-tune of ``init``: where ``data.inputs``, ``data.target`` or
+    ``data.baseline`` are left null, the pre-trained network's (a fine-tune reads as the
+    network it starts from; a value given is kept and checked against it by :func:`prepare`)."""
+    schema = init.schema
+    theirs = {"inputs": list(schema.inputs), "target": schema.target,
+              "baseline": bool(schema.baseline)}
+    out = data.copy()
+    for key, value in theirs.items():
+        if out.get(key) is None:
+            out[key] = value
+    return out
 
 
 class InterruptBetweenBatches(L.Callback):
@@ -206,17 +220,7 @@ def _fit_and_export(job: TrainJob, dm: WearDataModule, trainer: L.Trainer, model
         test = ({k: float(v) for k, v in
                  trainer.test(model, dm, ckpt_path=ckpt, verbose=False)[0].items()}
                 if len(dm.frames["test"]) else {})
-    val_rows = dm.network_rows("val")  # the readings (not a baseline model's baselines)
-    val_rows = val_rows[dm.schema.readings(val_rows, ["case", "replicate"])]
-    train_rows = dm.network_rows("train")
-    x_val = val_rows[dm.inputs].to_numpy(float)
-    novelty = Novelty.fit(dm.schema.scale(train_rows[dm.inputs].to_numpy(float)),
-                          dm.schema.scale(x_val), train_rows[dm.target].to_numpy(float))
-    calibrating = Surrogate(model, 1.0, novelty)
-    mean, std = calibrating.predict_array(x_val)
-    sigma = calibrating.difficulty(std, calibrating.novelty_score(x_val))
-    scale = conformal_scale(mean, sigma, val_rows[dm.target].to_numpy(float),
-                            float(cfg.model.interval))
+    scale, novelty = calibrate(model, dm, float(cfg.model.interval))
     # the exported model gets its name only at the successful end: a run that fails on the
     # way leaves no wear_surrogate.pt that a later command would take for a finished one
     path, staged = out / "wear_surrogate.pt", out / ".wear_surrogate.pt.staged"
@@ -225,6 +229,7 @@ def _fit_and_export(job: TrainJob, dm: WearDataModule, trainer: L.Trainer, model
         surrogate = Surrogate.load(staged)
         metrics = {**val, **test, "epochs": trainer.current_epoch,
                    "train_rows": len(dm.frames["train"]), "interval_scale": scale,
+                   "interval_calibrated_apart": dm.calibration_apart,
                    "novelty_radius": novelty.radius, **envelope}
         if len(dm.frames["test"]):
             metrics.update(report_test(surrogate, dm, out))
@@ -241,6 +246,31 @@ def _fit_and_export(job: TrainJob, dm: WearDataModule, trainer: L.Trainer, model
         raise
     log.info("model: %s; metrics: %s", path, text)
     return metrics
+
+
+def calibrate(model, dm: WearDataModule, level: float) -> tuple[float, Novelty]:
+    """The novelty, its radius set on the validation and calibration rows (inputs only: they
+    chose nothing by their inputs), and the interval's conformal scale at ``level`` from the
+    calibration rows (:func:`~surrogate.data.calibration_split`): the readings, not a baseline
+    model's baselines. Says in the log where the calibration rows also chose the epoch."""
+    held = {}
+    for part in ("val", "cal") if dm.calibration_apart else ("cal",):
+        rows = dm.network_rows(part)
+        held[part] = rows[dm.schema.readings(rows, ["case", "replicate"])]
+    if not dm.calibration_apart:
+        log.info("the interval is calibrated on the validation trajectories that also chose the "
+                 "epoch (fewer than %d): its coverage of new gearboxes may fall short of its "
+                 "level", MIN_APART)
+    train_rows = dm.network_rows("train")
+    x_held = np.concatenate([f[dm.inputs].to_numpy(float) for f in held.values()])
+    novelty = Novelty.fit(dm.schema.scale(train_rows[dm.inputs].to_numpy(float)),
+                          dm.schema.scale(x_held), train_rows[dm.target].to_numpy(float))
+    cal = held["cal"]
+    x_cal = cal[dm.inputs].to_numpy(float)
+    calibrating = Surrogate(model, 1.0, novelty)
+    mean, std = calibrating.predict_array(x_cal)
+    sigma = calibrating.difficulty(std, calibrating.novelty_score(x_cal))
+    return conformal_scale(mean, sigma, cal[dm.target].to_numpy(float), level), novelty
 
 
 def job_envelope(job: TrainJob, dm: WearDataModule) -> dict:

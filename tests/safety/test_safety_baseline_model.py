@@ -1,4 +1,4 @@
-"""Item 4: a baseline model (experiment=baseline) refuses what it cannot read, naming the
+"""Item 4: a baseline model (data.baseline=true) refuses what it cannot read, naming the
 gearbox: a gearbox of a single row, rows out of time order where cycles are given, a gearbox
 whose first row is not its baseline record (where its true wear is given)."""
 
@@ -28,7 +28,7 @@ def model(tmp_path_factory) -> Path:
     df.to_csv(tmp / "mine.csv", index=False)
     # the table's features (the default inputs), read as changes since each baseline record
     inputs = ",".join([*DEFAULT_INPUTS, *CONDITIONS])
-    assert np.isfinite(train(train_cfg(tmp, "experiment=baseline", f"data.inputs=[{inputs}]",
+    assert np.isfinite(train(train_cfg(tmp, "data.baseline=true", f"data.inputs=[{inputs}]",
                                        val_replicates=2)))
     return tmp / "run" / "wear_surrogate.pt"
 

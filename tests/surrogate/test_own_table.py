@@ -155,7 +155,8 @@ def test_splits_name_groups_by_value_and_refuse_in_the_users_terms(tmp_path):
                       "data.val_groups=[0.0,5]"))
     job.data.setup()
     stages = {k: set(job.data.labels.stage.iloc[f.row]) for k, f in job.data.frames.items()}
-    assert stages == {"test": {10, 11}, "val": {0, 5}, "train": set(range(1, 10)) - {5}}
+    assert stages == {"test": {10, 11}, "val": {0, 5}, "train": set(range(1, 10)) - {5},
+                      "cal": {0, 5}}  # two validation groups: they also calibrate
     with pytest.raises(ValueError, match=r"data.test_groups = \[46\]: column 'speed' of .*rig.csv "
                                          r"has no value 46; its values: \[15, 45\]"):
         prepare(cfg(tmp_path, "data.group=stage", "data.group_by=speed", "data.test_groups=[46]"))
@@ -253,3 +254,50 @@ def test_the_linear_model_and_the_verdict():
     assert not_better_line(net, lin) == ("the network (13.5 %) is not better than a linear "
                                          "model of the same inputs (13.1 %) on these test rows")
     assert not_better_line(lin, net) is None
+
+
+def test_calibration_split_halves_the_validation_trajectories_apart_from_the_stopping_ones():
+    """Of 16 or more validation trajectories, half (drawn with the seed) calibrate the interval
+    and the others choose the epoch: disjoint, together the validation set; fewer stay one."""
+    from surrogate.data import MIN_APART, calibration_split
+
+    def frames(n: int) -> dict:
+        val = pd.DataFrame({"case": 3, "replicate": np.repeat(np.arange(n), 3), "x": 0.0})
+        return {"train": val.iloc[:0], "val": val, "test": val.iloc[:0]}
+
+    for n in (MIN_APART, 27):
+        parts = calibration_split(frames(n), seed=4)
+        stop, cal = (set(parts[k].replicate) for k in ("val", "cal"))
+        assert not stop & cal and stop | cal == set(range(n)) and len(cal) == n // 2
+        assert (parts["cal"].groupby("replicate").size() == 3).all()  # whole trajectories
+        again = calibration_split(frames(n), seed=4)
+        assert again["cal"].equals(parts["cal"])
+    small = calibration_split(frames(MIN_APART - 1), seed=4)
+    assert small["cal"] is small["val"]
+
+
+def test_the_interval_is_calibrated_on_trajectories_that_chose_no_epoch(tmp_path):
+    """A table with 16 validation stages: the conformal scale in the model is the one of the
+    calibration half, which the checkpoint's choice of epoch never saw (metrics say so)."""
+    from surrogate.inference import conformal_scale
+
+    write(tmp_path, rig_table(stages=30, records=2))
+    c = cfg(tmp_path, "data.group=stage", "data.val_replicates=16", "data.test_replicates=2",
+            epochs=5)
+    job = prepare(c)
+    train(c)
+    metrics = json.loads((tmp_path / "run" / "metrics.json").read_text())
+    assert metrics["interval_calibrated_apart"] is True
+    dm = job.data
+    dm.setup()
+    assert dm.calibration_apart and "cal " in dm.split_summary()
+    s = Surrogate.load(tmp_path / "run" / "wear_surrogate.pt")
+    scale = {}
+    for part in ("val", "cal"):
+        rows = dm.network_rows(part)
+        x = rows[list(s.schema.inputs)].to_numpy(float)
+        mean, std = s.predict_array(x)
+        scale[part] = conformal_scale(mean, s.difficulty(std, s.novelty_score(x)),
+                                      rows.wear_mm.to_numpy(), 0.9)
+    assert s.interval_scale == pytest.approx(scale["cal"], rel=1e-5)
+    assert scale["cal"] != pytest.approx(scale["val"], rel=1e-3)

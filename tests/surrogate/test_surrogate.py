@@ -47,7 +47,7 @@ from surrogate.model import WearRegressor
 from surrogate.network import EnsembleMLP, mixture
 from surrogate.predict import gearbox_columns, predict_file
 from surrogate.schema import FeatureSchema, baseline_changes, vector_magnitudes
-from surrogate.training import train
+from surrogate.training import prepare, train
 
 ROOT = Path(__file__).resolve().parents[2]
 TINY_BASE = Scenario(solver=WearSolver(n_points=51),
@@ -87,7 +87,8 @@ def dataset(tmp_path_factory) -> Path:
 def trained(tmp_path_factory, dataset) -> Path:
     tmp = tmp_path_factory.mktemp("train")
     value = train(train_cfg(tmp, dataset, "case=3", "data.test_replicates=1",
-                            "data.operating_point=false", "trainer.max_epochs=100",
+                            "data.baseline=false", "data.operating_point=false",
+                            "trainer.max_epochs=100",
                             "model.members=3", "logger=csv"))
     assert np.isfinite(value)
     return tmp / "run"
@@ -219,13 +220,14 @@ def test_a_dataset_of_an_older_layout_is_refused_naming_the_fix(dataset, tmp_pat
     default inputs need: refused before any work, with the fix (delete it to rebuild)."""
     old = tmp_path / "old.parquet"
     pd.read_parquet(dataset).drop(columns=["dte_mesh3_db"]).to_parquet(old)
-    cfg = train_cfg(tmp_path, old, "case=3", "data.test_replicates=1")
+    cfg = train_cfg(tmp_path, old, "case=3", "data.test_replicates=1",
+                    "data.baseline=false")
     with pytest.raises(InstantiationException, match=r"\['dte_mesh3_db'\] are not in .*older "
                        r"version of the dataset API.*delete it to build it again"):
         instantiate(cfg.data)
     # before the mesh lines: the baseline network's inputs, named by their parts
     pd.read_parquet(dataset).drop(columns=["dte_line2_re", "dte_line2_im"]).to_parquet(old)
-    cfg = train_cfg(tmp_path, old, "case=3", "experiment=baseline", "data.test_replicates=1")
+    cfg = train_cfg(tmp_path, old, "case=3", "data.test_replicates=1")
     with pytest.raises(InstantiationException, match=r"\['dte_line2_re', 'dte_line2_im'\] are not "
                        r"in .*older version of the dataset API"):
         instantiate(cfg.data)
@@ -509,7 +511,7 @@ def test_a_mean_wear_network_is_scored_with_estimators_of_its_own_target(tmp_pat
     table = tmp_path / "fleet.csv"
     fleet.to_csv(table, index=False)
     net, labelled, held = benchmark.train_on_fleet(
-        ROOT, tmp_path / "net", "case3_mean", table,
+        ROOT, tmp_path / "net", "case3_absolute_mean", table,
         ["trainer.max_epochs=2", "trainer.min_epochs=1", "model.members=2"], "dte_scratch", 0,
         None)
     assert net.schema.target == "mean_wear_mm"
@@ -659,11 +661,11 @@ def test_a_lines_vector_change_ignores_the_gearboxs_own_line_and_its_marks_angle
 
 
 def test_a_baseline_network_reads_changes_and_needs_the_gearbox(dataset, tmp_path):
-    """``experiment=baseline``: the DTE's mesh lines, not the operating point, enter as their
+    """The main job's default reading: the DTE's mesh lines, not the operating point, enter as their
     vector change since each trajectory's unworn record; the model then reads a gearbox
     whatever its lines before wear (its flank form, its profile error), and refuses rows it
     cannot reference."""
-    cfg = train_cfg(tmp_path, dataset, "case=3", "experiment=baseline", "data.test_replicates=1",
+    cfg = train_cfg(tmp_path, dataset, "case=3", "data.test_replicates=1",
                     "trainer.max_epochs=20", "model.members=2", "logger=csv")
     assert np.isfinite(train(cfg))
     s = Surrogate.load(tmp_path / "run" / "wear_surrogate.pt")
@@ -676,7 +678,7 @@ def test_a_baseline_network_reads_changes_and_needs_the_gearbox(dataset, tmp_pat
     # readings
     dm = instantiate(cfg.data)
     dm.setup()
-    val = dm.frames["val"]
+    val = dm.frames["cal"]
     worn = vector_magnitudes(val, lines, ["case", "replicate"])[val.cycles > 0]
     x = worn[list(s.schema.inputs)].to_numpy(float)
     mean, std = s.predict_array(x)
@@ -723,18 +725,23 @@ def test_a_baseline_network_reads_changes_and_needs_the_gearbox(dataset, tmp_pat
     out = pd.read_csv(tmp_path / "w.csv")
     np.testing.assert_allclose(out.mean_wear_mm_pred, wear, rtol=1e-5, atol=1e-9)
     assert (out.rig == df.replicate).all()
-    # a fine-tune must read its features the way the pre-trained network did
+    # a fine-tune must read its features the way the pre-trained network did: told otherwise
+    # it is refused; left null it reads as that network (inputs, target, baseline)
+    init = f"init_from={tmp_path / 'run' / 'wear_surrogate.pt'}"
     with pytest.raises(ValueError, match=r"data\.baseline=true"):
-        train(train_cfg(tmp_path / "b", dataset, "case=3",
-                        f"init_from={tmp_path / 'run' / 'wear_surrogate.pt'}",
-                        f"data.inputs=[{','.join(s.schema.inputs)}]",
+        train(train_cfg(tmp_path / "b", dataset, "case=3", init,
+                        f"data.inputs=[{','.join(s.schema.inputs)}]", "data.baseline=false",
                         "data.target=mean_wear_mm", "data.test_replicates=1"))
+    job = prepare(train_cfg(tmp_path / "c", dataset, "case=3", init, "data.test_replicates=1",
+                            "data.sensors=[acc]"))
+    assert job.data.inputs == list(s.schema.inputs) and job.data.target == s.schema.target
+    assert job.data.baseline == tuple(s.schema.baseline)
 
 
 def test_a_baseline_network_refuses_trajectories_that_do_not_start_unworn(dataset, tmp_path):
     shuffled = tmp_path / "shuffled.parquet"
     pd.read_parquet(dataset).sort_values("cycles", ascending=False).to_parquet(shuffled)
-    dm = instantiate(train_cfg(tmp_path, shuffled, "case=3", "experiment=baseline",
+    dm = instantiate(train_cfg(tmp_path, shuffled, "case=3",
                                "data.test_replicates=1", "data.val_replicates=1").data)
     with pytest.raises(ValueError, match=r"trajectory \{'case': 3, 'replicate': \d+\}.* starts "
                                          r"at mean_wear_mm = [\d.e-]+, above its least \(0\)"):
@@ -766,8 +773,7 @@ def test_a_baseline_table_must_start_each_group_at_its_baseline(dataset, tmp_pat
     mine = pd.concat([mine.iloc[1:], mine.iloc[:1]])  # the first gearbox's baseline moved last
     mine.to_csv(tmp_path / "mine.csv", index=False)
     cfg = train_cfg(tmp_path, dataset, f"data.table={tmp_path / 'mine.csv'}", "data.group=rig",
-                    "experiment=baseline", "data.test_replicates=1",
-                    "data.val_replicates=1")
+                    "data.baseline=true", "data.test_replicates=1", "data.val_replicates=1")
     # refused as the table is read, before the split is drawn
     with pytest.raises(Exception, match=r"mine\.csv: trajectory \{'rig': 0\} starts at "
                                         r"mean_wear_mm"):
@@ -790,7 +796,7 @@ def test_a_users_table_of_mesh_lines_trains_a_baseline_network_and_is_read_by_pa
     df = pd.read_parquet(dataset)
     mine = df[df.case == 3].assign(rig=lambda d: d.replicate)
     mine.to_csv(tmp_path / "mine.csv", index=False)
-    common = [f"data.table={tmp_path / 'mine.csv'}", "data.group=rig", "experiment=baseline",
+    common = [f"data.table={tmp_path / 'mine.csv'}", "data.group=rig", "data.baseline=true",
               "data.test_replicates=1", "trainer.max_epochs=5", "model.members=2",
               "logger=csv"]
     assert np.isfinite(train(train_cfg(tmp_path, dataset, *common)))
