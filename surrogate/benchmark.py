@@ -208,9 +208,9 @@ def evaluate(name: str, surrogate: Surrogate, est: EmpiricalInverse, typical: fl
              **wear_errors(np.full_like(true, typical), true), "interval_coverage": np.nan,
              "flag_rate": np.nan}]
     if speed:
-        rows = surrogate.schema.network_rows(network_columns(surrogate.schema, test),
+        read = surrogate.schema.network_rows(network_columns(surrogate.schema, test),
                                              gearbox_keys(test))
-        x = np.repeat(rows[list(surrogate.schema.inputs)].to_numpy(float),
+        x = np.repeat(read[list(surrogate.schema.inputs)].to_numpy(float),
                       -(-1_000_000 // len(test)), axis=0)[:1_000_000]
         rows[0]["rows_per_s"], rows[0]["latency_us"] = throughput(
             lambda a: surrogate.predict_array(a)[0], x)
@@ -395,8 +395,8 @@ def labelled_counts(root: Path, out: Path, fleet: pd.DataFrame, extra: list[str]
         table.parent.mkdir(parents=True, exist_ok=True)
         subset = mine[mine.gearbox.isin(chosen[:n + others])]
         atomic_write(table, lambda p, frame=subset: frame.to_csv(p, index=False))
-        net, labelled, held = train_on_fleet(root, table.with_suffix(""), "case3_absolute", table, extra,
-                                             "dte_scratch", draw, None)
+        net, labelled, held = train_on_fleet(root, table.with_suffix(""), "case3_absolute",
+                                             table, extra, "dte_scratch", draw, None)
         target = net.schema.target
         (mine_net, mine_est, _), _ = evaluate(
             f"dte_scratch_{n}_{draw}", net, fit_fleet_estimator(labelled, target),
@@ -591,7 +591,8 @@ def narrow_ranges(root: Path, out: Path, extra: list[str], seeds: int) -> pd.Dat
     """What training over the default nuisance ranges costs on gearboxes inside narrow ones
     (:data:`NARROW_RANGES`), and what it buys on gearboxes of the defaults: per training seed, a
     case-3 network per training ranges of :data:`RANGE_VARIANTS` (each but the defaults its own
-    dataset file), all scored on the same held-out gearboxes of :data:`RANGE_TESTS` (one row per
+    dataset file; read absolutely, of root wear: ``case3_absolute``), all scored on the same
+    held-out gearboxes of :data:`RANGE_TESTS` (one row per
     network, seed, test set and estimator: :func:`evaluate`'s columns)."""
     tests = {k: load_dataset(root / "data" / f"dataset_{k}.parquet", spec)
              for k, spec in RANGE_TESTS.items()}
@@ -601,7 +602,8 @@ def narrow_ranges(root: Path, out: Path, extra: list[str], seeds: int) -> pd.Dat
         overrides = [f"data.dataset={root / 'data' / f'dataset_case3_{label}.parquet'}",
                      f"+data.generate.nuisance={{{nuisance}}}"] if ranges else []
         folder = out / "models" / f"case3_{label}_seed{seed}"
-        cfg = train_config(root, folder, "case=3", *overrides, *extra, f"seed={seed}")
+        cfg = train_config(root, folder, *MODELS["case3_absolute"], *overrides, *extra,
+                           f"seed={seed}")
         log.info("case 3 over the %s ranges: training (seed %d)", label, seed)
         net, _, est, typical = trained(cfg, folder)
         for test_name, test in tests.items():

@@ -8,9 +8,9 @@ model's wear: ``root_wear_mm`` or ``mean_wear_mm``), its standard deviation, the
 bounds, the ``novelty`` score and the ``out_of_range`` flag (:mod:`surrogate.novelty`); where
 more rows are flagged than of the training distribution, or the table's true wear (a column
 of the model's target) lies beyond the trained range, one line in the log says so. A model
-trained with
-``data.baseline=true`` reads each gearbox's features against its first row: ``gearbox=COLUMN``
-(or ``gearbox=[A,B]``) names the column(s) that tell the gearboxes apart, which the output keeps.
+read against each gearbox's first record (``data.baseline``: the main job's) reads it so:
+``gearbox=COLUMN`` (or ``gearbox=[A,B]``) names the column(s) that tell the gearboxes apart,
+which the output keeps.
 Each gearbox needs its baseline record first and at least one record after it; where a
 ``cycles`` column is given each gearbox's rows must be sorted by it, and without one the
 table's row order is taken as the time order (the first row of a gearbox is its baseline).
