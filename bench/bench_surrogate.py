@@ -1,14 +1,15 @@
 """CPU inference of the wear surrogate: ``python bench/bench_surrogate.py``.
 
-Prints the batch throughput [rows/s] (median of 7 runs) of the default network (width 16,
-depth 2, 5 members, 9 inputs: the invariant features of both sensors and the operating point)
-on 1e6 rows through ``Surrogate.predict_array`` (ONNX Runtime) on two threads and on one, its
-single-row latency, the same for the public ``Surrogate.predict`` (with the schema checks);
-as references measured in the same run, the same computation in torch
-(:func:`surrogate.inference.torch_predict`) and the analytic empirical-inverse estimator
-(target: >= 1e6 rows/s and >= 100 times the estimator). Timing does not depend on the
-weights' values, so the network is built with its initial weights; the schema is fitted to
-random rows in the training ranges.
+Prints the batch throughput [rows/s] (median of 7 runs) of the main job's network (width 16,
+depth 2, 5 members, 8 inputs: the magnitudes of the DTE mesh lines' vector changes and the
+operating point) on 1e6 rows through ``Surrogate.predict_array`` (ONNX Runtime) on two threads
+and on one, its single-row latency, the same for the public ``Surrogate.predict`` (the schema
+checks, the gearbox checks and each gearbox's vector changes since its first record, gearboxes
+of 8 records; one reading: a gearbox's baseline record and one record); as references measured
+in the same run, the same computation in torch (:func:`surrogate.inference.torch_predict`) and
+the analytic empirical-inverse estimator (target: >= 1e6 rows/s and >= 100 times the
+estimator). Timing does not depend on the weights' values, so the network is built with its
+initial weights; the schema is fitted to random rows.
 """
 
 from __future__ import annotations
@@ -22,10 +23,10 @@ import pandas as pd
 import torch
 
 from physics.estimators.empirical_inverse import EmpiricalInverse
-from surrogate.data import input_columns
+from surrogate.data import BASELINE_INPUTS, input_columns
 from surrogate.inference import ScaledEnsemble, Surrogate, torch_predict
 from surrogate.model import WearRegressor
-from surrogate.schema import FeatureSchema
+from surrogate.schema import FeatureSchema, vector_columns
 
 
 def rate(fn, n_rows: int, repeat: int = 7) -> float:
@@ -44,18 +45,30 @@ def latency_us(fn, repeat: int = 300) -> float:
     return float(np.median(times)) * 1e6
 
 
+def records(rng: np.random.Generator, n: int, per_gearbox: int) -> pd.DataFrame:
+    """``n`` records of gearboxes of ``per_gearbox`` records each, as a user's table gives
+    them: the lines' parts [m], a gearbox's one operating point, its id."""
+    parts = vector_columns(BASELINE_INPUTS)
+    frame = pd.DataFrame(rng.normal(0.0, 1e-6, (n, len(parts))), columns=parts)
+    gearbox = np.arange(n) // per_gearbox
+    point = rng.uniform(1.0, 2.0, (gearbox[-1] + 1, 2))[gearbox]
+    return frame.assign(n1_rpm=point[:, 0], torque_Nm=point[:, 1], gearbox=gearbox)
+
+
 def main() -> None:
     torch.manual_seed(0)
-    cols = input_columns(["dte", "acc"], True)
+    cols = input_columns(["dte", "acc"], True, baseline=True)
+    lines = tuple(BASELINE_INPUTS)
     rng = np.random.default_rng(0)
     train = pd.DataFrame(rng.uniform(1.0, 2.0, (512, len(cols))), columns=cols)
-    train["root_wear_mm"] = rng.uniform(0, 0.03, 512)
-    schema = FeatureSchema.fit(train, cols, dict.fromkeys([*cols, "root_wear_mm"], "1"),
-                               "root_wear_mm")
+    train[list(lines)] = rng.uniform(0.0, 3e-6, (512, len(lines)))  # changes [m]
+    train["mean_wear_mm"] = rng.uniform(0, 0.03, 512)
+    schema = FeatureSchema.fit(train, cols, dict.fromkeys([*cols, "mean_wear_mm"], "1"),
+                               "mean_wear_mm", baseline=lines, vectors=lines)
     model = WearRegressor(len(cols), schema.to_dict(), width=16, depth=2, members=5)
-    n = 1_000_000
+    n, per_gearbox = 1_000_000, 8
     x = rng.uniform(1.0, 2.0, (n, len(cols)))
-    frame = pd.DataFrame(x, columns=cols)
+    frame = records(rng, n, per_gearbox)
     threads = torch.get_num_threads()
     graph = ScaledEnsemble(model, schema)
     measured = {}
@@ -68,10 +81,11 @@ def main() -> None:
     torch.set_num_threads(threads)
     (batch, ref), (serial, ref_serial) = measured[threads], measured[1]
     s = Surrogate(model, interval_scale=1.645)
-    checked = rate(lambda: s.predict(frame), n, repeat=2)
+    checked = rate(lambda: s.predict(frame, gearbox=["gearbox"]), n, repeat=2)
     one = latency_us(lambda: s.predict_array(x[:1]))
     one_ref = latency_us(lambda: torch_predict(graph, x[:1]))
-    one_checked = latency_us(lambda: s.predict(frame.iloc[:1]), repeat=100)
+    one_checked = latency_us(lambda: s.predict(frame.iloc[:2], gearbox=["gearbox"]),
+                             repeat=100)
 
     est = EmpiricalInverse.from_config("thesis")
     cycles = rng.uniform(0, est.cycles_max, 200_000)
@@ -86,9 +100,9 @@ def main() -> None:
     print(f"surrogate, same, one thread         : {serial:,.0f} rows/s")
     print(f"same in torch (reference)           : {ref:,.0f} rows/s, one thread "
           f"{ref_serial:,.0f} (ONNX Runtime / torch: {batch / ref:.2f}, {serial / ref_serial:.2f})")
-    print(f"surrogate.predict (schema checks)   : {checked:,.0f} rows/s")
-    print(f"surrogate, one row                  : {one:.0f} us ({one_checked:.0f} us checked; "
-          f"torch {one_ref:.0f} us)")
+    print(f"surrogate.predict (checks, changes) : {checked:,.0f} rows/s")
+    print(f"surrogate, one row                  : {one:.0f} us ({one_checked:.0f} us for one "
+          f"reading through predict; torch {one_ref:.0f} us)")
     print(f"empirical inverse, batch            : {est_rate:,.0f} rows/s, one row {est_one:.0f} us")
     print(f"surrogate / estimator (batch)       : {batch / est_rate:.0f} x (target >= 100)")
 

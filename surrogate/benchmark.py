@@ -9,7 +9,9 @@ mean-depth twin), ``all_absolute``, ``all_absolute_mean``, ``all_acc`` (housing 
 only), ``loco2_absolute`` / ``loco5_absolute``. Those of :data:`SEEDED` are trained once per
 seed of ``--seeds`` (the seed draws the trajectory split and the start, and one seed's figures
 can mislead), the others with seed 0.
-Every model and estimator is scored on its own target (root wear unless named). Test sets:
+Every model and estimator is scored on its own target (the mean depth for the main job's
+reading, ``case3``, ``all``, ``loco*``; the root wear for the absolute ones unless ``_mean``).
+Test sets:
 
 - ``heldout_trajectories``: the model's own test trajectories (never seen in training);
 - ``heldout_operating_point_inside`` / ``_outside``: case 2 (2000 r/min, 290 N m, surrounded by
@@ -33,14 +35,15 @@ Every model and estimator is scored on its own target (root wear unless named). 
 - ``independent_fleet``: the same for all ten gearboxes of a fleet of the independent simulator
   (:func:`independent_fleet`), none of which a physics-trained network saw;
 - ``independent_fleet_heldout``: gearboxes of a fleet of the independent simulator
-  (:func:`independent_fleet`) that neither network saw, scored for the physics-trained network
-  (``case3``, ``all``) and for networks trained on the fleet's other labelled gearboxes
+  (:func:`independent_fleet`) that neither network saw, scored for the absolute
+  physics-trained network (``case3_absolute``, ``all_absolute``: the fleet's rows read one by
+  one) and for networks trained on the fleet's other labelled gearboxes
   (:data:`FLEET_NETWORKS`): the physics-trained one fine-tuned, all its weights
-  (``case3_finetuned``, ``all_finetuned``) or its output layers only (``case3_head``,
-  ``all_head``), and one of the DTE features trained on those gearboxes alone
-  (``case3_dte_scratch``, ``all_dte_scratch``): what a user with a few labelled records of his
-  own gearbox type gets (docs/own-data.md). Per training seed of ``case3``
-  (the seed draws the fleet's split too), once for ``all``.
+  (``case3_absolute_finetuned``, ``all_absolute_finetuned``) or its output layers only
+  (``..._head``), and one of the DTE features trained on those gearboxes alone
+  (``..._dte_scratch``): what a user with a few labelled records of his own gearbox type gets
+  (docs/own-data.md). Per training seed of ``case3_absolute`` (the seed draws the fleet's
+  split too), once for ``all_absolute``.
 
 The estimator (thesis 4.4: cubics of DTE peak-to-peak and kurtosis in cycles and the empirical
 wear law, :class:`physics.estimators.empirical_inverse.EmpiricalInverse`) is fitted on the same
@@ -367,7 +370,7 @@ def train_on_fleet(root: Path, folder: Path, name: str, table: Path, extra: list
                        *overrides)
     log.info("model %s: %s on the labelled gearboxes of %s", name, label, table.name)
     train(cfg)
-    dm = instantiate(cfg.data)
+    dm = prepare(cfg).data  # read as train() read it (a fine-tune takes its network's reading)
     dm.setup()
     ids = np.sort(fleet.gearbox.unique())  # the table's groups in the data module's order
 
@@ -476,8 +479,9 @@ def one_rig(root: Path, out: Path, extra: list[str], seed: int = 0) -> list[dict
 def run(out: Path, root: Path, extra: list[str], seeds: int = 5
         ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Train the models of :data:`MODELS` (those of :data:`SEEDED` once per training seed: the
-    seed draws their split and start, and one seed's figure says little) and, for ``case3``
-    and ``all``, the networks of :data:`FLEET_NETWORKS` on the fleet's labelled gearboxes;
+    seed draws their split and start, and one seed's figure says little) and, for
+    ``case3_absolute`` and ``all_absolute``, the networks of :data:`FLEET_NETWORKS` on the
+    fleet's labelled gearboxes;
     score them, the estimator and the null model (refitted on the fleet beside a network
     trained on it) on the test sets (column ``seed``); and :func:`labelled_counts`. Writes
     ``benchmark.csv``, ``labelled_counts.csv`` and ``parity.png``; returns the two tables.
@@ -660,12 +664,12 @@ def refusal(extra: list[str]) -> str | None:
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m surrogate.benchmark",
                                      description=__doc__.split("\n\n")[0],
-                                     epilog="Takes about 15 minutes on 2 cores the first "
-                                            "time (the case-3, all-case, shifted, beyond-range, "
-                                            "dry-law and model-form-off datasets are generated "
-                                            "once into data/), 9 minutes after: 27 trainings on "
-                                            "the physics, 18 on the fleet's labelled gearboxes, "
-                                            "20 on draws of them and 34 on the one-rig table.")
+                                     epilog="Takes about 20 minutes on 2 cores once the "
+                                            "case-3, all-case, shifted, beyond-range, dry-law "
+                                            "and model-form-off datasets are in data/ (the "
+                                            "first run generates them): 27 trainings on the "
+                                            "physics, 18 on the fleet's labelled gearboxes, 20 "
+                                            "on draws of them and 34 on the one-rig table.")
     parser.add_argument("--out", type=Path, default=None,
                         help="output folder (default: logs/benchmark/<time>)")
     parser.add_argument("--seeds", type=int, default=5,

@@ -64,7 +64,8 @@ SENSORS = ("dte", "acc")
 #: the training ones, and the harmonics' phases, dataset columns too, as an alternative)
 INVARIANT = {"dte": ("peak_to_peak", "kurtosis", *(f"mesh{k}_db" for k in MESH_ORDERS)),
              "acc": ("kurtosis", "crest", "margin", "impulse", "shape")}
-#: the default inputs: the invariant features of both sensors
+#: the absolute reading's default inputs (``data.baseline=false``): the invariant features of
+#: both sensors
 DEFAULT_INPUTS = [f"{q}_{f}" for q in SENSORS for f in INVARIANT[q]]
 CONDITIONS = ["n1_rpm", "torque_Nm"]
 
@@ -528,22 +529,25 @@ def split_table(rows: pd.DataFrame, test_codes: list[int] | None, val_codes: lis
     return {k: parts[k].reset_index(drop=True) for k in ("train", "val", "test")}
 
 
-def calibration_split(frames: dict[str, pd.DataFrame], seed: int,
-                      keys: tuple[str, ...] = ("case", "replicate")) -> dict[str, pd.DataFrame]:
+def calibration_split(frames: dict[str, pd.DataFrame], seed: int) -> dict[str, pd.DataFrame]:
     """``frames`` with its validation trajectories cut in two: ``val``, which choose the epoch
     kept (early stopping, the checkpoint), and ``cal``, which calibrate the interval. A
     split-conformal interval covers its level only on data that chose nothing of the model
     (Angelopoulos & Bates, "A gentle introduction to conformal prediction", 2021, sec. 2.3):
     validation rows that also chose the epoch have smaller errors than a new gearbox's, and
-    the interval under-covers (docs/surrogate.md, Where it does not know). With fewer than
-    :data:`MIN_APART` validation trajectories both are the same rows."""
+    the interval under-covers (docs/surrogate.md, Where it does not know). Of each case's
+    validation trajectories half (rounded down, drawn with ``seed`` in a stream of their own)
+    calibrate; with fewer than :data:`MIN_APART` validation trajectories in all, both are the
+    same rows."""
     val = frames["val"]
-    ids = pd.MultiIndex.from_frame(val[list(keys)])
-    trajectories = ids.unique().sort_values()
-    if len(trajectories) < MIN_APART:
+    if val.groupby(["case", "replicate"]).ngroups < MIN_APART:
         return {**frames, "cal": val}
-    perm = np.random.default_rng([seed, 1]).permutation(len(trajectories))
-    is_cal = ids.isin(trajectories[perm[:len(trajectories) // 2]])
+    chosen = []
+    for case, rows in val.groupby("case", sort=True):
+        reps = np.sort(rows.replicate.unique())
+        perm = np.random.default_rng([seed, int(case), 1]).permutation(reps)
+        chosen.append(rows[rows.replicate.isin(perm[:len(reps) // 2])].index)
+    is_cal = val.index.isin(np.concatenate(chosen))
     return {**frames, "val": val[~is_cal].reset_index(drop=True),
             "cal": val[is_cal].reset_index(drop=True)}
 
@@ -569,7 +573,8 @@ def split_trajectories(df: pd.DataFrame, val_replicates: int | None, test_replic
 
 
 class WearDataModule(L.LightningDataModule):
-    """Features -> pinion root wear, from the dataset of the given cases."""
+    """Features -> wear (the mean depth read against each gearbox's first record, or the root
+    wear read absolutely), from the dataset of the given cases or a user's table."""
 
     def __init__(self, dataset: str, case: str | int = 3,
                  sensors: tuple[str, ...] = SENSORS, operating_point: bool = True,

@@ -154,7 +154,7 @@ def check_gearboxes(df: pd.DataFrame, gearbox: list[str], target: str | None = N
     sizes = groups.size()
     if (sizes < 2).any():
         g = sizes.index[int(np.argmax((sizes < 2).to_numpy()))]
-        raise ValueError(f"{source}: gearbox {name(g)} has a single row; a baseline model reads "
+        raise ValueError(f"{source}: gearbox {name(g)} has a single row; this model reads "
                          "each row as its change since the gearbox's baseline record (its first "
                          "row), so each gearbox needs its baseline record and later records: "
                          "add them, or leave this gearbox out")
@@ -169,8 +169,8 @@ def check_gearboxes(df: pd.DataFrame, gearbox: list[str], target: str | None = N
             if falls.size:
                 a, b = rows[idx][ok][falls[0]], rows[idx][ok][falls[0] + 1]
                 raise ValueError(f"{source}: gearbox {name(g)}: rows {a} and {b} are out of "
-                                 f"time order ({col} {values[a]:g} then {values[b]:g}); a "
-                                 "baseline model reads the first row as the baseline record "
+                                 f"time order ({col} {values[a]:g} then {values[b]:g}); this "
+                                 "model reads the first row as the baseline record "
                                  f"and the rest after it: {rule}")
     if target is not None and target in df.columns:
         wear = pd.to_numeric(df[target], errors="coerce").to_numpy(float)

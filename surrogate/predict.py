@@ -18,7 +18,7 @@ From Python::
 
     from surrogate.inference import Surrogate, check_gearboxes
 from surrogate.novelty import envelope_report
-    wear = Surrogate.load("wear_surrogate.pt").predict(features_df)
+    wear = Surrogate.load("wear_surrogate.pt").predict(features_df, gearbox=["rig"])
 """
 
 from __future__ import annotations
@@ -87,9 +87,13 @@ def prepare(cfg: DictConfig) -> PredictJob:
     return PredictJob(surrogate, table, output, gearbox)
 
 
-def predict_file(ckpt: str | Path, source: str | Path, target: str | Path) -> pd.DataFrame:
-    """Predict wear for every row of ``source`` with ``ckpt``; write ``target``; return it."""
-    return execute(PredictJob(Surrogate.load(ckpt), read_table(source), Path(target)))
+def predict_file(ckpt: str | Path, source: str | Path, target: str | Path,
+                 gearbox: tuple[str, ...] = ()) -> pd.DataFrame:
+    """Predict wear for every row of ``source`` with ``ckpt`` (``gearbox``: the columns that
+    tell the gearboxes apart, for a model read against each one's first record); write
+    ``target``; return it."""
+    return execute(PredictJob(Surrogate.load(ckpt), read_table(source), Path(target),
+                              tuple(gearbox)))
 
 
 def execute(job: PredictJob) -> pd.DataFrame:

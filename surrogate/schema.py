@@ -126,7 +126,8 @@ class FeatureSchema:
                      else name)
             raise ValueError(f"row {r} column {shown} is {x[r, c]}: every input must "
                              "be finite; drop or repair such rows" + (
-                                 " (of a baseline model: the change since the gearbox's "
+                                 " (read against the first record: the change since the "
+                                 "gearbox's "
                                  "baseline record, so a NaN in that record spoils every row "
                                  "of the gearbox; repair it, do not drop it)"
                                  if self.inputs[c] in self.baseline else ""))
@@ -272,7 +273,7 @@ def baseline_changes(df: pd.DataFrame, columns: list[str], gearbox: list[str],
             which = df[gearbox].iloc[[r]].to_dict("records")[0]
             raise ValueError(f"row {r}, gearbox {which}: {name} = "
                              f"{values[r]:g} against {base[r]:g} in its baseline record (its "
-                             f"first row); a baseline model needs {rule}")
+                             f"first row); a model read against it needs {rule}")
     out = df.copy()
     values = df[columns].to_numpy(float)
     out[columns] = values - values[of_row]

@@ -30,7 +30,8 @@ class DataConfig:
     operating_point: bool = True  # speed and torque as inputs (a user knows them)
     #: explicit input columns (a user's own table); null: the reading's default inputs: the
     #: DTE's mesh lines 1-6 when read against the baseline record, else data.sensors'
-    #: Table 13 features; with data.operating_point, speed and torque beside
+    #: Table 13 features and mesh-harmonic levels; with data.operating_point, speed and
+    #: torque beside. With init_from, null inputs, target and baseline are that network's
     inputs: list[str] | None = None
     #: the wear column to read: root_wear_mm (the thesis's), or mean_wear_mm (the flank's mean
     #: depth over the path of contact; docs/surrogate.md, Method, Target); null: the mean depth

@@ -99,8 +99,13 @@ def prepare(cfg: DictConfig) -> TrainJob:
     if init is not None and list(init.schema.inputs) != data.inputs:
         raise ValueError(f"init_from = {cfg.init_from}: that network takes "
                          f"{list(init.schema.inputs)}, this run's data gives {data.inputs}; "
-                         "choose the same data.inputs (or data.sensors and "
-                         "data.operating_point)")
+                         "leave data.inputs unset (a fine-tune reads the network's inputs) "
+                         "or give those columns")
+    if init is not None and init.schema.target != data.target:
+        raise ValueError(f"init_from = {cfg.init_from}: that network reads "
+                         f"{init.schema.target}, this run's data.target is {data.target}; "
+                         "leave data.target unset, or map your wear column onto "
+                         f"{init.schema.target} (+data.columns.<yours>={init.schema.target})")
     if init is not None:
         theirs = dict(zip(init.schema.inputs, init.schema.units, strict=True))
         other = {c: (theirs[c], data.units[c]) for c in data.inputs if theirs[c] != data.units[c]}

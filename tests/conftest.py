@@ -1,6 +1,6 @@
 """Shared fixtures: the thesis baseline scenario and its geometry, and the expensive setup that
 many tests share, made once per test session: the README's commands that others start from
-(one trained case-3 run with its small dataset, one baseline run, one sweep, one set of demo
+(one trained case-3 run with its small dataset, one absolute run, one sweep, one set of demo
 bundles, one user table)."""
 
 from __future__ import annotations

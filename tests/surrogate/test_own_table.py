@@ -261,16 +261,22 @@ def test_calibration_split_halves_the_validation_trajectories_apart_from_the_sto
     and the others choose the epoch: disjoint, together the validation set; fewer stay one."""
     from surrogate.data import MIN_APART, calibration_split
 
-    def frames(n: int) -> dict:
-        val = pd.DataFrame({"case": 3, "replicate": np.repeat(np.arange(n), 3), "x": 0.0})
+    def frames(n: int, cases: tuple[int, ...] = (3,)) -> dict:
+        val = pd.concat([pd.DataFrame({"case": c, "replicate": np.repeat(np.arange(n), 3),
+                                       "x": 0.0}) for c in cases], ignore_index=True)
         return {"train": val.iloc[:0], "val": val, "test": val.iloc[:0]}
 
-    for n in (MIN_APART, 27):
-        parts = calibration_split(frames(n), seed=4)
-        stop, cal = (set(parts[k].replicate) for k in ("val", "cal"))
-        assert not stop & cal and stop | cal == set(range(n)) and len(cal) == n // 2
-        assert (parts["cal"].groupby("replicate").size() == 3).all()  # whole trajectories
-        again = calibration_split(frames(n), seed=4)
+    def trajectories(f: pd.DataFrame) -> set:
+        return set(map(tuple, f[["case", "replicate"]].to_numpy()))
+
+    for n, cases in ((MIN_APART, (3,)), (27, (3,)), (7, (1, 2, 5))):
+        parts = calibration_split(frames(n, cases), seed=4)
+        stop, cal = trajectories(parts["val"]), trajectories(parts["cal"])
+        assert not stop & cal and stop | cal == trajectories(frames(n, cases)["val"])
+        for c in cases:  # half of each case's, rounded down
+            assert sum(1 for k in cal if k[0] == c) == n // 2
+        assert (parts["cal"].groupby(["case", "replicate"]).size() == 3).all()  # whole ones
+        again = calibration_split(frames(n, cases), seed=4)
         assert again["cal"].equals(parts["cal"])
     small = calibration_split(frames(MIN_APART - 1), seed=4)
     assert small["cal"] is small["val"]

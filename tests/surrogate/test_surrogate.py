@@ -737,6 +737,14 @@ def test_a_baseline_network_reads_changes_and_needs_the_gearbox(dataset, tmp_pat
                             "data.sensors=[acc]"))
     assert job.data.inputs == list(s.schema.inputs) and job.data.target == s.schema.target
     assert job.data.baseline == tuple(s.schema.baseline)
+    with pytest.raises(ValueError, match=r"reads mean_wear_mm, this run's data.target is "
+                                         r"root_wear_mm; leave data.target unset"):
+        prepare(train_cfg(tmp_path / "d", dataset, "case=3", init, "data.test_replicates=1",
+                          "data.target=root_wear_mm"))
+    # predict_file takes the gearbox columns too
+    again = predict_file(tmp_path / "run" / "wear_surrogate.pt", src, tmp_path / "w2.csv",
+                         gearbox=("rig",))
+    np.testing.assert_allclose(again.mean_wear_mm_pred, wear, rtol=1e-5, atol=1e-9)
 
 
 def test_a_baseline_network_refuses_trajectories_that_do_not_start_unworn(dataset, tmp_path):
