@@ -256,8 +256,10 @@ def _fit_and_export(job: TrainJob, dm: WearDataModule, trainer: L.Trainer, model
 def calibrate(model, dm: WearDataModule, level: float) -> tuple[float, Novelty]:
     """The novelty, its radius set on the validation and calibration rows (inputs only: they
     chose nothing by their inputs), and the interval's conformal scale at ``level`` from the
-    calibration rows (:func:`~surrogate.data.calibration_split`): the readings, not a baseline
-    model's baselines. Says in the log where the calibration rows also chose the epoch."""
+    calibration rows (:func:`~surrogate.data.calibration_split`), each gearbox (trajectory) one
+    exchangeable unit (:func:`~surrogate.inference.conformal_scale` with ``groups``): the
+    readings, not the baseline records of a model read against them. Says in the log where
+    the calibration rows also chose the epoch."""
     held = {}
     for part in ("val", "cal") if dm.calibration_apart else ("cal",):
         rows = dm.network_rows(part)
@@ -275,7 +277,9 @@ def calibrate(model, dm: WearDataModule, level: float) -> tuple[float, Novelty]:
     calibrating = Surrogate(model, 1.0, novelty)
     mean, std = calibrating.predict_array(x_cal)
     sigma = calibrating.difficulty(std, calibrating.novelty_score(x_cal))
-    return conformal_scale(mean, sigma, cal[dm.target].to_numpy(float), level), novelty
+    gearbox = cal.groupby(["case", "replicate"], sort=False).ngroup().to_numpy()
+    return conformal_scale(mean, sigma, cal[dm.target].to_numpy(float), level,
+                           groups=gearbox), novelty
 
 
 def job_envelope(job: TrainJob, dm: WearDataModule) -> dict:

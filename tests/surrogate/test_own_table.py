@@ -303,7 +303,8 @@ def test_the_interval_is_calibrated_on_trajectories_that_chose_no_epoch(tmp_path
         rows = dm.network_rows(part)
         x = rows[list(s.schema.inputs)].to_numpy(float)
         mean, std = s.predict_array(x)
+        gearbox = rows.groupby(["case", "replicate"], sort=False).ngroup().to_numpy()
         scale[part] = conformal_scale(mean, s.difficulty(std, s.novelty_score(x)),
-                                      rows.wear_mm.to_numpy(), 0.9)
+                                      rows.wear_mm.to_numpy(), 0.9, groups=gearbox)
     assert s.interval_scale == pytest.approx(scale["cal"], rel=1e-5)
     assert scale["cal"] != pytest.approx(scale["val"], rel=1e-3)

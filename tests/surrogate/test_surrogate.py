@@ -415,6 +415,42 @@ def test_conformal_scale_covers_the_level_on_exchangeable_scores():
     assert np.mean(np.abs(fresh) <= scale * 2.0) == pytest.approx(0.9, abs=0.015)
 
 
+def test_conformal_scale_by_gearbox_hand_values_and_one_row_each_is_the_row_formula():
+    """Three gearboxes of two rows: each row weighs 1 / (4 * 2); the 0.5 level is reached at
+    the fourth smallest score. One row per gearbox gives the row formula exactly; too few
+    gearboxes for the level give the largest score."""
+    scores = np.array([0.3, 1.2, 0.1, 0.9, 2.5, 0.6])
+    zero, one = np.zeros(6), np.ones(6)
+    gearbox = np.array([0, 0, 1, 1, 2, 2])
+    assert conformal_scale(zero, one, scores, 0.5, groups=gearbox) == pytest.approx(0.9)
+    assert conformal_scale(zero, one, scores, 0.9, groups=gearbox) == pytest.approx(2.5)
+    rng = np.random.default_rng(3)
+    for n, level in ((7, 0.5), (40, 0.9), (200, 0.95)):
+        x = rng.exponential(1.0, n)
+        assert conformal_scale(np.zeros(n), np.ones(n), x, level, groups=np.arange(n)) == (
+            conformal_scale(np.zeros(n), np.ones(n), x, level))
+
+
+def test_conformal_scale_by_gearbox_covers_a_new_gearbox_where_rows_alone_do_not():
+    """Readings of a gearbox err together (a gearbox offset beside each reading's own error):
+    over many draws of 13 calibration gearboxes of 7 readings, the interval scaled by
+    gearbox covers a new gearbox's reading at least at the level; scaled row by row it
+    falls short (the finite-sample term counts 91 readings where 13 units vary)."""
+    rng = np.random.default_rng(0)
+    draws, k, rows, level = 4000, 13, 7, 0.9
+    gearbox = np.repeat(np.arange(k), rows)
+    covered = {"gearbox": [], "rows": []}
+    for _ in range(draws):
+        y = rng.normal(0, 1, (k, 1)) + 0.05 * rng.normal(0, 1, (k, rows))
+        new = rng.normal() + 0.05 * rng.normal()
+        zero, one = np.zeros(k * rows), np.ones(k * rows)
+        covered["gearbox"].append(abs(new) <= conformal_scale(zero, one, y.ravel(), level,
+                                                              groups=gearbox))
+        covered["rows"].append(abs(new) <= conformal_scale(zero, one, y.ravel(), level))
+    assert np.mean(covered["gearbox"]) >= level - 0.01  # MC error 0.005
+    assert np.mean(covered["rows"]) < level - 0.02
+
+
 def test_model_rejects_bad_settings():
     with pytest.raises(ValueError, match="interval"):
         WearRegressor(3, {}, interval=1.5)
@@ -686,7 +722,9 @@ def test_a_baseline_network_reads_changes_and_needs_the_gearbox(dataset, tmp_pat
     # normalised conformal: the residuals over the ensemble's spread widened by the novelty
     sigma = s.difficulty(std, s.novelty_score(x))
     assert s.interval_scale == pytest.approx(
-        conformal_scale(mean, sigma, worn.mean_wear_mm.to_numpy(), 0.9), rel=1e-5)
+        conformal_scale(mean, sigma, worn.mean_wear_mm.to_numpy(), 0.9,
+                        groups=worn.groupby(["case", "replicate"]).ngroup().to_numpy()),
+        rel=1e-5)
     df = pd.read_parquet(dataset)
     df = df[df.case == 3].reset_index(drop=True)
     cols, keys = s.schema.columns, ["case", "replicate"]
