@@ -23,6 +23,9 @@ Test sets:
   range, ``[high, high + 0.25 (high - low)]`` (:func:`beyond_ranges`; a range that reaches
   its physical limit stays as it is): inputs the network never trained on, which its flag
   should catch;
+- ``new_gearboxes``: 32 more case-3 gearboxes of the default ranges drawn with another seed
+  (:data:`NEW_GEARBOXES`): gearboxes like the training ones, enough of them to measure the
+  interval's coverage;
 - ``model_form_off``: case-3 gearboxes of our model whose mesh stiffness, stiffness ratio and
   mesh resonance lie well off the declared model's, 25-50 % above it or 15-30 % below
   (:data:`MODEL_FORM_OFF`; inside the drawn form ranges of :class:`NuisanceRanges`, at their
@@ -244,6 +247,9 @@ MODELS = {
 DRY_LAW = {"seed": 2, "replicates": 8, "nuisance": {"boundary_share": [0.99, 0.99]}}
 #: the beyond-the-ranges test set: the dataset spec's values (8 gearboxes per case)
 BEYOND = {"seed": 4, "replicates": 8}
+#: the new-gearboxes test set: 32 more case-3 gearboxes of the default ranges (another seed),
+#: enough to measure the interval's coverage of gearboxes like the training ones
+NEW_GEARBOXES = {"cases": [3], "seed": 9, "replicates": 32}
 #: the model-form-off test set: case-3 gearboxes of our physics whose mesh stiffness level,
 #: double/single stiffness ratio and mesh resonance (:mod:`physics.dynamics.model_form`) lie
 #: off the declared model's, 8 above it and 8 below (the dataset spec's values of each half)
@@ -492,6 +498,7 @@ def run(out: Path, root: Path, extra: list[str], seeds: int = 5
     beyond = load_dataset(root / "data" / "dataset_beyond.parquet",
                           {**BEYOND, "nuisance": beyond_ranges()})
     form_off = model_form_off(root)
+    new = load_dataset(root / "data" / "dataset_new_gearboxes.parquet", NEW_GEARBOXES)
     foreign = independent_rows()
     fleet = independent_fleet(sum(FLEET_SPLIT.values()))
     rows, plots = [], {}
@@ -510,6 +517,7 @@ def run(out: Path, root: Path, extra: list[str], seeds: int = 5
             sets["beyond_ranges"] = beyond[beyond.case.isin(cases)]
         if not loco and 3 in cases:
             sets["model_form_off"] = form_off
+            sets["new_gearboxes"] = new
         if not loco:
             sets["dry_wear_law"] = dry[dry.case.isin(cases)]
             sets["independent_simulator"] = foreign[foreign.case.isin(cases)]
