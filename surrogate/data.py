@@ -111,8 +111,8 @@ MIN_REPLICATES = 128
 #: the fewest validation trajectories per case: they choose the epoch and calibrate the
 #: 90 % interval
 MIN_VALIDATION = 8
-#: validation trajectories from which on half of them calibrate the interval apart from those
-#: that choose the epoch (:func:`calibration_split`): each half then holds MIN_VALIDATION
+#: validation trajectories (all cases together) from which on half of each case's calibrate the
+#: interval apart from those that choose the epoch (:func:`calibration_split`)
 MIN_APART = 2 * MIN_VALIDATION
 #: chunks of a dataset built here (fewer where it has fewer trajectories): the build's
 #: processes take chunks as they finish, so many small ones keep both cores busy to the end
