@@ -214,9 +214,8 @@ def evaluate(name: str, surrogate: Surrogate, est: EmpiricalInverse, typical: fl
              **wear_errors(np.full_like(true, typical), true), "interval_coverage": np.nan,
              "flag_rate": np.nan}]
     if speed:
-        read = surrogate.schema.network_rows(network_columns(surrogate.schema, test),
-                                             gearbox_keys(test))
-        x = np.repeat(read[list(surrogate.schema.inputs)].to_numpy(float),
+        read = schema.network_rows(network_columns(schema, test), keys)
+        x = np.repeat(read[list(schema.inputs)].to_numpy(float),
                       -(-1_000_000 // len(test)), axis=0)[:1_000_000]
         rows[0]["rows_per_s"], rows[0]["latency_us"] = throughput(
             lambda a: surrogate.predict_array(a)[0], x)
@@ -673,8 +672,9 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m surrogate.benchmark",
                                      description=__doc__.split("\n\n")[0],
                                      epilog="Takes about 20 minutes on 2 cores once the "
-                                            "case-3, all-case, shifted, beyond-range, dry-law "
-                                            "and model-form-off datasets are in data/ (the "
+                                            "case-3, all-case, shifted, beyond-range, dry-law, "
+                                            "model-form-off and new-gearbox datasets are in "
+                                            "data/ (the "
                                             "first run generates them): 27 trainings on the "
                                             "physics, 18 on the fleet's labelled gearboxes, 20 "
                                             "on draws of them and 34 on the one-rig table.")

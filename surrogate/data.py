@@ -779,14 +779,15 @@ class WearDataModule(L.LightningDataModule):
         every stage, and a single process needs no separate ``prepare_data``."""
         if self.schema is not None:
             return
-        if self.table is not None:
-            self.frames = calibration_split(self.split(), self.seed)
-            self.schema = FeatureSchema.fit(self.network_rows("train"), self.inputs,
-                                            self.units, self.target, self.baseline,
-                                            self.vectors)
-            return
-        df = self.table if self.table is not None else load_dataset(
-            self.dataset, self.generate, self.jobs)
+        parts = self.split() if self.table is not None else self.split_dataset()
+        self.frames = calibration_split(parts, self.seed)
+        self.schema = FeatureSchema.fit(self.network_rows("train"), self.inputs, self.units,
+                                        self.target, self.baseline, self.vectors)
+
+    def split_dataset(self) -> dict[str, pd.DataFrame]:
+        """The train/val/test rows of the physics dataset (built if missing) of the trained
+        cases (:func:`split_trajectories`), its columns and baselines checked."""
+        df = load_dataset(self.dataset, self.generate, self.jobs)
         unknown = sorted(set(self.cases) - set(df.case.unique().tolist()))
         if unknown:
             raise ValueError(f"cases {unknown} are not in {self.dataset} (it holds "
@@ -798,11 +799,8 @@ class WearDataModule(L.LightningDataModule):
         df = df[df.case.isin(self.cases)]
         if self.baseline:
             self.check_baselines(df)
-        self.frames = calibration_split(
-            split_trajectories(df, self.val_replicates, self.test_replicates, self.seed,
-                               self.holdout_case), self.seed)
-        self.schema = FeatureSchema.fit(self.network_rows("train"), self.inputs, self.units,
-                                        self.target, self.baseline, self.vectors)
+        return split_trajectories(df, self.val_replicates, self.test_replicates, self.seed,
+                                  self.holdout_case)
 
     def check_baselines(self, df: pd.DataFrame) -> None:
         """Each trajectory's first row must be its baseline record, its least worn (the

@@ -16,8 +16,7 @@ Each gearbox needs its baseline record first and at least one record after it; w
 table's row order is taken as the time order (the first row of a gearbox is its baseline).
 From Python::
 
-    from surrogate.inference import Surrogate, check_gearboxes
-from surrogate.novelty import envelope_report
+    from surrogate.inference import Surrogate
     wear = Surrogate.load("wear_surrogate.pt").predict(features_df, gearbox=["rig"])
 """
 
