@@ -30,6 +30,7 @@ import torch
 from omegaconf import OmegaConf
 
 from physics.files import atomic_write
+from surrogate.conformal import exchangeable_quantile
 from surrogate.network import Network, mixture
 from surrogate.novelty import Novelty, difficulty
 from surrogate.schema import FeatureSchema
@@ -59,31 +60,16 @@ def conformal_scale(mean: np.ndarray, std: np.ndarray, true: np.ndarray, level: 
                     groups: np.ndarray | None = None) -> float:
     """Split-conformal interval scale from the normalised residuals ``|y - mu| / sigma`` on
     data the network did not train on (the calibration trajectories), so that
-    ``mu +- scale sigma`` covers a share ``level`` of new rows (Papadopoulos et al. 2002;
-    Angelopoulos & Bates, "A gentle introduction to conformal prediction", 2021, sec. 2.3).
-    ``std`` is the rows' difficulty: the ensemble's deviation widened by the novelty
+    ``mu +- scale sigma`` covers a share ``level`` of new rows (Papadopoulos et al. 2002):
+    their :func:`~surrogate.conformal.exchangeable_quantile`, by gearbox where ``groups``
+    labels the rows' gearboxes (a gearbox's readings err together). ``std`` is the rows'
+    difficulty: the ensemble's deviation widened by the novelty
     (:func:`surrogate.novelty.difficulty`; normalised conformal prediction, Papadopoulos, Vovk
-    & Gammerman 2011).
-
-    Rows exchangeable one by one: the ``ceil((n + 1) level) / n`` empirical quantile. Rows in
-    ``groups`` (a gearbox's readings, which err together): the gearboxes are the exchangeable
-    units, so each of the ``K`` gets mass ``1 / (K + 1)`` spread evenly over its rows and the
-    new gearbox's ``1 / (K + 1)`` sits at infinity; the ``level`` quantile of that mixture
-    covers a random reading of a new gearbox with probability at least ``level`` (CDF pooling
-    of Dunn, Wasserman & Ramdas, JASA 118 (2023) 2491, with the finite-sample term of
-    exchangeable groups: Lee, Barber & Willett, arXiv:2306.06342). Where ``level`` exceeds
-    what the rows can give (``K / (K + 1)``, or ``n / (n + 1)``), their largest score."""
-    scores = np.abs(true - mean) / np.maximum(std, 1e-300)
-    n = scores.size
-    if n == 0:
+    & Gammerman 2011)."""
+    scores = np.abs(np.asarray(true, float) - mean) / np.maximum(std, 1e-300)
+    if scores.size == 0:
         raise ValueError("no calibration rows to calibrate the interval on")
-    order = np.argsort(scores, kind="stable")
-    if groups is None:
-        return float(scores[order][min(math.ceil((n + 1) * level), n) - 1])
-    _, of_row, sizes = np.unique(np.asarray(groups), return_inverse=True, return_counts=True)
-    weight = 1.0 / ((len(sizes) + 1) * sizes[of_row])
-    reached = np.cumsum(weight[order]) >= level * (1 - 1e-12)
-    return float(scores[order][int(np.argmax(reached)) if reached.any() else n - 1])
+    return exchangeable_quantile(scores, level, groups)
 
 
 class ScaledEnsemble(torch.nn.Module):

@@ -24,7 +24,7 @@ class WearRegressor(L.LightningModule):
 
     def __init__(self, n_inputs: int, schema: dict, width: int = 64, depth: int = 2,
                  members: int = 5, lr: float = 3e-3, weight_decay: float = 1e-5,
-                 interval: float = 0.9, trainable: str = "all") -> None:
+                 interval: float = 0.95, trainable: str = "all") -> None:
         super().__init__()
         ModelConfig(width=width, depth=depth, members=members, lr=lr, weight_decay=weight_decay,
                     interval=interval, trainable=trainable).check()

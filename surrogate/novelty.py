@@ -4,11 +4,13 @@
   (5) nearest training rows in the network's standardised inputs, whitened by the training
   rows' covariance (a Mahalanobis metric: a row that breaks the training rows' correlation of
   two features, a combination no training gearbox showed, lies far even where each feature
-  alone is typical), divided by the same distance
-  of the validation rows (gearboxes or groups of the training distribution the network did not
-  train on) at their ``level`` quantile (0.95): a score above 1 is farther from the training
-  rows than all but 5 % of the validation rows. On rows drawn like the training rows about
-  ``1 - level`` score above 1; on inputs nobody trained on, nearly all. k-nearest-neighbour
+  alone is typical), divided by the radius: the conformal ``level`` (0.95) quantile of the
+  same distance of the validation rows (gearboxes or groups of the training distribution the
+  network did not train on), each validation gearbox one exchangeable unit
+  (:func:`~surrogate.conformal.exchangeable_quantile`; a gearbox's rows lie near or far
+  together, so a quantile of the rows alone flags more than ``1 - level`` of a new gearbox's
+  rows). A row of a new gearbox drawn like the training ones scores above 1 with probability
+  at most ``1 - level``; on inputs nobody trained on, nearly all do. k-nearest-neighbour
   distances as a test of whether a point lies in the support of the training data: Lei, G'Sell,
   Rinaldo, Tibshirani & Wasserman, "Distribution-free predictive inference for regression",
   JASA 113 (2018) 1094, sec. 4; a distance to the training rows as the difficulty of a
@@ -41,10 +43,12 @@ import numpy as np
 import torch
 from scipy import spatial
 
+from surrogate.conformal import exchangeable_quantile
+
 #: training rows whose distances are averaged
 NEIGHBOURS = 5
-#: the validation rows' quantile of the score at which a row is flagged: about 5 % of rows of
-#: the training distribution score above it
+#: the validation gearboxes' conformal quantile of the distance at which a row is flagged: at
+#: most 5 % of the rows of a new gearbox of the training distribution score above it
 LEVEL = 0.95
 #: weight of the novelty in the interval's difficulty: at a score of 1 (the flag) the
 #: interval is twice as wide as the ensemble's spread alone would make it
@@ -70,10 +74,11 @@ class Novelty:
 
     @classmethod
     def fit(cls, train: np.ndarray, val: np.ndarray, target: np.ndarray,
-            level: float = LEVEL, neighbours: int = NEIGHBOURS, gamma: float = GAMMA
-            ) -> Novelty:
-        """From the standardised inputs of the training rows and of the validation rows, and
-        the training rows' target."""
+            groups: np.ndarray | None = None, level: float = LEVEL,
+            neighbours: int = NEIGHBOURS, gamma: float = GAMMA) -> Novelty:
+        """From the standardised inputs of the training rows and of the validation rows (with
+        their gearboxes, ``groups``; None: each row its own), and the training rows'
+        target."""
         train = np.asarray(train, float)
         if len(train) == 0 or len(val) == 0:
             raise ValueError("novelty needs training and validation rows")
@@ -82,7 +87,7 @@ class Novelty:
         k = max(1, min(int(neighbours), len(train)))
         whiten = whitening(train)
         probe = cls((train @ whiten).astype(np.float32), whiten, 1.0, level, k, gamma)
-        radius = float(np.quantile(probe.distance(np.asarray(val, float)), level))
+        radius = exchangeable_quantile(probe.distance(np.asarray(val, float)), level, groups)
         # validation rows on top of training rows (a table of repeated records): any distance
         # is then novel; the smallest nonzero spacing of the training rows keeps the score finite
         if not radius > 0:

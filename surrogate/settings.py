@@ -44,7 +44,7 @@ class DataConfig:
     baseline: bool | None = None
     # whole trajectories (case, replicate) per case, never rows of one; the validation ones
     # choose the epoch and calibrate the interval (of 16 or more, half each).
-    # null: a tenth of each case's trajectories, at least 8
+    # null: a sixth of each case's trajectories, at least 8
     val_replicates: int | None = None
     test_replicates: int = 8
     holdout_case: int | None = None  # a case number: leave that case out (test on it alone)
@@ -84,7 +84,7 @@ class ModelConfig:
     members: int = 5  # ensemble size: the spread of the members is the epistemic uncertainty
     lr: float = 3e-3
     weight_decay: float = 1e-5
-    interval: float = 0.9  # level of the predictive interval (calibrated on validation)
+    interval: float = 0.95  # level of the predictive interval (calibrated on validation)
     # which weights train: "all", or "head" (each member's output layer only: a fine-tune on a
     # few labelled gearboxes that keeps the physics-trained features, ``init_from``)
     trainable: str = "all"

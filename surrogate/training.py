@@ -256,8 +256,8 @@ def _fit_and_export(job: TrainJob, dm: WearDataModule, trainer: L.Trainer, model
 def calibrate(model, dm: WearDataModule, level: float) -> tuple[float, Novelty]:
     """The novelty, its radius set on the validation and calibration rows (inputs only: they
     chose nothing by their inputs), and the interval's conformal scale at ``level`` from the
-    calibration rows (:func:`~surrogate.data.calibration_split`), each gearbox (trajectory) one
-    exchangeable unit (:func:`~surrogate.inference.conformal_scale` with ``groups``): the
+    calibration rows (:func:`~surrogate.data.calibration_split`); in both each gearbox
+    (trajectory) is one exchangeable unit (:mod:`surrogate.conformal`), and the rows are the
     readings, not the baseline records of a model read against them. Says in the log where
     the calibration rows also chose the epoch."""
     held = {}
@@ -268,18 +268,27 @@ def calibrate(model, dm: WearDataModule, level: float) -> tuple[float, Novelty]:
         log.info("the interval is calibrated on the validation trajectories that also chose the "
                  "epoch (fewer than %d): its coverage of new gearboxes may fall short of its "
                  "level", MIN_APART)
-    train_rows = dm.network_rows("train")
-    x_held = np.concatenate([f[dm.inputs].to_numpy(float) for f in held.values()])
+    units = int(gearboxes(held["cal"]).max()) + 1
+    if level > units / (units + 1):
+        log.info("%d calibration gearboxes cannot give a %.3g interval (at most %.3g): it takes "
+                 "their largest score; more validation trajectories (data.val_replicates) give "
+                 "the level", units, level, units / (units + 1))
+    train_rows, all_held = dm.network_rows("train"), pd.concat(held.values())
     novelty = Novelty.fit(dm.schema.scale(train_rows[dm.inputs].to_numpy(float)),
-                          dm.schema.scale(x_held), train_rows[dm.target].to_numpy(float))
+                          dm.schema.scale(all_held[dm.inputs].to_numpy(float)),
+                          train_rows[dm.target].to_numpy(float), groups=gearboxes(all_held))
     cal = held["cal"]
     x_cal = cal[dm.inputs].to_numpy(float)
     calibrating = Surrogate(model, 1.0, novelty)
     mean, std = calibrating.predict_array(x_cal)
     sigma = calibrating.difficulty(std, calibrating.novelty_score(x_cal))
-    gearbox = cal.groupby(["case", "replicate"], sort=False).ngroup().to_numpy()
     return conformal_scale(mean, sigma, cal[dm.target].to_numpy(float), level,
-                           groups=gearbox), novelty
+                           groups=gearboxes(cal)), novelty
+
+
+def gearboxes(rows: pd.DataFrame) -> np.ndarray:
+    """Each row's gearbox (trajectory: case and replicate) as an integer label."""
+    return rows.groupby(["case", "replicate"], sort=False).ngroup().to_numpy()
 
 
 def job_envelope(job: TrainJob, dm: WearDataModule) -> dict:

@@ -12,6 +12,7 @@ import pandas as pd
 import pytest
 import torch
 
+from surrogate.conformal import exchangeable_quantile
 from surrogate.inference import Surrogate, conformal_scale
 from surrogate.novelty import Novelty, difficulty, envelope_report
 from surrogate.schema import FeatureSchema
@@ -37,6 +38,39 @@ def test_novelty_is_rare_on_the_training_distribution_and_certain_far_from_it():
     broken[:, 1] = -broken[:, 0]  # the same marginals, the correlation reversed
     assert np.mean(nov.score(broken) > 1) > 0.8
     assert np.median(nov.score(same)) < np.median(nov.score(broken)) / 3
+
+
+def test_novelty_by_gearbox_flags_a_new_gearbox_at_most_at_the_level():
+    """A gearbox's rows lie near or far together (a gearbox offset beside each row's own
+    scatter): over many draws of 26 validation gearboxes of 7 rows, the radius taken by
+    gearbox flags a row of a new gearbox at most at ``1 - level``; the rows' quantile flags
+    more, as it counts 182 rows where 26 units vary."""
+    rng = np.random.default_rng(5)
+
+    def gearboxes(k, rows=7):
+        return (rng.normal(0, 1, (k, 1, 3)) + 0.1 * rng.normal(0, 1, (k, rows, 3))).reshape(-1, 3)
+
+    nov = Novelty.fit(gearboxes(300), gearboxes(26), np.zeros(2100))
+    groups, level = np.repeat(np.arange(26), 7), 0.95
+    flagged = {"gearbox": [], "rows": []}
+    for _ in range(1500):
+        d_val, d_new = nov.distance(gearboxes(26)), nov.distance(gearboxes(1))
+        flagged["gearbox"].append(np.mean(d_new > exchangeable_quantile(d_val, level, groups)))
+        flagged["rows"].append(np.mean(d_new > np.quantile(d_val, level)))
+    assert np.mean(flagged["gearbox"]) <= 1 - level + 0.01  # MC error about 0.005
+    assert np.mean(flagged["rows"]) > 1 - level + 0.01
+    fitted = Novelty.fit(gearboxes(300), (val := gearboxes(26)), np.zeros(2100), groups=groups)
+    assert fitted.radius == pytest.approx(exchangeable_quantile(
+        fitted.distance(val), fitted.level, groups))
+
+
+def test_exchangeable_quantile_refuses_what_it_cannot_take():
+    with pytest.raises(ValueError, match="no held-out rows"):
+        exchangeable_quantile(np.array([]), 0.9)
+    with pytest.raises(ValueError, match="must lie in"):
+        exchangeable_quantile(np.ones(3), 1.0)
+    with pytest.raises(ValueError, match="2 group labels for 3 scores"):
+        exchangeable_quantile(np.ones(3), 0.5, np.array([0, 1]))
 
 
 def test_novelty_travels_as_tensors_and_plain_numbers(tmp_path):

@@ -165,13 +165,14 @@ def test_split_is_by_trajectory_and_the_scaling_uses_training_rows(dataset):
         split_trajectories(df, 2, 2, seed=0)
 
 
-def test_a_built_dataset_holds_enough_gearboxes_and_a_tenth_validates(tmp_path):
+def test_a_built_dataset_holds_enough_gearboxes_and_a_sixth_validates(tmp_path):
     """The default training set: 256 gearboxes for one case, 128 per case for all five (the
-    floor), an explicit ``data.generate.replicates`` wins; a tenth of a case's trajectories
+    floor), an explicit ``data.generate.replicates`` wins; a sixth of a case's trajectories
     validates (8 at least), and the split takes it when ``val_replicates`` is left null."""
     assert replicates_per_case(256, 1) == 256 and replicates_per_case(256, 5) == 128
     assert replicates_per_case(1280, 5) == 256 and replicates_per_case(1, 3) == 128
-    assert validation_count(256) == 26 and validation_count(64) == 8
+    assert validation_count(256) == 43 and validation_count(128) == 21
+    assert validation_count(40) == 8
     cfg = train_cfg(tmp_path, tmp_path / "x.parquet", "case=3", "data.val_replicates=null")
     dm = instantiate(cfg.data)
     assert dm.generate["replicates"] == 256 and dm.val_replicates is None
@@ -193,7 +194,7 @@ def test_a_built_dataset_holds_enough_gearboxes_and_a_tenth_validates(tmp_path):
     df = pd.DataFrame({"case": 3, "replicate": reps, "x": np.arange(200.0)})
     parts = split_trajectories(df, None, 8, seed=0)
     assert {k: v.replicate.nunique() for k, v in parts.items()} == {
-        "train": 82, "val": 10, "test": 8}
+        "train": 75, "val": 17, "test": 8}
 
 
 def test_a_dataset_built_with_other_settings_is_named_not_silently_used(dataset, caplog):
