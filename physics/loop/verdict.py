@@ -135,9 +135,20 @@ def summary_line(r: dict) -> str:
     if v == "effect":
         return f"**Verdict: effect named** ({r['chosen_effect']})."
     if v != "unexplained_residual":
-        return ("**Verdict: none.** No candidate passes the null test and the held-out records "
-                "keep nothing beyond what the model discrepancy allows on clean records, and no "
-                "spectral line that no declared order explains.")
+        if r.get("form_reference"):
+            return ("**Verdict: none.** No candidate passes the null test and the held-out "
+                    "records keep nothing beyond what the model discrepancy allows on the clean "
+                    "reference records, and no spectral line that no declared order explains.")
+        if r.get("mode") != "bundle":
+            return ("**Verdict: none.** No candidate passes the null test on the table's rows.")
+        return ("**Verdict: none.** No candidate passes the null test, and the held-out records "
+                "keep nothing beyond the scatter of this bundle's own train records and no "
+                "spectral line that no declared order explains. Without a reference that "
+                "scatter is not that of clean records: an effect present in every record is "
+                "part of it and cannot be told from the declared model's form error (held-out "
+                f"error {r['error_before']:.3g}, {r['error_unit']}). Read the bundle against "
+                "clean records (reference=first:N, this unit's first records, or a sister "
+                "unit's bundle) to test for one.")
     parts = []
     for label, g in r["unexplained"]["groups"].items():
         lines = "; ".join(f"{x['frequency_hz']:.1f} Hz (pinion order {x['order']:.3f}, "

@@ -108,4 +108,7 @@ def test_a_clean_bundle_gets_none(tmp_path, scn):
     report = run_loop(read_bundle(path), scn, FAST)
     assert report["verdict"] == "none" and report["unexplained"] is None
     write_report(report, tmp_path / "run", with_figures=False)
-    assert "**Verdict: none.**" in (tmp_path / "run" / "report.md").read_text()
+    md = (tmp_path / "run" / "report.md").read_text()
+    # without a reference the line says whose scatter it judged against, and what to do
+    assert "**Verdict: none.**" in md and "cannot be told from the declared model's form" in md
+    assert "reference=first:N" in md
