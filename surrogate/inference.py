@@ -277,8 +277,9 @@ class Surrogate:
         (the ensemble's), ``<target>_lower`` / ``_upper`` (the normalised conformal interval of
         the trained level, its half width the interval scale times the row's
         :func:`~surrogate.novelty.difficulty`; clipped at 0), ``novelty`` (the row's score,
-        :class:`~surrogate.novelty.Novelty`: above 1 farther from the training rows than all
-        but 5 % of the validation rows) and ``out_of_range``, the flag: a novelty above 1 or an
+        :class:`~surrogate.novelty.Novelty`: above 1 farther from the training rows than a
+        row of a new gearbox like the validation ones lies with 95 % probability) and
+        ``out_of_range``, the flag: a novelty above 1 or an
         input outside the training range widened by 5 % (:meth:`FeatureSchema.in_envelope`):
         the reading is an extrapolation.
         """

@@ -169,9 +169,10 @@ def envelope_report(flagged: np.ndarray, novelty: Novelty, true: np.ndarray | No
     parts = []
     if share > NOTE_FACTOR * (1 - novelty.level):
         parts.append(f"{f} of {n} {what} ({100 * share:.0f} %) lie outside the network's "
-                     "training data (farther from its training rows than "
-                     f"{100 * novelty.level:.0f} % of its validation rows, or an input "
-                     "beyond its training range): their readings are extrapolations")
+                     "training data (farther from its training rows than a new gearbox "
+                     f"like its validation ones lies with {100 * novelty.level:.0f} % "
+                     "probability, or an input beyond its training range): their readings "
+                     "are extrapolations")
     if true is not None:
         t = np.asarray(true, float)
         lo, hi = novelty.target_low, novelty.target_high
