@@ -12,6 +12,8 @@
 - :mod:`surrogate.inference`: export, safe loading, CPU prediction with intervals and flags;
 - :mod:`surrogate.novelty`: the novelty score against the training rows, the flag's threshold
   and the interval's difficulty;
+- :mod:`surrogate.conformal`: the conformal quantile of held-out scores, by row or by
+  gearbox, that sets the interval's scale and the flag's threshold;
 - :mod:`surrogate.predict`, :mod:`surrogate.summarise`, :mod:`surrogate.benchmark`: commands.
 """
 
@@ -34,6 +36,7 @@ _SOURCES = {
         "Surrogate", "ScaledEnsemble", "export", "conformal_scale", "torch_predict"),
     "surrogate.predict": ("predict_file", "gearbox_columns"),
     "surrogate.novelty": ("Novelty", "difficulty", "envelope_report"),
+    "surrogate.conformal": ("exchangeable_quantile",),
     "surrogate.benchmark": (
         "DRY_LAW", "MODEL_FORM_OFF", "one_rig_table", "one_rig", "INDEPENDENT_WEAR_MM",
         "fit_estimator", "fit_fleet_estimator", "independent_fleet", "referenced",
