@@ -130,8 +130,9 @@ def validation_count(trajectories: int) -> int:
     """Validation trajectories of a case with ``trajectories``: a sixth, at least
     :data:`MIN_VALIDATION`. The conformal interval's quantile is read from half of them
     (:func:`calibration_split`): the fewer, the more its coverage scatters over seeds, and
-    below 20 calibrating gearboxes no quantile reaches the 95 % level (the largest score is
-    taken; :mod:`surrogate.conformal`). A sixth of the main job's 256 gives 43: 21 calibrate."""
+    below 19 calibrating gearboxes no quantile reaches the 95 % level (the largest score is
+    taken; :func:`surrogate.conformal.attainable`). A sixth of the main job's 256 gives 43: 21
+    calibrate."""
     return max(MIN_VALIDATION, round(trajectories / 6))
 
 
@@ -531,6 +532,11 @@ def split_table(rows: pd.DataFrame, test_codes: list[int] | None, val_codes: lis
     return {k: parts[k].reset_index(drop=True) for k in ("train", "val", "test")}
 
 
+def gearboxes(rows: pd.DataFrame) -> np.ndarray:
+    """Each row's gearbox (trajectory: case and replicate) as an integer label."""
+    return rows.groupby(["case", "replicate"], sort=False).ngroup().to_numpy()
+
+
 def calibration_split(frames: dict[str, pd.DataFrame], seed: int) -> dict[str, pd.DataFrame]:
     """``frames`` with its validation trajectories cut in two: ``val``, which choose the epoch
     kept (early stopping, the checkpoint), and ``cal``, which calibrate the interval. A
@@ -542,7 +548,7 @@ def calibration_split(frames: dict[str, pd.DataFrame], seed: int) -> dict[str, p
     calibrate; with fewer than :data:`MIN_APART` validation trajectories in all, both are the
     same rows."""
     val = frames["val"]
-    if val.groupby(["case", "replicate"]).ngroups < MIN_APART:
+    if len(np.unique(gearboxes(val))) < MIN_APART:
         return {**frames, "cal": val}
     chosen = []
     for case, rows in val.groupby("case", sort=True):

@@ -10,7 +10,9 @@
   (:func:`~surrogate.conformal.exchangeable_quantile`; a gearbox's rows lie near or far
   together, so a quantile of the rows alone flags more than ``1 - level`` of a new gearbox's
   rows). A row of a new gearbox drawn like the training ones scores above 1 with probability
-  at most ``1 - level``; on inputs nobody trained on, nearly all do. k-nearest-neighbour
+  at most ``1 - level`` on average over the draw of the validation gearboxes (one network's
+  rate scatters about it; with fewer than 19 of them the bound is ``1 / (K + 1)``); on
+  inputs nobody trained on, nearly all do. k-nearest-neighbour
   distances as a test of whether a point lies in the support of the training data: Lei, G'Sell,
   Rinaldo, Tibshirani & Wasserman, "Distribution-free predictive inference for regression",
   JASA 113 (2018) 1094, sec. 4; a distance to the training rows as the difficulty of a
@@ -22,7 +24,7 @@
   extrapolates beyond the range of any one input, however near the row lies to the others);
 - the **difficulty** (:func:`difficulty`) of the normalised conformal interval: the
   ensemble's standard deviation times ``1 + gamma * score``; the interval's scale is the
-  conformal quantile of the validation rows' ``|y - mu| / difficulty``
+  conformal quantile of the calibration gearboxes' ``|y - mu| / difficulty``
   (:func:`surrogate.inference.conformal_scale`), so an interval widens with the novelty of its
   row as well as with the members' disagreement;
 - the **training target's range** (``target_low``, ``target_high``), against which a table
@@ -60,12 +62,13 @@ NOTE_FACTOR = 2.0
 
 @dataclass(frozen=True)
 class Novelty:
-    """The training rows (standardised), the validation rows' distance at ``level``, and the
-    training target's range; see the module text."""
+    """The training rows (standardised), the flag's radius (the held-out gearboxes' conformal
+    quantile of the distance at ``level``), and the training target's range; see the module
+    text."""
 
     reference: np.ndarray  # (rows, inputs), standardised as the network reads them, whitened
     whiten: np.ndarray  # (inputs, inputs): standardised rows @ whiten -> the metric's space
-    radius: float  # mean distance to ``neighbours`` training rows at the ``level`` quantile
+    radius: float  # mean distance to ``neighbours`` training rows at which a row is flagged
     level: float = LEVEL
     neighbours: int = NEIGHBOURS
     gamma: float = GAMMA
@@ -73,7 +76,7 @@ class Novelty:
     target_high: float = math.inf
 
     @classmethod
-    def fit(cls, train: np.ndarray, val: np.ndarray, target: np.ndarray,
+    def fit(cls, train: np.ndarray, val: np.ndarray, target: np.ndarray, *,
             groups: np.ndarray | None = None, level: float = LEVEL,
             neighbours: int = NEIGHBOURS, gamma: float = GAMMA) -> Novelty:
         """From the standardised inputs of the training rows and of the validation rows (with

@@ -24,8 +24,10 @@ from physics import interrupt
 from physics.estimators.empirical_inverse import wear_errors
 from physics.files import atomic_write, check_inside, pyplot
 from surrogate import baselines, settings
-from surrogate.data import MIN_APART, WearDataModule
+from surrogate.conformal import attainable
+from surrogate.data import MIN_APART, WearDataModule, gearboxes
 from surrogate.inference import Surrogate, conformal_scale, export
+from surrogate.novelty import LEVEL as NOVELTY_LEVEL
 from surrogate.novelty import Novelty, envelope_report
 
 log = logging.getLogger(__name__)
@@ -268,12 +270,14 @@ def calibrate(model, dm: WearDataModule, level: float) -> tuple[float, Novelty]:
         log.info("the interval is calibrated on the validation trajectories that also chose the "
                  "epoch (fewer than %d): its coverage of new gearboxes may fall short of its "
                  "level", MIN_APART)
-    units = int(gearboxes(held["cal"]).max()) + 1
-    if level > units / (units + 1):
-        log.info("%d calibration gearboxes cannot give a %.3g interval (at most %.3g): it takes "
-                 "their largest score; more validation trajectories (data.val_replicates) give "
-                 "the level", units, level, units / (units + 1))
     train_rows, all_held = dm.network_rows("train"), pd.concat(held.values())
+    for what, rows, at in (("the interval", held["cal"], level),
+                           ("the novelty flag", all_held, NOVELTY_LEVEL)):
+        units = rows.groupby(["case", "replicate"]).ngroups
+        if units and not attainable(at, units):
+            log.info("%d held-out gearboxes cannot give %s a %.3g level (at most %.3g): it takes "
+                     "their largest score; more validation trajectories (data.val_replicates) "
+                     "give the level", units, what, at, units / (units + 1))
     novelty = Novelty.fit(dm.schema.scale(train_rows[dm.inputs].to_numpy(float)),
                           dm.schema.scale(all_held[dm.inputs].to_numpy(float)),
                           train_rows[dm.target].to_numpy(float), groups=gearboxes(all_held))
@@ -285,10 +289,6 @@ def calibrate(model, dm: WearDataModule, level: float) -> tuple[float, Novelty]:
     return conformal_scale(mean, sigma, cal[dm.target].to_numpy(float), level,
                            groups=gearboxes(cal)), novelty
 
-
-def gearboxes(rows: pd.DataFrame) -> np.ndarray:
-    """Each row's gearbox (trajectory: case and replicate) as an integer label."""
-    return rows.groupby(["case", "replicate"], sort=False).ngroup().to_numpy()
 
 
 def job_envelope(job: TrainJob, dm: WearDataModule) -> dict:

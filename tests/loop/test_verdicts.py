@@ -17,6 +17,7 @@ from physics.loop import (
     unexplained_lines,
 )
 from physics.loop.report import STABLE_KEYS, write_report
+from physics.loop.verdict import summary_line
 from physics.params import scenario_from_config
 from physics.testbeds import make_bundle
 
@@ -112,3 +113,18 @@ def test_a_clean_bundle_gets_none(tmp_path, scn):
     # without a reference the line says whose scatter it judged against, and what to do
     assert "**Verdict: none.**" in md and "cannot be told from the declared model's form" in md
     assert "reference=first:N" in md
+
+
+def test_a_none_verdict_says_what_it_rests_on():
+    """Against a reference, "none" speaks of the clean reference records; without one, of the
+    bundle's own train records, with the held-out error and the reference to read against; on
+    a feature table, of its rows."""
+    base = {"verdict": "none", "mode": "bundle", "error_before": 5.5,
+            "error_unit": "noise units", "form_reference": None}
+    own = summary_line(base)
+    assert "own train records" in own and "5.5, noise units" in own
+    assert "reference=first:N" in own
+    ref = summary_line(base | {"form_reference": {"source": "first:2"}})
+    assert "clean reference records" in ref and "reference=first:N" not in ref
+    table = summary_line(base | {"mode": "feature_table"})
+    assert "table's rows" in table and "train records" not in table

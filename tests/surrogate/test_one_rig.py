@@ -80,7 +80,7 @@ def test_acceptance_every_stage_left_out_in_turn_beats_the_line_and_covers(rig, 
     """Leave-one-stage-out cross-validation with the default training, as a user of one rig
     would judge the network: 32 folds, every stage (both speeds) read by a network that never
     saw it; over the folds its mean relative error at most the linear model's of the same
-    inputs, its 90 % interval covering at least 0.85 of the held-out rows."""
+    inputs, its 95 % interval covering at least 0.85 of the held-out rows."""
     metrics, _, _ = run(rig, "stage_cv", caplog, training=[])
     folds = pd.read_csv(rig / "stage_cv" / "cv.csv")
     assert metrics["folds"] == 32 and sorted(folds.stage) == list(range(32))

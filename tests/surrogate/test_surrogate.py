@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import logging
 from pathlib import Path
 
 import hypothesis
@@ -27,6 +28,7 @@ from physics.dynamics.model_form import FACTORS
 from physics.params import Dynamics, Scenario, WearSolver
 from physics.signals.order_analysis import LINE_ORDERS
 from surrogate import predict, settings
+from surrogate.conformal import attainable, exchangeable_quantile
 from surrogate.data import (
     BUILD_CHUNKS,
     DEFAULT_INPUTS,
@@ -430,6 +432,28 @@ def test_conformal_scale_by_gearbox_hand_values_and_one_row_each_is_the_row_form
         x = rng.exponential(1.0, n)
         assert conformal_scale(np.zeros(n), np.ones(n), x, level, groups=np.arange(n)) == (
             conformal_scale(np.zeros(n), np.ones(n), x, level))
+
+
+def test_a_level_is_attainable_from_as_many_units_as_it_needs_and_the_run_says_when_not(
+        tmp_path, dataset, caplog):
+    """``K`` held-out units leave ``K / (K + 1)`` below the new unit's mass at infinity: 0.95
+    needs 19 (reached at their largest score), 0.9 needs 9. A run with fewer validation
+    gearboxes says, for the interval and for the novelty flag, that it took the largest."""
+    assert attainable(0.95, 19) and not attainable(0.95, 18)
+    assert attainable(0.9, 9) and not attainable(0.9, 8)
+    # 19 or 20 units give the level at their largest score (19 / 20, 20 / 21 >= 0.95); 40 at
+    # their 39th (39 / 41 >= 0.95 > 38 / 41)
+    x = np.arange(1.0, 41.0)
+    assert exchangeable_quantile(x[:19], 0.95) == 19.0
+    assert exchangeable_quantile(x[:20], 0.95) == 20.0
+    assert exchangeable_quantile(x, 0.95) == 39.0
+    with caplog.at_level(logging.INFO, logger="surrogate.training"):
+        train(train_cfg(tmp_path, dataset, "case=3", "data.test_replicates=1",
+                        "data.baseline=false", "trainer.max_epochs=2", "model.members=2",
+                        "logger=csv"))
+    said = [r.getMessage() for r in caplog.records if "cannot give" in r.getMessage()]
+    assert len(said) == 2 and "the interval a 0.95 level" in said[0]
+    assert "the novelty flag a 0.95 level" in said[1] and "data.val_replicates" in said[1]
 
 
 def test_conformal_scale_by_gearbox_covers_a_new_gearbox_where_rows_alone_do_not():
