@@ -65,8 +65,10 @@ def test_novelty_by_gearbox_flags_a_new_gearbox_at_most_at_the_level():
 
 
 def test_exchangeable_quantile_refuses_what_it_cannot_take():
-    with pytest.raises(ValueError, match="no held-out rows"):
+    with pytest.raises(ValueError, match="non-empty 1-D"):
         exchangeable_quantile(np.array([]), 0.9)
+    with pytest.raises(ValueError, match="1 held-out scores are not finite"):
+        exchangeable_quantile(np.array([1.0, np.nan]), 0.9)
     with pytest.raises(ValueError, match="must lie in"):
         exchangeable_quantile(np.ones(3), 1.0)
     with pytest.raises(ValueError, match="2 group labels for 3 scores"):
