@@ -7,7 +7,7 @@ and the :class:`~surrogate.novelty.Novelty` (training rows and threshold); it is
 
 Predictions run in ONNX Runtime (:func:`onnx_session`): the input scaling, the five members and
 their mixture as one graph, built from the loaded weights on first use. On this machine it runs
-at 1.8-1.9 times torch's batch rate on two threads and an eighth of its single-row latency
+at 3.1-3.8 times torch's batch rate on two threads and a seventh of its single-row latency
 (``bench/bench_surrogate.py``, docs/surrogate.md, Training and inference time);
 :func:`torch_predict` is the same computation in torch, the reference the tests and the
 benchmark hold it to.
