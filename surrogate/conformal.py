@@ -50,7 +50,7 @@ def exchangeable_quantile(scores: np.ndarray, level: float,
     if groups is None:
         of_row = np.arange(n)
     else:
-        labels = pd.Series(list(groups)) if not isinstance(groups, pd.Series) else groups
+        labels = pd.Series(list(groups))
         if len(labels) != n:
             raise ValueError(f"{len(labels)} group labels for {n} scores")
         of_row, _ = pd.factorize(labels, use_na_sentinel=False)

@@ -270,25 +270,24 @@ def calibrate(model, dm: WearDataModule, level: float) -> tuple[float, Novelty]:
         log.info("the interval is calibrated on the validation trajectories that also chose the "
                  "epoch (fewer than %d): its coverage of new gearboxes may fall short of its "
                  "level", MIN_APART)
-    train_rows, all_held = dm.network_rows("train"), pd.concat(held.values())
-    for what, rows, at in (("the interval", held["cal"], level),
-                           ("the novelty flag", all_held, NOVELTY_LEVEL)):
-        units = rows.groupby(["case", "replicate"]).ngroups
+    train_rows, all_held, cal = dm.network_rows("train"), pd.concat(held.values()), held["cal"]
+    of_held, of_cal = gearboxes(all_held), gearboxes(cal)
+    for what, labels, at in (("the interval", of_cal, level),
+                             ("the novelty flag", of_held, NOVELTY_LEVEL)):
+        units = np.unique(labels).size
         if units and not attainable(at, units):
             log.info("%d held-out gearboxes cannot give %s a %.3g level (at most %.3g): it takes "
                      "their largest score; more validation trajectories (data.val_replicates) "
                      "give the level", units, what, at, units / (units + 1))
     novelty = Novelty.fit(dm.schema.scale(train_rows[dm.inputs].to_numpy(float)),
                           dm.schema.scale(all_held[dm.inputs].to_numpy(float)),
-                          train_rows[dm.target].to_numpy(float), groups=gearboxes(all_held))
-    cal = held["cal"]
+                          train_rows[dm.target].to_numpy(float), groups=of_held)
     x_cal = cal[dm.inputs].to_numpy(float)
     calibrating = Surrogate(model, 1.0, novelty)
     mean, std = calibrating.predict_array(x_cal)
     sigma = calibrating.difficulty(std, calibrating.novelty_score(x_cal))
     return conformal_scale(mean, sigma, cal[dm.target].to_numpy(float), level,
-                           groups=gearboxes(cal)), novelty
-
+                           groups=of_cal), novelty
 
 
 def job_envelope(job: TrainJob, dm: WearDataModule) -> dict:

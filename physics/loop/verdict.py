@@ -140,7 +140,7 @@ def summary_line(r: dict) -> str:
                     "records keep nothing beyond what the model discrepancy allows on the clean "
                     "reference records, and no spectral line that no declared order explains.")
         if r.get("mode") != "bundle":
-            return ("**Verdict: none.** No candidate passes the null test on the table's rows.")
+            return "**Verdict: none.** No candidate passes the null test on the table's rows."
         return ("**Verdict: none.** No candidate passes the null test, and the held-out records "
                 "keep nothing beyond the scatter of this bundle's own train records and no "
                 "spectral line that no declared order explains. Without a reference that "
