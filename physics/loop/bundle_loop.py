@@ -93,6 +93,10 @@ into its run folder.
    residuals that no linear combination of the free nuisance's directions reproduces (near 0: the
    declared model's own freedom makes the same change; a DTE sensor gain against a free stiffness
    level, whose lengths scale out of the equation of motion, is the exact case).
+   The null is the declared model's best fit: after an adoption the declared model is refitted
+   from the adopted candidate's nuisance (:func:`~physics.loop.fit.recalibrated`); where that
+   fits the train records better, it becomes the calibration and the round is judged again (a
+   candidate's gain can be a better basin of the nuisance that its joint fit reached).
    **Greedy second round** (:func:`~physics.loop.attribution.attribute` again): once an effect is
    adopted, every other effect is tried on the model that carries it
    (:func:`~physics.loop.attribution.stacked`, the first's parameters held at their fit, the
@@ -110,6 +114,7 @@ into its run folder.
 
 from __future__ import annotations
 
+import logging
 import time
 
 import numpy as np
@@ -129,7 +134,7 @@ from physics.loop.config import LoopSettings
 from physics.loop.declared import TORQUE, declared_modes, declared_nuisance
 from physics.loop.detection import detection_limits
 from physics.loop.discrepancy import entry_family, with_discrepancy
-from physics.loop.fit import calibrate, held, screened
+from physics.loop.fit import MAX_RECALIBRATIONS, calibrate, held, recalibrated, screened
 from physics.loop.form_error import FormReference
 from physics.loop.records import Records, prepare
 from physics.loop.report import LoopReport
@@ -139,6 +144,8 @@ from physics.loop.usable import check_usable, shown_candidates
 from physics.loop.verdict import closest, group_lines, judge, unexplained_entries
 from physics.loop.wear_reading import Reader, wear_score
 from physics.params import Scenario
+
+log = logging.getLogger(__name__)
 
 
 def group_summary(rec: Records, before: list[np.ndarray], after: list[np.ndarray]
@@ -206,6 +213,22 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
     declared = Reader("the declared model", nuisance)
     first = attribute(rec, judged, None, {}, nuisance, free_nuisance, candidates, declared,
                       progress)
+    refitted_from: list[str] = []  # the candidates whose nuisance moved the calibration
+    while first.adopted and len(refitted_from) < MAX_RECALIBRATIONS:
+        # the null test against the declared model's best fit: refit it from the adopted
+        # candidate's nuisance, and where that fits better, judge every candidate again
+        better = recalibrated(rec, nuisance, first.best.nuisance, free_nuisance)
+        if better is None:
+            break
+        log.info("the declared model refitted from %s's nuisance fits the train records "
+                 "better than the calibration: the first round again from there",
+                 first.best.name)
+        nuisance = better
+        refitted_from.append(first.best.name)
+        judged = with_discrepancy(rec, nuisance)
+        declared = Reader("the declared model", nuisance)
+        first = attribute(rec, judged, None, {}, nuisance, free_nuisance, candidates,
+                          declared, progress)
     base_test = first.base_test  # the calibrated declared model's
     rounds = [first]
     eff = first.effects[first.best.name]
@@ -269,7 +292,9 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
         wear_error_after_pct=wear_after.error if wear_after else None,
         calibration=nuisance,
         calibrated_on=("this unit's earliest records, held for the later ones" if rec.held
-                       else "the train records"),
+                       else "the train records" + "".join(
+                           f", refitted from the nuisance of {n} (a better fit of the declared "
+                           "model; every candidate judged again)" for n in refitted_from)),
         nuisance_after=after_nui,
         null_bic=first.null_bic,
         ranking=ranking,

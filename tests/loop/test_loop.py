@@ -51,6 +51,7 @@ from physics.loop import (
     with_level,
     write_bundle,
 )
+from physics.loop.fit import recalibrated
 from physics.params import scenario_from_config
 from physics.signals.order_analysis import (
     line_amplitudes,
@@ -462,6 +463,23 @@ def test_chain_parameters_reuse_the_simulation(clean_records):
                   {"damping_ratio": 2 * nui["damping_ratio"]},
                   {"housing_mass_kg": 2 * nui["housing_mass_kg"]}):
         assert misfit(nui) < misfit(nui | moved)
+
+
+def test_a_calibration_off_its_best_fit_is_moved_by_a_candidates_nuisance(clean_records):
+    """The null test weighs a candidate against the declared model's best fit: where the
+    declared model refitted from a candidate's nuisance fits the train records better than
+    the calibration, that refit replaces it; from its own minimum a refit gains nothing."""
+    rec, truth = clean_records
+    free = ["damping_ratio", "profile_error_um", "housing_mass_kg"]
+    best = truth["nuisance"]
+    off = best | {"damping_ratio": 3.0 * best["damping_ratio"],
+                  "profile_error_um": 0.3 * best["profile_error_um"]}
+    moved = recalibrated(rec, off, best, free)
+    assert moved is not None and set(moved) == set(best)
+    assert train_cost(rec, moved, None, {}) < 0.5 * train_cost(rec, off, None, {})
+    assert moved["damping_ratio"] == pytest.approx(best["damping_ratio"], rel=0.2)
+    assert recalibrated(rec, moved, moved, free) is None
+    assert recalibrated(rec, off, best, []) is None  # nothing free (a held calibration)
 
 
 def test_calibration_finds_a_declared_support_mode(tmp_path):
