@@ -171,9 +171,14 @@ def summary_line(r: dict) -> str:
                      f"{c['heldout_error']:.2f}; fails "
                      f"{', '.join(k for k, ch in c['checks'].items() if not ch['holds'])})"
                      for c in r["unexplained"]["closest"])
+    own = (r.get("form_reference") or {}).get("calibration_held")
     return ("**Verdict: unexplained residual.** No candidate of the library passes the null test, "
             "but the records carry what the declared model cannot explain. "
-            + " ".join(parts) + (f". Closest candidates: {near}." if near else "."))
+            + " ".join(parts) + (f". Closest candidates: {near}." if near else ".")
+            + (" Against this unit's own earliest records the residual also holds the "
+               "declared model's error in the response to the wear since them, which those "
+               "records cannot show: an unexplained residual here may be the wear itself, "
+               "read otherwise by the model, as much as an undeclared effect." if own else ""))
 
 
 def unexplained_figure(report, out: Path) -> None:

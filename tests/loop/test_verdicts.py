@@ -128,3 +128,16 @@ def test_a_none_verdict_says_what_it_rests_on():
     assert "clean reference records" in ref and "reference=first:N" not in ref
     table = summary_line(base | {"mode": "feature_table"})
     assert "table's rows" in table and "train records" not in table
+
+
+def test_an_unexplained_residual_against_own_first_records_names_the_wear_response():
+    """Against the unit's own earliest records (its calibration held) the line says that the
+    model's response to the wear since them is part of the residual; against a sister unit,
+    or none, it does not."""
+    base = {"verdict": "unexplained_residual", "form_reference": None,
+            "unexplained": {"groups": {"g": {"lines": [], "entries": [
+                {"entry": "line_mesh1", "residual_db": -9.0, "z": -12.0}]}}, "closest": []}}
+    held = summary_line(base | {"form_reference": {"calibration_held": True}})
+    assert "line_mesh1 (-9.0 dB, z -12.0)" in held and "response to the wear" in held
+    for other in (base, base | {"form_reference": {"calibration_held": False}}):
+        assert "response to the wear" not in summary_line(other)
