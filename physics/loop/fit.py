@@ -70,8 +70,8 @@ CALIBRATION_STARTS = 3
 #: least-squares evaluations that polish a screened candidate's best grid point
 SCREEN_NFEV = 6
 #: relative cut of the train chi-square by which a refit of the declared model from an
-#: adopted candidate's nuisance replaces the calibration (:func:`recalibrated`): a least-squares
-#: refit from a nearby start ends within round-off of the same minimum, not a tenth below it
+#: adopted candidate's nuisance replaces the calibration (:func:`recalibrated`): a refit that
+#: ends in the calibration's own basin comes within far less of its chi-square than that
 RECALIBRATION_GAIN = 0.01
 #: calibrations a bundle's first round may be rerun from (:func:`recalibrated`)
 MAX_RECALIBRATIONS = 2
