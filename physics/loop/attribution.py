@@ -12,6 +12,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -119,6 +120,18 @@ def separable_share(directions: np.ndarray, change: np.ndarray) -> float:
     return float(rest @ rest) / ss
 
 
+def lowest_fits(ranking: list[Candidate], earlier: Sequence[Candidate]) -> list[Candidate]:
+    """Each candidate of ``ranking`` or, where it fits the train records better, a copy of the
+    same effect and option's fit in ``earlier`` (the fits being of one model on the same
+    records, the lower is the candidate's fit; its judgement is made afresh)."""
+    def key(c: Candidate) -> tuple:
+        return c.name, tuple(sorted(c.option.items()))
+
+    kept = {key(c): c for c in earlier}
+    return [dataclasses.replace(kept[key(c)]) if key(c) in kept
+            and kept[key(c)].train_rss < c.train_rss else c for c in ranking]
+
+
 def candidates_for(quantities: set[str], settings: LoopSettings) -> list[tuple[Effect, dict]]:
     """(effect, option) pairs to try: the library's (or ``settings.candidates``) effects that can
     show in the records' quantities."""
@@ -182,7 +195,8 @@ class Round:
 
 def attribute(rec: Records, judged: Records, declared: Effect | None, declared_values: dict,
               nuisance: dict, free_nuisance: list[str], candidates: list[tuple[Effect, dict]],
-              reader: Reader, progress: bool = False, deadline: float | None = None) -> Round:
+              reader: Reader, progress: bool = False, deadline: float | None = None,
+              earlier: Sequence[Candidate] = ()) -> Round:
     """Screen, refine and judge ``candidates`` against the model ``declared`` (None: the calibrated
     declared model; else it with an adopted effect at ``declared_values``) at ``nuisance``; the
     null test on each, the best that passes adopted (see the module text); if one is, which model
@@ -190,7 +204,10 @@ def attribute(rec: Records, judged: Records, declared: Effect | None, declared_v
     before). Fits weigh the residuals of ``rec`` (noise alone); the held-out judgement uses
     ``judged`` (the same records with the model discrepancy,
     :func:`~physics.loop.discrepancy.with_discrepancy`). Past ``deadline``
-    (:func:`time.monotonic`) the next candidate raises :class:`TimeLimit`."""
+    (:func:`time.monotonic`) the next candidate raises :class:`TimeLimit`. ``earlier``: the
+    candidates of a round judged against another calibration of the same model (a rerun from a
+    refitted calibration, :func:`physics.loop.fit.recalibrated`); each candidate keeps the
+    lower of its two fits on the train records, judged against this round's model."""
     settings = rec.settings
     base_train = model_signals(rec, rec.train, nuisance, declared, declared_values)
     base_test = model_signals(rec, rec.test, nuisance, declared, declared_values)
@@ -205,6 +222,7 @@ def attribute(rec: Records, judged: Records, declared: Effect | None, declared_v
     top = settings.refine
     ranking[:top] = each(lambda c: search(rec, effects[c.name], c, free_nuisance),
                          ranking[:top], "refining", progress, deadline)
+    ranking = lowest_fits(ranking, earlier)
     directions = free_directions(rec, nuisance, declared, declared_values, free_nuisance)
 
     def scored(c: Candidate) -> None:

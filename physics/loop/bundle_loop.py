@@ -228,7 +228,7 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
         judged = with_discrepancy(rec, nuisance)
         declared = Reader("the declared model", nuisance)
         first = attribute(rec, judged, None, {}, nuisance, free_nuisance, candidates,
-                          declared, progress)
+                          declared, progress, earlier=first.ranking)
     base_test = first.base_test  # the calibrated declared model's
     rounds = [first]
     eff = first.effects[first.best.name]

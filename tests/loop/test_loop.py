@@ -51,6 +51,7 @@ from physics.loop import (
     with_level,
     write_bundle,
 )
+from physics.loop.attribution import lowest_fits
 from physics.loop.fit import recalibrated
 from physics.params import scenario_from_config
 from physics.signals.order_analysis import (
@@ -480,6 +481,24 @@ def test_a_calibration_off_its_best_fit_is_moved_by_a_candidates_nuisance(clean_
     assert moved["damping_ratio"] == pytest.approx(best["damping_ratio"], rel=0.2)
     assert recalibrated(rec, moved, moved, free) is None
     assert recalibrated(rec, off, best, []) is None  # nothing free (a held calibration)
+
+
+def test_a_rerun_round_keeps_each_candidates_lower_fit():
+    """After a recalibration every candidate is fitted again from the new calibration; where
+    its fit of the earlier round is lower on the same train records, that one is kept (a
+    copy: its judgement is made afresh), matched by effect and option."""
+    def cand(name, option, rss):
+        return Candidate(name, option, {"x": rss}, {}, rss, 1, heldout=rss)
+
+    now = [cand("friction", {}, 10.0), cand("torque_ripple", {"order": 1}, 5.0),
+           cand("torque_ripple", {"order": 2}, 7.0)]
+    before = [cand("friction", {}, 8.0), cand("torque_ripple", {"order": 1}, 6.0),
+              cand("tip_relief", {}, 1.0)]
+    kept = lowest_fits(now, before)
+    assert [c.train_rss for c in kept] == [8.0, 5.0, 7.0]
+    assert kept[0] is not before[0] and kept[0] == before[0]
+    assert [c.name for c in kept] == ["friction", "torque_ripple", "torque_ripple"]
+    assert lowest_fits(now, ()) == now
 
 
 def test_calibration_finds_a_declared_support_mode(tmp_path):
