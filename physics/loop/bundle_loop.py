@@ -93,10 +93,12 @@ into its run folder.
    residuals that no linear combination of the free nuisance's directions reproduces (near 0: the
    declared model's own freedom makes the same change; a DTE sensor gain against a free stiffness
    level, whose lengths scale out of the equation of motion, is the exact case).
-   The null is the declared model's best fit: after an adoption the declared model is refitted
-   from the adopted candidate's nuisance (:func:`~physics.loop.fit.recalibrated`); where that
-   fits the train records better, it becomes the calibration and the round is judged again (a
-   candidate's gain can be a better basin of the nuisance that its joint fit reached).
+   The null is the declared model's best fit (:func:`best_null_round`): after an adoption the
+   declared model is refitted from the adopted candidate's nuisance
+   (:func:`~physics.loop.fit.recalibrated`); where that fits the train records better by more
+   than 1 % of the chi-square, it becomes the calibration and the round is judged again, each
+   candidate keeping its lowest fit, at most twice (a candidate's gain can be a better basin
+   of the nuisance that its joint fit reached).
    **Greedy second round** (:func:`~physics.loop.attribution.attribute` again): once an effect is
    adopted, every other effect is tried on the model that carries it
    (:func:`~physics.loop.attribution.stacked`, the first's parameters held at their fit, the
@@ -119,7 +121,7 @@ import time
 
 import numpy as np
 
-from physics.loop.attribution import attribute, candidates_for, second_candidates
+from physics.loop.attribution import Round, attribute, candidates_for, second_candidates
 from physics.loop.bundle import Bundle
 from physics.loop.comparison import (
     feature_error,
@@ -188,6 +190,51 @@ def assumed(bundle: Bundle, base: Scenario, nuisance: dict) -> dict:
 
 
 @one_blas_thread
+def best_null_round(rec: Records, nuisance: dict, free_nuisance: list[str],
+                    candidates: list, progress: bool = False
+                    ) -> tuple[Round, dict, Records, list[str], bool]:
+    """The first round judged against the declared model's best fit: where the declared model
+    refitted from an adopted candidate's nuisance (:func:`~physics.loop.fit.recalibrated`) fits
+    the train records better than ``nuisance``, the refit becomes the calibration and the round
+    is run again, each candidate keeping the lower of its fits
+    (:func:`~physics.loop.attribution.lowest_fits`), at most
+    :data:`~physics.loop.fit.MAX_RECALIBRATIONS` times. Returns the round, the calibration it
+    was judged against, the records with that calibration's discrepancy, the candidates whose
+    nuisance moved the calibration, and whether the cap left a better fit unused."""
+    refits: list[str] = []
+    earlier: list = []
+    while True:
+        judged = with_discrepancy(rec, nuisance)
+        first = attribute(rec, judged, None, {}, nuisance, free_nuisance, candidates,
+                          Reader("the declared model", nuisance), progress, earlier=earlier)
+        better = (recalibrated(rec, nuisance, first.best.nuisance, free_nuisance)
+                  if first.adopted else None)
+        if better is None or len(refits) == MAX_RECALIBRATIONS:
+            if better is not None:
+                log.warning("the declared model refitted from %s's nuisance fits better still; "
+                            "the cap of %d refits is reached: the adoption is judged against "
+                            "the last", first.best.name, MAX_RECALIBRATIONS)
+            return first, nuisance, judged, refits, better is not None
+        log.info("the declared model refitted from %s's nuisance fits the train records "
+                 "better than the calibration: the first round again from there",
+                 first.best.name)
+        refits.append(first.best.name)
+        nuisance, earlier = better, first.ranking
+
+
+def calibrated_on(held: bool, refits: list[str], capped: bool) -> str:
+    """What the report's calibration was fitted on (:func:`best_null_round`'s refits)."""
+    text = ("this unit's earliest records, held for the later ones" if held
+            else "the train records")
+    if refits:
+        text += (", then refitted from the nuisance of " + ", then of ".join(refits)
+                 + " (a better fit of the declared model; every candidate judged again)")
+    if capped:
+        text += (f"; after {MAX_RECALIBRATIONS} refits a further one would fit better still "
+                 "(not made: the adoption is judged against the last)")
+    return text
+
+
 def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = None,
              progress: bool = False, reference: FormReference | None = None) -> LoopReport:
     """The whole loop on one bundle; returns its report (see the module text). With a
@@ -209,26 +256,9 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
         rec, nuisance, free_nuisance = held(rec, reference.calibration)
     else:
         nuisance, free_nuisance = calibrate(rec, start)
-    judged = with_discrepancy(rec, nuisance)
+    first, nuisance, judged, refits, capped = best_null_round(rec, nuisance, free_nuisance,
+                                                              candidates, progress)
     declared = Reader("the declared model", nuisance)
-    first = attribute(rec, judged, None, {}, nuisance, free_nuisance, candidates, declared,
-                      progress)
-    refitted_from: list[str] = []  # the candidates whose nuisance moved the calibration
-    while first.adopted and len(refitted_from) < MAX_RECALIBRATIONS:
-        # the null test against the declared model's best fit: refit it from the adopted
-        # candidate's nuisance, and where that fits better, judge every candidate again
-        better = recalibrated(rec, nuisance, first.best.nuisance, free_nuisance)
-        if better is None:
-            break
-        log.info("the declared model refitted from %s's nuisance fits the train records "
-                 "better than the calibration: the first round again from there",
-                 first.best.name)
-        nuisance = better
-        refitted_from.append(first.best.name)
-        judged = with_discrepancy(rec, nuisance)
-        declared = Reader("the declared model", nuisance)
-        first = attribute(rec, judged, None, {}, nuisance, free_nuisance, candidates,
-                          declared, progress, earlier=first.ranking)
     base_test = first.base_test  # the calibrated declared model's
     rounds = [first]
     eff = first.effects[first.best.name]
@@ -291,10 +321,7 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
         wear_error_before_pct=wear_before.error if wear_before else None,
         wear_error_after_pct=wear_after.error if wear_after else None,
         calibration=nuisance,
-        calibrated_on=("this unit's earliest records, held for the later ones" if rec.held
-                       else "the train records" + "".join(
-                           f", refitted from the nuisance of {n} (a better fit of the declared "
-                           "model; every candidate judged again)" for n in refitted_from)),
+        calibrated_on=calibrated_on(rec.held, refits, capped),
         nuisance_after=after_nui,
         null_bic=first.null_bic,
         ranking=ranking,

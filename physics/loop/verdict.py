@@ -176,9 +176,9 @@ def summary_line(r: dict) -> str:
             "but the records carry what the declared model cannot explain. "
             + " ".join(parts) + (f". Closest candidates: {near}." if near else ".")
             + (" Against this unit's own earliest records the residual also holds the "
-               "declared model's error in the response to the wear since them, which those "
-               "records cannot show: an unexplained residual here may be the wear itself, "
-               "read otherwise by the model, as much as an undeclared effect." if own else ""))
+               "declared model's error in how the signature changes with the wear since them, "
+               "which those records cannot show: it may be that misprediction rather than an "
+               "undeclared effect." if own else ""))
 
 
 def unexplained_figure(report, out: Path) -> None:

@@ -496,7 +496,8 @@ def test_a_rerun_round_keeps_each_candidates_lower_fit():
               cand("tip_relief", {}, 1.0)]
     kept = lowest_fits(now, before)
     assert [c.train_rss for c in kept] == [8.0, 5.0, 7.0]
-    assert kept[0] is not before[0] and kept[0] == before[0]
+    assert kept[0] is not before[0] and kept[0].values == {"x": 8.0}
+    assert kept[1] is now[1] and kept[2] is now[2]
     assert [c.name for c in kept] == ["friction", "torque_ripple", "torque_ripple"]
     assert lowest_fits(now, ()) == now
 
@@ -765,3 +766,27 @@ def test_loop_names_the_undeclared_effect(tmp_path, scn, name):
     floor = rms(residuals(rec, rec.test, model_signals(rec, rec.test, truth["nuisance"],
                                                        EFFECTS[name], truth["values"])))
     assert report["error_after"] <= max(0.5 * report["error_before"], 1.1 * floor)
+
+
+def test_a_candidate_that_only_moves_the_nuisance_is_judged_against_the_refitted_null(
+        clean_records, scn, monkeypatch):
+    """A clean bundle whose calibration is left off its best fit (damping three times the
+    truth's): the candidate that takes the nuisance back is adopted against that calibration,
+    the declared model refitted from its nuisance replaces it, and against the refit nothing
+    is added; the report says the calibration was refitted."""
+    import physics.loop.bundle_loop as loop
+
+    rec, truth = clean_records
+    best = truth["nuisance"]
+    off = best | {"damping_ratio": 3.0 * best["damping_ratio"],
+                  "profile_error_um": 0.3 * best["profile_error_um"]}
+    free = ["damping_ratio", "profile_error_um", "housing_mass_kg"]
+    monkeypatch.setattr(loop, "calibrate", lambda r, start: (dict(off), list(free)))
+    settings = LoopSettings(seed=3, max_nfev=6, explore=8, refine=1, candidates=("friction",),
+                            detection_limits=False)
+    report = run_loop(rec.bundle, scn, settings)
+    assert report["calibrated_on"].startswith("the train records, then refitted from the "
+                                              "nuisance of friction")
+    assert report["verdict"] != "effect" and report["chosen_effect"] is None
+    cal = report["calibration"]
+    assert train_cost(rec, cal, None, {}) < 0.5 * train_cost(rec, off, None, {})

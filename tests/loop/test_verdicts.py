@@ -138,6 +138,6 @@ def test_an_unexplained_residual_against_own_first_records_names_the_wear_respon
             "unexplained": {"groups": {"g": {"lines": [], "entries": [
                 {"entry": "line_mesh1", "residual_db": -9.0, "z": -12.0}]}}, "closest": []}}
     held = summary_line(base | {"form_reference": {"calibration_held": True}})
-    assert "line_mesh1 (-9.0 dB, z -12.0)" in held and "response to the wear" in held
+    assert "line_mesh1 (-9.0 dB, z -12.0)" in held and "changes with the wear" in held
     for other in (base, base | {"form_reference": {"calibration_held": False}}):
-        assert "response to the wear" not in summary_line(other)
+        assert "changes with the wear" not in summary_line(other)
