@@ -136,7 +136,15 @@ from physics.loop.config import LoopSettings
 from physics.loop.declared import TORQUE, declared_modes, declared_nuisance
 from physics.loop.detection import detection_limits
 from physics.loop.discrepancy import entry_family, with_discrepancy
-from physics.loop.fit import MAX_RECALIBRATIONS, calibrate, held, recalibrated, screened
+from physics.loop.effects import Effect
+from physics.loop.fit import (
+    MAX_RECALIBRATIONS,
+    Candidate,
+    calibrate,
+    held,
+    recalibrated,
+    screened,
+)
 from physics.loop.form_error import FormReference
 from physics.loop.records import Records, prepare
 from physics.loop.report import LoopReport
@@ -189,9 +197,8 @@ def assumed(bundle: Bundle, base: Scenario, nuisance: dict) -> dict:
     return out
 
 
-@one_blas_thread
 def best_null_round(rec: Records, nuisance: dict, free_nuisance: list[str],
-                    candidates: list, progress: bool = False
+                    candidates: list[tuple[Effect, dict]], progress: bool = False
                     ) -> tuple[Round, dict, Records, list[str], bool]:
     """The first round judged against the declared model's best fit: where the declared model
     refitted from an adopted candidate's nuisance (:func:`~physics.loop.fit.recalibrated`) fits
@@ -202,7 +209,7 @@ def best_null_round(rec: Records, nuisance: dict, free_nuisance: list[str],
     was judged against, the records with that calibration's discrepancy, the candidates whose
     nuisance moved the calibration, and whether the cap left a better fit unused."""
     refits: list[str] = []
-    earlier: list = []
+    earlier: list[Candidate] = []
     while True:
         judged = with_discrepancy(rec, nuisance)
         first = attribute(rec, judged, None, {}, nuisance, free_nuisance, candidates,
@@ -235,6 +242,7 @@ def calibrated_on(held: bool, refits: list[str], capped: bool) -> str:
     return text
 
 
+@one_blas_thread
 def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = None,
              progress: bool = False, reference: FormReference | None = None) -> LoopReport:
     """The whole loop on one bundle; returns its report (see the module text). With a
