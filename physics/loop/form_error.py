@@ -20,9 +20,13 @@ sampling rate), the mean residual of each signature entry over all reference rec
 removes it from the measured signatures of the bundle
 under study, group by group, before the loop calibrates anything. What remains is the
 residual the declared model does not share with the reference gearbox: an undeclared effect,
-the two units' difference, the noise. Of the unit's own earliest records it also keeps their
-discrepancy about that mean (:attr:`FormReference.spread`): the same unit's form error without
-the effect, by which the loop judges an unexplained residual.
+the two units' difference, the noise. It also keeps the reference records' discrepancy about
+that mean (:attr:`FormReference.spread`): the declared model's scatter on clean records of the
+gearbox type, by which the loop judges an unexplained residual. The bundle's own train records
+cannot give it where an effect is present in all of them (it raises their scatter in its own
+entries); the reference's scatter does not hold the two units' difference beyond what the
+calibrated nuisance takes up, nor, for the unit's own earliest records, the declared model's
+error in how the signature changes with the wear since them.
 
 What it cannot do: remove a form error that depends on parameters in which the two units
 differ strongly (another mounting, another load spectrum), or see an effect that the
@@ -58,21 +62,17 @@ class FormReference:
     records: dict[tuple, int]  # reference records behind each group's mean
     gear: dict  # the reference bundle's gear overrides (the type both units must share)
     calibration: dict  # the reference's calibrated nuisance
+    #: per group, the discrepancy sd [dB] of each entry about the reference mean, estimated on
+    #: the reference records themselves (:func:`physics.loop.discrepancy.discrepancy_sd` of
+    #: their centred residuals)
+    spread: dict[tuple, np.ndarray]
     # what the reference is: a sister gearbox, or this unit's own earliest records
     # (:mod:`physics.loop.own_history`), with the records it holds
     source: str = "a sister gearbox"
     names: tuple[str, ...] = ()
-    #: per group, the discrepancy sd [dB] of each entry about the reference mean, estimated on
-    #: the reference records themselves (:func:`physics.loop.discrepancy.discrepancy_sd` of
-    #: their centred residuals); None for a sister unit, whose records say nothing of the two
-    #: units' difference
-    spread: dict[tuple, np.ndarray] | None = None
-
-    @property
-    def same_unit(self) -> bool:
-        """Whether the reference is this unit's own earliest records (then its
-        :attr:`calibration` is held for the later ones, :func:`physics.loop.fit.held`)."""
-        return self.spread is not None
+    #: whether the reference is this unit's own earliest records (then its :attr:`calibration`
+    #: is held for the later ones, :func:`physics.loop.fit.held`)
+    same_unit: bool = False
 
     def check(self, bundle: Bundle) -> None:
         """Refuse a bundle this reference cannot serve (:func:`check_reference`)."""
@@ -84,11 +84,9 @@ class FormReference:
         return dataclasses.replace(rec, measured=measured)
 
     def judging(self, rec: Records) -> Records:
-        """``rec`` with the discrepancy of the unit's own reference records (:attr:`spread`) in
-        place of the one estimated on ``rec``'s train records, which an effect present in all
-        of them inflates; ``rec`` itself for a sister unit's reference."""
-        if self.spread is None:
-            return rec
+        """``rec`` with the discrepancy of the reference records (:attr:`spread`) in place of
+        the one estimated on ``rec``'s train records, which an effect present in all of them
+        inflates."""
         return dataclasses.replace(rec, groups=[
             dataclasses.replace(g, discrepancy_sd=self.spread[g.key]) for g in rec.groups])
 
@@ -122,8 +120,8 @@ def form_reference(reference: Bundle, base: Scenario, settings: LoopSettings,
                    source: str = "a sister gearbox", same_unit: bool = False) -> FormReference:
     """Calibrate the declared model on ``reference`` (its train records, as the loop does) and
     average each group's residual over all its records; ``source`` says what the reference
-    is (for the report). ``same_unit`` (the unit's own earliest records): also the residuals'
-    discrepancy about that mean (:attr:`FormReference.spread`)."""
+    is (for the report), ``same_unit`` whether it is the unit's own earliest records. Also the
+    residuals' discrepancy about that mean (:attr:`FormReference.spread`)."""
     rec = prepare(reference, base, settings)
     start = declared_nuisance(base) | declared_modes(base)
     nuisance, _ = calibrate(rec, start)
@@ -131,10 +129,10 @@ def form_reference(reference: Bundle, base: Scenario, settings: LoopSettings,
     res = residuals_db(rec, idx, model_signals(rec, idx, nuisance, None, {}))
     offsets = {g.key: np.mean([res[i] for i in g.records], axis=0) for g in rec.groups}
     return FormReference(
-        offsets=offsets, spread=_spread(rec, res, offsets) if same_unit else None,
+        offsets=offsets, spread=_spread(rec, res, offsets),
         records={g.key: len(g.records) for g in rec.groups},
         gear=dict(reference.gear), calibration=nuisance, source=source,
-        names=tuple(reference.records))
+        names=tuple(reference.records), same_unit=same_unit)
 
 
 def _spread(rec: Records, res: list[np.ndarray], offsets: dict[tuple, np.ndarray]

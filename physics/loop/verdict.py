@@ -11,12 +11,12 @@ What the model cannot explain is looked for in two places:
   entry is unexplained where it exceeds the upper ``rate / (2 N)`` quantile of the normal in
   every held-out record of the group with one sign, ``N`` the entries of all groups
   (Bonferroni; a residual in dB of a line near the noise is heavy-tailed, one record alone can
-  lie far out, so the entry must persist as the lines must). The discrepancy is the one
-  estimated on the train records, where an effect present in all of them raises its family's
-  and is not found here (it cannot be told from form error on these records); against the
-  unit's own first records it is theirs, about their mean
-  (:meth:`physics.loop.form_error.FormReference.judging`): the same unit's form error without
-  the effect.
+  lie far out, so the entry must persist as the lines must). With a reference (a sister
+  unit's clean records or this unit's first ones) the discrepancy is the reference records',
+  about their mean (:meth:`physics.loop.form_error.FormReference.judging`): the declared
+  model's scatter on clean records of the gearbox type. Without one it is the bundle's own
+  train records', where an effect present in all of them raises its family's and is not found
+  here (it cannot be told from form error on these records).
 - **spectral lines** no declared order explains (:mod:`physics.loop.lines`), in every record.
 
 The candidates that came closest are the first three by held-out error, each with the null
@@ -171,14 +171,21 @@ def summary_line(r: dict) -> str:
                      f"{c['heldout_error']:.2f}; fails "
                      f"{', '.join(k for k, ch in c['checks'].items() if not ch['holds'])})"
                      for c in r["unexplained"]["closest"])
-    own = (r.get("form_reference") or {}).get("calibration_held")
+    ref = r.get("form_reference") or {}
+    caveat = ""
+    if ref.get("calibration_held"):
+        caveat = (" Against this unit's own earliest records the residual also holds the "
+                  "declared model's error in how the signature changes with the wear since "
+                  "them, which those records cannot show: it may be that misprediction rather "
+                  "than an undeclared effect.")
+    elif ref:
+        caveat = (" Against a sister unit the residual also holds the two units' difference "
+                  "beyond what the calibrated nuisance takes up: it may be that difference "
+                  "rather than an undeclared effect.")
     return ("**Verdict: unexplained residual.** No candidate of the library passes the null test, "
             "but the records carry what the declared model cannot explain. "
             + " ".join(parts) + (f". Closest candidates: {near}." if near else ".")
-            + (" Against this unit's own earliest records the residual also holds the "
-               "declared model's error in how the signature changes with the wear since them, "
-               "which those records cannot show: it may be that misprediction rather than an "
-               "undeclared effect." if own else ""))
+            + caveat)
 
 
 def unexplained_figure(report, out: Path) -> None:

@@ -49,6 +49,7 @@ from physics.loop import (
     signature_gain,
     split_records,
     stacked,
+    unexplained_entries,
     verdict_line,
     wear_check,
     wear_estimates,
@@ -579,15 +580,22 @@ def sister(tmp_path_factory, scn):
     return form_reference(read_bundle(path), scn, LoopSettings(**FAST))
 
 
-def test_a_sister_units_form_reference_removes_most_of_the_form_error(mixed, sister, scn):
+@pytest.fixture(scope="module")
+def against_sister(mixed, sister, scn):
+    """The ``mixed`` bundle less the sister unit's mean residual, and the declared model
+    calibrated on it."""
+    sub = sister.subtracted(mixed[0])
+    return sub, calibrate(sub, declared_nuisance(scn))[0]
+
+
+def test_a_sister_units_form_reference_removes_most_of_the_form_error(mixed, against_sister):
     """Two reasonable gear models differ by many noise units (the ``mixed`` bundle's
     calibrated declared model: several); a sister unit's mean residual, removed from the
     signatures, leaves what the two units do not share: the calibrated declared model, then
     refitted, misses the records by less than half as much in every group."""
     rec, nuisance = mixed
     every = np.arange(len(rec.models))
-    sub = sister.subtracted(rec)
-    refitted, _ = calibrate(sub, declared_nuisance(scn))
+    sub, refitted = against_sister
     before = group_errors(rec, every, model_signals(rec, every, nuisance, None, {}), False)
     after = group_errors(sub, every, model_signals(sub, every, refitted, None, {}), False)
     assert set(before) == {g.label for g in rec.groups}
@@ -607,10 +615,34 @@ def test_the_form_reference_moves_each_group_by_its_own_mean(mixed, sister):
     assert set(summary["records"]) == {g.label for g in rec.groups}
     assert all(n == 4 for n in summary["records"].values())  # four wear states per group
     assert all(v > 1.0 for v in summary["rms_offset_db"].values())  # the form error [dB]
-    # a sister unit's records say nothing of the two units' difference: the bundle's own
-    # discrepancy judges the unexplained residual
-    assert sister.spread is None and sister.judging(rec) is rec
+    # the sister's records' scatter about their mean judges the unexplained residual, in
+    # place of the bundle's train records' (which an effect in all of them would raise)
+    judged = sister.judging(rec)
+    assert all(np.array_equal(g.discrepancy_sd, sister.spread[g.key]) for g in judged.groups)
+    assert all(np.all(np.isfinite(d) & (d >= 0)) for d in sister.spread.values())
     assert not sister.same_unit and not summary["calibration_held"]  # another unit: recalibrated
+
+
+def test_an_offset_in_every_record_is_unexplained_against_the_sisters_scatter(
+        sister, against_sister):
+    """Every band of one group 10 dB above the model in every record (an effect present in
+    all of them): the bundle's own train records take it into their scatter and report no
+    band; the sister unit's records, clean, report every one."""
+    sub, nuisance = against_sister
+    g = sub.groups[-1]
+    bands = np.array([n.startswith("band") for n in g.names])
+    shifted = dataclasses.replace(sub, measured=[
+        m + 10.0 * bands if sub.group(i).key == g.key else m
+        for i, m in enumerate(sub.measured)])
+    own = with_discrepancy(shifted, nuisance)
+    model = model_signals(sub, sub.test, nuisance, None, {})
+
+    def bands_beyond(judged):
+        found = unexplained_entries(judged, sub.test, model, 0.01).get(g.label, [])
+        return sum(e["kind"] == "band" for e in found)
+
+    assert bands_beyond(own) == 0
+    assert bands_beyond(sister.judging(own)) == bands.sum() > 0
 
 
 def test_a_reference_that_cannot_serve_the_bundle_is_refused(mixed, sister):

@@ -130,14 +130,17 @@ def test_a_none_verdict_says_what_it_rests_on():
     assert "table's rows" in table and "train records" not in table
 
 
-def test_an_unexplained_residual_against_own_first_records_names_the_wear_response():
+def test_an_unexplained_residual_names_what_the_reference_cannot_show():
     """Against the unit's own earliest records (its calibration held) the line says that the
     model's response to the wear since them is part of the residual; against a sister unit,
-    or none, it does not."""
+    the two units' difference; without a reference, neither."""
     base = {"verdict": "unexplained_residual", "form_reference": None,
             "unexplained": {"groups": {"g": {"lines": [], "entries": [
                 {"entry": "line_mesh1", "residual_db": -9.0, "z": -12.0}]}}, "closest": []}}
     held = summary_line(base | {"form_reference": {"calibration_held": True}})
     assert "line_mesh1 (-9.0 dB, z -12.0)" in held and "changes with the wear" in held
-    for other in (base, base | {"form_reference": {"calibration_held": False}}):
-        assert "changes with the wear" not in summary_line(other)
+    assert "units' difference" not in held
+    sister = summary_line(base | {"form_reference": {"calibration_held": False}})
+    assert "units' difference" in sister and "changes with the wear" not in sister
+    alone = summary_line(base)
+    assert "changes with the wear" not in alone and "units' difference" not in alone
