@@ -86,9 +86,11 @@ class FormReference:
     def judging(self, rec: Records) -> Records:
         """``rec`` with the discrepancy of the reference records (:attr:`spread`) in place of
         the one estimated on ``rec``'s train records, which an effect present in all of them
-        inflates."""
+        inflates; in a group of one reference record (no scatter to measure) the train
+        records' is kept."""
         return dataclasses.replace(rec, groups=[
-            dataclasses.replace(g, discrepancy_sd=self.spread[g.key]) for g in rec.groups])
+            dataclasses.replace(g, discrepancy_sd=self.spread[g.key])
+            if self.records[g.key] >= 2 else g for g in rec.groups])
 
     def summary(self) -> dict:
         """For the report: each group's reference records and RMS mean residual [dB]."""
