@@ -139,13 +139,18 @@ def form_reference(reference: Bundle, base: Scenario, settings: LoopSettings,
 
 def _spread(rec: Records, res: list[np.ndarray], offsets: dict[tuple, np.ndarray]
             ) -> dict[tuple, np.ndarray]:
-    """Per group, the discrepancy sd [dB] of the reference records' residuals ``res`` about
-    their group's mean ``offsets`` (:func:`physics.loop.discrepancy.discrepancy_sd`); each
-    centred residual scaled by ``sqrt(n / (n - 1))``, the variance the mean of ``n`` took."""
+    """Per group, the discrepancy sd [dB] by which a record referred to the group's mean
+    ``offsets`` is judged: the reference records' discrepancy ``d`` about that mean
+    (:func:`physics.loop.discrepancy.discrepancy_sd` of the residuals ``res`` centred, each
+    scaled by ``sqrt(n / (n - 1))``, the variance the mean of ``n`` took), plus the error of
+    the mean itself, which every record referred to it shares: ``(d^2 + entry_sd^2) / n``.
+    A group of one record has no scatter to measure and enters no estimate (it gets the
+    pooled value; :meth:`FormReference.judging` does not use it)."""
     centred = []
     for g in rec.groups:
         n = len(g.records)
-        centred.append(np.array([res[i] - offsets[g.key] for i in g.records])
-                       * np.sqrt(n / max(n - 1, 1)))
+        rows = np.array([res[i] - offsets[g.key] for i in g.records]) * np.sqrt(n / max(n - 1, 1))
+        centred.append(rows if n >= 2 else rows[:0])
     sds = discrepancy_sd(rec.groups, centred, rec.settings.discrepancy_prior)
-    return {g.key: d for g, d in zip(rec.groups, sds, strict=True)}
+    return {g.key: np.sqrt(d**2 * (1 + 1 / len(g.records)) + g.entry_sd**2 / len(g.records))
+            for g, d in zip(rec.groups, sds, strict=True)}

@@ -625,14 +625,14 @@ def test_the_form_reference_moves_each_group_by_its_own_mean(mixed, sister):
 
 def test_an_offset_in_every_record_is_unexplained_against_the_sisters_scatter(
         sister, against_sister):
-    """Every band of one group 10 dB above the model in every record (an effect present in
+    """Every band of one group 15 dB above the model in every record (an effect present in
     all of them): the bundle's own train records take it into their scatter and report no
     band; the sister unit's records, clean, report every one."""
     sub, nuisance = against_sister
     g = sub.groups[-1]
     bands = np.array([n.startswith("band") for n in g.names])
     shifted = dataclasses.replace(sub, measured=[
-        m + 10.0 * bands if sub.group(i).key == g.key else m
+        m + 15.0 * bands if sub.group(i).key == g.key else m
         for i, m in enumerate(sub.measured)])
     own = with_discrepancy(shifted, nuisance)
     model = model_signals(sub, sub.test, nuisance, None, {})

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pandas as pd
@@ -21,7 +22,8 @@ from physics.loop import (
     split_history,
 )
 from physics.loop.fit import held, with_level
-from physics.loop.records import prepare
+from physics.loop.form_error import _spread
+from physics.loop.records import Group, prepare
 from physics.params import scenario_from_config
 from physics.testbeds import make_bundle
 
@@ -168,3 +170,29 @@ def test_a_pit_that_appears_during_the_life_is_written(tmp_path):
                            duration_s=0.3, onset=0.5)
     assert truth["with_effect"] == ["r02", "r03"]
     assert truth["effect_to_noise_db"] > -20
+
+
+def test_the_reference_scatter_holds_the_error_of_its_mean_and_ignores_single_records():
+    """A reference group of ``n`` records scattered about their mean by ``d`` (zero-mean
+    Gaussian offsets, noise ``e``): a record referred to that mean is off by ``d`` of its own
+    plus the mean's error, ``(d^2 + e^2) / n``. A group of one record, whose scatter cannot be
+    measured, leaves the other groups' estimate as it is."""
+    rng = np.random.default_rng(3)
+    n, m, d, e = 6, 400, 2.0, 0.5
+    names = [f"band{k:02d}" for k in range(m)]
+
+    def group(key, records):
+        return Group(key=key, records=np.asarray(records), names=names,
+                     entry_sd=np.full(m, e), discrepancy_sd=np.zeros(m))
+
+    res = [*(d * rng.standard_normal((n, m)) + e * rng.standard_normal((n, m))),
+           5.0 * rng.standard_normal(m)]
+    many = group((2000.0, 300.0, "accel_m_s2", 40960.0), range(n))
+    one = group((1800.0, 290.0, "accel_m_s2", 40960.0), [n])
+    offsets = {many.key: np.mean(res[:n], axis=0), one.key: res[n]}
+    settings = SimpleNamespace(discrepancy_prior=LoopSettings().discrepancy_prior)
+    alone = _spread(SimpleNamespace(groups=[many], settings=settings), res, offsets)
+    both = _spread(SimpleNamespace(groups=[many, one], settings=settings), res, offsets)
+    assert np.array_equal(alone[many.key], both[many.key])
+    expected = np.sqrt(d**2 * (1 + 1 / n) + e**2 / n)
+    assert np.median(alone[many.key]) == pytest.approx(expected, rel=0.1)
