@@ -62,9 +62,8 @@ class FormReference:
     records: dict[tuple, int]  # reference records behind each group's mean
     gear: dict  # the reference bundle's gear overrides (the type both units must share)
     calibration: dict  # the reference's calibrated nuisance
-    #: per group, the discrepancy sd [dB] of each entry about the reference mean, estimated on
-    #: the reference records themselves (:func:`physics.loop.discrepancy.discrepancy_sd` of
-    #: their centred residuals)
+    #: per group of two or more reference records, the discrepancy sd [dB] of each entry by
+    #: which a record referred to the reference mean is judged (:func:`_spread`)
     spread: dict[tuple, np.ndarray]
     # what the reference is: a sister gearbox, or this unit's own earliest records
     # (:mod:`physics.loop.own_history`), with the records it holds
@@ -90,7 +89,7 @@ class FormReference:
         records' is kept."""
         return dataclasses.replace(rec, groups=[
             dataclasses.replace(g, discrepancy_sd=self.spread[g.key])
-            if self.records[g.key] >= 2 else g for g in rec.groups])
+            if g.key in self.spread else g for g in rec.groups])
 
     def summary(self) -> dict:
         """For the report: each group's reference records and RMS mean residual [dB]."""
@@ -144,13 +143,10 @@ def _spread(rec: Records, res: list[np.ndarray], offsets: dict[tuple, np.ndarray
     (:func:`physics.loop.discrepancy.discrepancy_sd` of the residuals ``res`` centred, each
     scaled by ``sqrt(n / (n - 1))``, the variance the mean of ``n`` took), plus the error of
     the mean itself, which every record referred to it shares: ``(d^2 + entry_sd^2) / n``.
-    A group of one record has no scatter to measure and enters no estimate (it gets the
-    pooled value; :meth:`FormReference.judging` does not use it)."""
-    centred = []
-    for g in rec.groups:
-        n = len(g.records)
-        rows = np.array([res[i] - offsets[g.key] for i in g.records]) * np.sqrt(n / max(n - 1, 1))
-        centred.append(rows if n >= 2 else rows[:0])
-    sds = discrepancy_sd(rec.groups, centred, rec.settings.discrepancy_prior)
+    A group of one record has no scatter to measure: it enters no estimate and gets none."""
+    groups = [g for g in rec.groups if len(g.records) >= 2]
+    centred = [np.array([res[i] - offsets[g.key] for i in g.records])
+               * np.sqrt(len(g.records) / (len(g.records) - 1)) for g in groups]
+    sds = discrepancy_sd(groups, centred, rec.settings.discrepancy_prior)
     return {g.key: np.sqrt(d**2 * (1 + 1 / len(g.records)) + g.entry_sd**2 / len(g.records))
-            for g, d in zip(rec.groups, sds, strict=True)}
+            for g, d in zip(groups, sds, strict=True)}

@@ -644,7 +644,8 @@ def test_an_offset_in_every_record_is_unexplained_against_the_sisters_scatter(
     assert bands_beyond(own) == 0
     assert bands_beyond(sister.judging(own)) == bands.sum() > 0
     # one reference record in that group: no scatter measured, the train records' is kept
-    single = dataclasses.replace(sister, records=sister.records | {g.key: 1})
+    single = dataclasses.replace(sister, records=sister.records | {g.key: 1}, spread={
+        k: v for k, v in sister.spread.items() if k != g.key})
     kept = single.judging(own)
     assert kept.groups[-1] is own.groups[-1] and bands_beyond(kept) == 0
 
