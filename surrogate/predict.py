@@ -3,7 +3,8 @@
 ``input`` is a CSV or parquet table with the feature columns the model was trained on (their
 names and units are in the checkpoint; a missing one is refused, naming it). Every other column
 (labels, ids, the true wear, features the model does not read) passes through: ``output``
-(default: ``wear.csv`` in the run folder) gets them and ``<target>_pred`` (the
+(default: ``wear.csv`` in the run folder; never the input itself, and an existing file only with
+``overwrite=true``) gets them and ``<target>_pred`` (the
 model's wear: ``root_wear_mm`` or ``mean_wear_mm``), its standard deviation, the interval
 bounds, the ``novelty`` score and the ``out_of_range`` flag (:mod:`surrogate.novelty`); where
 more rows are flagged than of the training distribution, or the table's true wear (a column
@@ -23,6 +24,7 @@ From Python::
 from __future__ import annotations
 
 import logging
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -71,8 +73,30 @@ def gearbox_columns(value) -> tuple[str, ...]:
     return tuple(names)
 
 
+def check_output(output: Path, source: Path, overwrite: object) -> None:
+    """Refuse (ValueError, one line) an ``output`` that would replace a file: the input table
+    ``source`` (an existing file) itself, also through a link, always; another existing file
+    unless ``overwrite`` is true; a folder; a folder that cannot be written."""
+    if not isinstance(overwrite, bool):
+        raise ValueError(f"overwrite = {overwrite!r} is not a switch; give overwrite=true or "
+                         "overwrite=false")
+    if output.is_dir():
+        raise ValueError(f"output = {str(output)!r} is a folder; give a .csv file name")
+    if output.exists():
+        if os.path.samefile(output, source):
+            raise ValueError(f"output = {str(output)!r} is the input table itself (input = "
+                             f"{str(source)!r}): the predictions never replace their input; "
+                             "give another output file name")
+        if not overwrite:
+            raise ValueError(f"output = {str(output)!r} already exists: a file this run did "
+                             "not write is replaced only when asked; give another output file "
+                             "name, or pass overwrite=true to replace it")
+    check_writable(output.parent, "output")
+
+
 def prepare(cfg: DictConfig) -> PredictJob:
-    """Load and check the checkpoint and the table, and the output's folder, before any work."""
+    """Load and check the checkpoint and the table, and the output (:func:`check_output`),
+    before any work."""
     surrogate = Surrogate.load(cfg.ckpt)
     table = read_table(cfg.input)
     gearbox = gearbox_columns(cfg.get("gearbox"))
@@ -80,9 +104,7 @@ def prepare(cfg: DictConfig) -> PredictJob:
         check_gearboxes(table, list(gearbox), surrogate.schema.target, f"input = {cfg.input}")
     surrogate.schema.check(surrogate.schema.network_rows(table, list(gearbox)))
     output = Path(cfg.output)
-    if output.is_dir():
-        raise ValueError(f"output = {str(output)!r} is a folder; give a .csv file name")
-    check_writable(output.parent, "output")
+    check_output(output, Path(cfg.input), cfg.overwrite)
     return PredictJob(surrogate, table, output, gearbox)
 
 

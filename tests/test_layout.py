@@ -31,6 +31,7 @@ def modules() -> dict[str, Path]:
             parts = path.relative_to(ROOT).with_suffix("").parts
             name = ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
             out[name] = path
+    assert {"physics.params", "surrogate.predict"} <= set(out), f"no package found in {ROOT}"
     return out
 
 

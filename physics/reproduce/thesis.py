@@ -23,6 +23,10 @@ Film thickness, film ratio, asperity load ratio and Hertz pressure are reported 
 point of the unworn pair (single-tooth zone); average wear is the mean pinion wear depth over the
 active flank; ``total_wear_relative`` is the worn area of both flanks relative to the standard
 centre distance. Every value is computed; nothing is copied from the thesis.
+
+``record_hashes=true`` then records the sha256 of each table in
+``tests/reproduce/table_hashes.sha256`` of the repository checkout, the record that
+``tests/reproduce/test_reproduce_hashes.py`` compares the default run with.
 """
 
 from __future__ import annotations
@@ -45,7 +49,7 @@ from physics.dynamics.evolution import (
 )
 from physics.dynamics.model import build_model, simulate
 from physics.estimators.empirical_inverse import EmpiricalInverse, accuracy
-from physics.files import check_writable, write_csv
+from physics.files import check_writable, sha256_file, write_csv, write_text
 from physics.gear.contact import reduced_modulus
 from physics.gear.geometry import MeshGeometry
 from physics.gear.load_sharing import pair_loads
@@ -452,6 +456,9 @@ class ReproduceConfig(PhysicsConfig):
         default_factory=lambda: [-0.1, 0.0, 0.1])  # Table 6
     stiffness: StiffnessStudy = field(default_factory=StiffnessStudy)
     evolution: EvolutionStudy = field(default_factory=EvolutionStudy)
+    #: after the tables, record their sha256 in tests/reproduce/table_hashes.sha256 of the
+    #: checkout (HASH_RECORD): the default run only, from a repository checkout
+    record_hashes: bool = False
 
 
 @dataclass(frozen=True)
@@ -463,6 +470,7 @@ class ReproducePlan:
     lubricants: dict[str, Lubricant]
     thesis14: Path | None
     out: Path
+    record: Path | None = None  # where the tables' hashes are recorded (record_hashes=true)
 
 
 def _positive(name: str, values: list[float], whole: bool = False) -> None:
@@ -496,10 +504,68 @@ def _entry(key: str, value: float):
                          f"entry of {key}") from None
 
 
+#: the record of the default run's tables, in the repository checkout this package is run from
+#: (beside its pyproject.toml)
+HASH_RECORD = Path(__file__).resolve().parents[2] / "tests" / "reproduce" / "table_hashes.sha256"
+#: tables left out of the record: they follow thesis_tables=, not the physics
+UNRECORDED = frozenset({"estimator_accuracy.csv"})
+#: the keys that may be given with record_hashes=true: they change no recorded table
+RECORD_KEYS = frozenset({"record_hashes", "out_dir", "thesis_tables"})
+
+
+def table_hashes(folder: Path, names: list[str]) -> dict[str, str]:
+    """The sha256 of each table ``names`` (file names) in ``folder``, but the unrecorded ones."""
+    return {name: sha256_file(folder / name) for name in names if name not in UNRECORDED}
+
+
+def write_hash_record(record: Path, hashes: dict[str, str]) -> Path:
+    """Write ``hashes`` to ``record`` as ``sha256sum`` does (``<digest>  <name>``), sorted by
+    name, atomically."""
+    return write_text(record, "".join(f"{hashes[n]}  {n}\n" for n in sorted(hashes)))
+
+
+def _task_overrides() -> list[str] | None:
+    """The command line's overrides of this run (None outside a Hydra app)."""
+    from hydra.core.hydra_config import HydraConfig
+
+    try:
+        return list(HydraConfig.get().overrides.task)
+    except ValueError:  # HydraConfig not set
+        return None
+
+
+def _hash_record(cfg: DictConfig) -> Path | None:
+    """The record to write (``record_hashes=true``), checked: it is the default run's, so the
+    run must be the command's default one, run from a repository checkout."""
+    if not cfg.record_hashes:
+        return None
+    checkout = HASH_RECORD.parents[2]
+    if not (HASH_RECORD.parent.is_dir() and (checkout / "pyproject.toml").is_file()):
+        raise ValueError(f"record_hashes = true: the hashes are recorded in "
+                         f"tests/reproduce/{HASH_RECORD.name} of the repository checkout, and "
+                         f"this package is installed without it ({checkout} holds no "
+                         "pyproject.toml and tests/reproduce); run the command in a checkout "
+                         "installed with pip install -e .[dev], or drop record_hashes=true")
+    overrides = _task_overrides()
+    if overrides is None:
+        raise ValueError("record_hashes = true: the hashes are recorded by the command "
+                         "python -m physics.reproduce record_hashes=true only; call it so, or "
+                         "set record_hashes to false")
+    changed = [o for o in overrides if o.split("=")[0].lstrip("+~") not in RECORD_KEYS]
+    if changed:
+        raise ValueError(f"record_hashes = true with {' '.join(changed)}: the record holds the "
+                         "default run's tables, which the test compares with a default run; "
+                         f"drop {' '.join(changed)} (only {', '.join(sorted(RECORD_KEYS))} may "
+                         "be given with it)")
+    check_writable(HASH_RECORD.parent, "record_hashes")
+    return HASH_RECORD
+
+
 def prepare(cfg: DictConfig) -> ReproducePlan:
-    """Check the whole reproduction before any work: the output folder takes files, and every
-    scenario it will run is built and checked against the model's scope
-    (:func:`physics.scope.check_scope`)."""
+    """Check the whole reproduction before any work: the hash record (``record_hashes``), the
+    output folder takes files, and every scenario it will run is built and checked against the
+    model's scope (:func:`physics.scope.check_scope`)."""
+    record = _hash_record(cfg)
     check_writable(cfg.out_dir, "out_dir")
     scn = check_record(scenario_from_config(cfg))
     lubs = {lub.name: lub for lub in map(_lubricant_from_group, cfg.lubricants)}
@@ -540,7 +606,8 @@ def prepare(cfg: DictConfig) -> ReproducePlan:
     base = OmegaConf.to_container(cfg, resolve=True)
     for case in ev.cases:
         check_scenario(check_record(scenario_from_config({**base, "case": case})))
-    return ReproducePlan(cfg, scn, lubs, _thesis_table14(cfg.thesis_tables), Path(cfg.out_dir))
+    return ReproducePlan(cfg, scn, lubs, _thesis_table14(cfg.thesis_tables), Path(cfg.out_dir),
+                         record)
 
 
 def reproduce(cfg: DictConfig) -> dict[str, pd.DataFrame]:
@@ -598,4 +665,8 @@ def run(plan: ReproducePlan) -> dict[str, pd.DataFrame]:
     if mixed:
         plots.plot_ehl_pressure_film(ehl_profiles(scn, base), out / "ehl_pressure_film.png")
     log.info("wrote %d tables and wear_profile.png to %s", len(tables), out)
+    if plan.record is not None:
+        hashes = table_hashes(out, [f"{name}.csv" for name in tables])
+        write_hash_record(plan.record, hashes)
+        log.info("recorded the hashes of %d tables in %s", len(hashes), plan.record)
     return tables

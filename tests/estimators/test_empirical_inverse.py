@@ -81,7 +81,9 @@ def test_config_matches_the_published_coefficients():
                            / "thesis.yaml").read_text())
     table = pd.read_csv(REF / "table13_empirical_models_case3.csv")
     text = " ".join(table.expression)
-    for value in (*conf["p2p_cubic"], *conf["kurtosis_cubic"], *conf["wear_law_mm"]):
+    values = (*conf["p2p_cubic"], *conf["kurtosis_cubic"], *conf["wear_law_mm"])
+    assert len(values) == 12  # two cubics' four coefficients, the wear law's four
+    for value in values:
         assert f"{abs(value):g}".replace("e-07", "e-7") in text
 
 

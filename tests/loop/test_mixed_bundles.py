@@ -296,6 +296,7 @@ def test_wear_states_are_even_in_root_wear(mixed):
     # the lubricated law wears the root fastest while it runs in: states even in cycles left
     # no state between 0 and 6.9 um; even in wear, up to 1.2 times the most worn record
     rec, _ = mixed
+    assert len(rec.test) > 0
     for i in rec.test:
         wear = np.array([w for w, _ in rec.wear_states[i]])
         step = np.diff(wear)

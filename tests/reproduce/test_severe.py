@@ -18,7 +18,9 @@ def test_the_runs_are_the_documented_ones():
 def test_severe_dry_wear_of_both_pairs_stays_in_scope():
     """Over a hundred micrometres of flank wear under the dry law, quasi-static, on the thesis's
     pair and on a module-3 pair: finite pressures below the shakedown limit."""
-    for _, scn, _, integrate in severe.runs()[:2]:
+    runs = severe.runs()[:2]
+    assert len(runs) == 2
+    for _, scn, _, integrate in runs:
         row = severe.run_one(scn, 3e8, integrate)
         assert row["outcome"] == "in scope"
         assert row["pinion_max_um"] > 100 and row["p_max_GPa"] < 5.39

@@ -18,6 +18,8 @@ from physics.signals.order_analysis import (
 
 FS, FM = 40960.0, 600.0
 T = np.arange(4096) / FS  # 0.1 s, the dataset's records
+LEVELS = [f"mesh{k}_db" for k in MESH_ORDERS]
+PHASES = [f"mesh{k}_{f}" for k in MESH_ORDERS for f in ("cos", "sin")]
 
 
 def _record(amps: np.ndarray, phases: np.ndarray) -> np.ndarray:
@@ -43,6 +45,7 @@ def test_levels_ignore_the_records_gain_and_offset(gain, offset, seed):
     rng = np.random.default_rng(seed)
     x = _record(rng.uniform(0.1, 10.0, 6) * 1e-6, rng.uniform(0, 2 * np.pi, 6))
     a, b = mesh_harmonic_levels(x, FS, FM), mesh_harmonic_levels(gain * x + offset, FS, FM)
+    assert list(a) == list(b) == LEVELS
     for k in a:
         assert b[k] == pytest.approx(a[k], abs=1e-3)
 
@@ -52,7 +55,7 @@ def test_both_at_once_are_the_levels_and_the_phases():
     xs = np.stack([_record(rng.uniform(0.1, 10, 6), rng.uniform(0, 6, 6)) for _ in range(2)])
     both = mesh_harmonics(xs, FS, FM)
     apart = mesh_harmonic_levels(xs, FS, FM) | mesh_harmonic_phases(xs, FS, FM)
-    assert list(both) == list(apart)
+    assert list(both) == list(apart) and set(both) == {*LEVELS, *PHASES}
     assert all(np.array_equal(both[k], apart[k]) for k in both)
 
 
@@ -60,6 +63,7 @@ def test_a_batch_is_read_record_by_record():
     rng = np.random.default_rng(1)
     xs = np.stack([_record(rng.uniform(0.1, 10, 6), rng.uniform(0, 6, 6)) for _ in range(3)])
     batch = mesh_harmonic_levels(xs, FS, FM)
+    assert list(batch) == LEVELS
     for i, x in enumerate(xs):
         one = mesh_harmonic_levels(x, FS, FM)
         assert all(batch[k][i] == pytest.approx(one[k], abs=1e-4) for k in one)
@@ -101,6 +105,7 @@ def test_phases_ignore_the_records_gain_offset_and_start(gain, offset, delay, se
             for k, (a, q) in enumerate(zip(amps, p, strict=True)))
     a = mesh_harmonic_phases(x[:len(T)], FS, FM)
     b = mesh_harmonic_phases(gain * x[delay:] + offset, FS, FM)
+    assert list(a) == list(b) == PHASES
     for k in a:
         assert b[k] == pytest.approx(a[k], abs=2e-3)
 

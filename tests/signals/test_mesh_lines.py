@@ -68,6 +68,7 @@ def test_a_batch_with_its_own_start_phases_is_read_record_by_record():
     xs = np.stack([_record(rng.uniform(0.1, 10, 6), rng.uniform(0, 6, 6)) for _ in range(3)])
     starts = np.array([0.0, 1.0, -2.0])
     batch = mesh_lines(xs, FS, FM, starts)
+    assert list(batch) == [f"line{k}_{p}" for k in LINE_ORDERS for p in ("re", "im")]
     for i in range(3):
         one = mesh_lines(xs[i], FS, FM, starts[i])
         for name in batch:
@@ -80,6 +81,7 @@ def test_the_harmonics_levels_phases_and_lines_come_from_one_projection():
     both = mesh_harmonics(x, FS, FM, start_phase_rad=2 * np.pi * FM * 0.01)
     apart = mesh_harmonics(x, FS, FM) | mesh_lines(x, FS, FM, 2 * np.pi * FM * 0.01)
     assert list(both) == list(apart)
+    assert {f"line{k}_{p}" for k in LINE_ORDERS for p in ("re", "im")} <= set(both)
     assert all(np.array_equal(both[k], apart[k]) for k in both)
 
 
