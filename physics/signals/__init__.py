@@ -1,5 +1,7 @@
-"""Vibration signals (thesis 4.2): the Table 13 features, order analysis and the declared
-measurement chain (DTE, housing acceleration, noise). Imports ``physics.params`` and
+"""Vibration signals (thesis 4.2): the Table 13 features, the gear condition indicators of the
+time-synchronous average (FM0, FM4, NA4, M6A, M8A, energy ratio, sideband level; the function
+``physics.signals.indicators.indicators``), order analysis and the declared measurement chain
+(DTE, housing acceleration, noise). Imports ``physics.params`` and
 ``physics.dynamics``."""
 
 from __future__ import annotations
@@ -9,6 +11,9 @@ from physics.exports import lazy_exports
 #: the public names, by the module that defines each (imported on first use: physics.exports)
 _SOURCES = {
     "physics.signals.features": ("FEATURES", "DIMENSIONAL", "feature_units"),
+    "physics.signals.indicators": (
+        "INDICATORS", "indicator_units", "time_synchronous_average", "tsa_components", "na4",
+        "shaft_rate_from_spectrum"),
     "physics.signals.measurement": (
         "housing_acceleration", "sensed", "declared_chain", "transmissibility", "support_path",
         "housing_mount", "transfer_path", "add_noise"),
