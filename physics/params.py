@@ -349,6 +349,12 @@ class Dynamics:
       mounts' loss factor of 0.1-0.3 (Harris & Piersol, Shock and Vibration Handbook, 5th ed.,
       ch. 32: natural rubber and neoprene) is a damping ratio of 0.05-0.15; the loop fits it
       within 0.02-0.5.
+    - ``flank_contact`` "path": each pair's gap is its two flanks' wear (and form deviation)
+      summed at its point of the theoretical path, and a pair touches on that path only
+      (thesis 2.2). "exact": the rigid gap of the flanks as they are, on and off the path, tip
+      corners included, and the pairs before their entry and after their exit that can touch
+      (:mod:`physics.gear.tooth_contact`). "path" is the default while the datasets, tables and
+      the loop are made with it; ``rig_comparison.csv`` shows both.
     - ``stiffness_factor``, ``double_contact_factor``, ``resonance_factor`` 1: the model's form
       uncertainty (:mod:`physics.dynamics.model_form`): the mesh stiffness level, the
       double/single stiffness ratio and the mesh resonance relative to the declared model (the
@@ -392,6 +398,7 @@ class Dynamics:
     double_contact_factor: float = bounded(1.0, 0.0, 100.0, "double-contact stiffness over the "
                                            "declared one")
     resonance_factor: float = bounded(1.0, 0.0, 100.0, "mesh resonance over the declared one")
+    flank_contact: str = choice("path", "path", "exact")
 
     def __post_init__(self) -> None:
         validate_fields(self, "dynamics")

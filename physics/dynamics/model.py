@@ -53,6 +53,7 @@ from physics.dynamics.model_form import FACTORS, with_model_form
 from physics.gear.accuracy import form_deviation
 from physics.gear.geometry import MeshGeometry
 from physics.gear.stiffness import MeshStiffness, mesh_stiffness
+from physics.gear.tooth_contact import NO_CONTACT, PairGaps, clamped, pair_slots
 from physics.params import Dynamics, Scenario
 from physics.scope import check_scope
 
@@ -92,6 +93,11 @@ class PairModel:
     gear_modulation_phase: float = 0.0  # [rad]
     ripple_force: float = 0.0  # amplitude of the torque ripple as mesh force [N]
     omega_ripple: float = 0.0  # its angular frequency [rad/s]
+    # the pairs off the theoretical path that can touch (physics.gear.tooth_contact): the one
+    # before its entry, pair B past the end (0 while B is on the path), the one after it;
+    # stiffness and rigid gap (OFF_PATH, cells), drive flanks only. None: no off-path contact
+    k_off: np.ndarray | None = None  # [N/m]
+    g_off: np.ndarray | None = None  # [m]
 
     @property
     def omega_max(self) -> float:
@@ -127,6 +133,40 @@ class PairModel:
                 ones if self.lam_b is None else self.lam_b)
 
 
+def path_gaps(s_a: np.ndarray, s_b: np.ndarray, on_b: np.ndarray, s_grid: np.ndarray | None,
+              wear1: np.ndarray | None, wear2: np.ndarray | None
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """Gaps of pairs A and B as the thesis (2.2) has them: the two flanks' wear summed at the
+    pair's point of the theoretical path (``s_b`` is held at the end of the path) [m]."""
+    if wear1 is None and wear2 is None:
+        return np.zeros_like(s_a), np.zeros_like(s_a)
+    s_grid = np.asarray(s_grid, dtype=float)
+    total = (np.zeros_like(s_grid) if wear1 is None else wear1) + (
+        np.zeros_like(s_grid) if wear2 is None else wear2)
+    # B's gap past the end of the path holds its value there: the tables' interpolation ramps
+    # B's stiffness to 0 over one cell, and a gap that fell to 0 with it would close the
+    # flanks for that cell
+    return np.interp(s_a, s_grid, total), np.interp(s_b, s_grid, total)
+
+
+def exact_contact(ms: MeshStiffness, k_of, s_a: np.ndarray, on_b: np.ndarray,
+                  s_grid: np.ndarray | None, wear1: np.ndarray | None, wear2: np.ndarray | None):
+    """Gaps of pairs A and B and the off-path pairs' stiffness and gaps (``OFF_PATH`` rows)
+    from the tooth contact of the flanks as they are (:mod:`physics.gear.tooth_contact`): an
+    off-path pair's compliance is the pair's at the nearer end of the path."""
+    geom = ms.geometry
+    slots = pair_slots(geom, s_a)  # before entry, A, one ahead, two ahead
+    pair_gaps = PairGaps(geom, ms.forms, s_grid, wear1, wear2)
+    gaps = pair_gaps(slots)
+    k_slots = k_of(clamped(geom, slots).ravel()).reshape(slots.shape)
+    off = np.stack([slots[:, 0] < geom.s_start, ~on_b, np.ones_like(on_b)])
+    reach = (gaps[:, [0, 2, 3]].T < NO_CONTACT) & off
+    end = pair_gaps(np.array([geom.s_end]))[0]
+    return (gaps[:, 1], np.where(on_b, gaps[:, 2], end),  # B held at the end: path_gaps
+            np.where(reach, k_slots[:, [0, 2, 3]].T, 0.0),
+            np.where(reach, gaps[:, [0, 2, 3]].T, NO_CONTACT))
+
+
 def blank_inertia(radius: float, bore: float, width: float, density: float) -> float:
     """Polar moment of a solid steel disc between bore and radius [kg m^2]."""
     return 0.5 * math.pi * density * width * (radius**4 - bore**4)
@@ -145,19 +185,16 @@ def build_model(scn: Scenario, stiffness: MeshStiffness | None = None,
     k_of = ms.pair_function(s_grid, wear1, wear2)
     k_a = k_of(s_a)
     k_b = np.where(on_b, k_of(s_b), 0.0)
-    if wear1 is None and wear2 is None:
-        g_a = g_b = np.zeros(n_phase)
+    if dyn.flank_contact == "exact":
+        g_a, g_b, k_off, g_off = exact_contact(ms, k_of, s_a, on_b, s_grid, wear1, wear2)
     else:
-        s_grid = np.asarray(s_grid, dtype=float)
-        total = (np.zeros_like(s_grid) if wear1 is None else wear1) + (
-            np.zeros_like(s_grid) if wear2 is None else wear2)
-        g_a = np.interp(s_a, s_grid, total)
-        g_b = np.where(on_b, np.interp(s_b, s_grid, total), 0.0)
+        g_a, g_b = path_gaps(s_a, s_b, on_b, s_grid, wear1, wear2)
+        k_off = g_off = None
     if dyn.form_deviation_um > 0:  # the flank's form deviation, a gap like the wear's
         wave = (geom.s_start, geom.path_length, dyn.form_deviation_um, dyn.form_waves,
                 dyn.form_phase_rad)
         g_a = g_a + form_deviation(s_a, *wave)
-        g_b = np.where(on_b, g_b + form_deviation(s_b, *wave), 0.0)
+        g_b = g_b + form_deviation(s_b, *wave)  # s_b held at the end of the path
     rho, width = scn.material.density_kg_m3, g.face_width
     j1 = dyn.inertia1_kg_m2 or blank_inertia(geom.r1, g.bore_radius1_mm * 1e-3, width, rho)
     j2 = dyn.inertia2_kg_m2 or blank_inertia(geom.r2, g.bore_radius2_mm * 1e-3, width, rho)
@@ -170,6 +207,7 @@ def build_model(scn: Scenario, stiffness: MeshStiffness | None = None,
         long_error=dyn.eccentricity1_um * 1e-6 * math.sin(geom.alpha_w),
         short_error=dyn.profile_error_um * 1e-6, omega1=omega1, omega_mesh=omega1 * g.z1,
         roll_speed=geom.rb1 * omega1, k_a=k_a, k_b=k_b, g_a=g_a, g_b=g_b, inertias=(j1, j2),
+        k_off=k_off, g_off=g_off,
     )
     return with_model_form(declared, {f: getattr(dyn, f) for f in FACTORS})
 
@@ -336,9 +374,10 @@ def simulate(models: Sequence[PairModel] | PairModel, dyn: Dynamics,
     step0 = 0 if lead >= n_transient * dt else max(
         0, n_transient - max(math.ceil(lead / dt), (half - 1) * n_sub))
     par = np.stack([kernel_parameters(m) for m in models])
-    tables = np.stack([np.stack([m.k_a, m.k_b, m.g_a, m.g_b, *m.force_factors()])
+    tables = np.stack([np.concatenate([np.stack([m.k_a, m.k_b, m.g_a, m.g_b,
+                                                 *m.force_factors()]), off_path_rows(m)])
                        for m in models])
-    x0 = np.array([m.half_backlash + m.static_force / (m.k_a[0] + m.k_b[0]) for m in models])
+    x0 = np.array([static_deflection(m) for m in models])
     out = _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, dyn.phase_bins, half,
                      step0)
     dte_steps, force_steps, load_a, load_b, phase_sum, phase_count = out
@@ -351,17 +390,54 @@ def simulate(models: Sequence[PairModel] | PairModel, dyn: Dynamics,
     return Response(time, dte_steps, force_steps, load_a, load_b, by_phase, dt, n_sub)
 
 
-@numba.njit(cache=True, fastmath=True, inline="always")
-def _contact(k, u, half, c_v):
-    """Force of one pair: stiffness times the dead-zone deflection plus its share of damping.
+def static_deflection(m: PairModel) -> float:
+    """The static ``x`` at phase 0: ``sum_i k_i max(x - g_i - Delta_n, 0) = W0`` over the
+    pairs of the tables' first cell (off-path ones included), solved exactly (the engaged
+    pairs are those with the smallest gaps; piecewise linear): the start of every
+    integration, so that a worn pair starts in contact as it stands, not from an impact."""
+    off = off_path_rows(m)[:, 0]
+    k = np.concatenate([[m.k_a[0], m.k_b[0]], off[0::2]])
+    g = np.concatenate([[m.g_a[0], m.g_b[0]], off[1::2]])
+    order = np.argsort(g)
+    k, g = k[order], g[order]
+    for n in range(1, len(k) + 1):
+        stiff = k[:n].sum()
+        if stiff <= 0:
+            continue
+        x = (m.static_force + (k[:n] * g[:n]).sum()) / stiff
+        if n == len(k) or x <= g[n]:
+            return float(x + m.half_backlash)
+    raise ValueError("the tables' first cell has no pair that can carry the load")
 
-    The damping acts through the contact: nothing while the flanks are apart, and a contact
-    never pulls (drive flank >= 0, coast flank <= 0).
+
+def off_path_rows(m: PairModel) -> np.ndarray:
+    """The kernel's rows of the off-path pairs: stiffness and gap of each, interleaved
+    (``2 * OFF_PATH`` rows; zero stiffness where the model has none)."""
+    rows = np.empty((2 * OFF_PATH, len(m.k_a)))
+    rows[0::2] = 0.0 if m.k_off is None else m.k_off
+    rows[1::2] = NO_CONTACT if m.g_off is None else m.g_off
+    return rows
+
+
+#: off-path pairs in the kernel's tables (:func:`physics.gear.tooth_contact.pair_slots`)
+OFF_PATH = 3
+
+
+@numba.njit(cache=True, fastmath=True, inline="always")
+def _contact(k, x, g, half, c_v):
+    """Force of one pair at deflection ``x``: stiffness times the dead-zone deflection plus its
+    share of damping.
+
+    ``g`` is the pair's gap on its drive flanks (their wear and form deviation): it moves the
+    drive flanks' contact to ``x > half + g`` and leaves the coast flanks' at ``x < -half``
+    (the model follows the drive flanks' wear only; material worn off a drive flank widens the
+    backlash of that pair, it never closes it). The damping acts through the contact: nothing
+    while the flanks are apart, and a contact never pulls (drive flank >= 0, coast flank <= 0).
     """
-    if u > half:
-        return max(k * (u - half) + c_v, 0.0)
-    if u < -half:
-        return min(k * (u + half) + c_v, 0.0)
+    if x - g > half:
+        return max(k * (x - g - half) + c_v, 0.0)
+    if x < -half:
+        return min(k * (x + half) + c_v, 0.0)
     return 0.0
 
 
@@ -387,8 +463,8 @@ def _entry_shift(q, u_in):
 @numba.njit(cache=True, fastmath=True, inline="always")
 def _mesh_state(par, tab, pos, da, kf):
     """The pairs in contact at table position ``pos``: stiffness, gap and force factor of pair
-    A, pair B and an early-entering pair C (``k_c`` 0 without one), and the inverse of their
-    summed stiffness.
+    A, pair B and an early-entering pair C (``k_c`` 0 without one), and where the off-path
+    pairs' rows are read (cells ``i0``, ``i1``, fraction, stiffness factor).
 
     ``pos`` in [0, n) is the mesh phase in table cells; the tables are interpolated linearly and
     periodically. ``da`` is the centre-distance change [m] (gear run-out): it moves the ends of
@@ -423,32 +499,54 @@ def _mesh_state(par, tab, pos, da, kf):
             k_a = max(k_a + share * tab[0, j] * kf, 0.0)
         elif share > 0.0:  # it comes earlier, beside the pairs of the tables
             k_c, g_c, l_c = share * tab[0, j] * kf, tab[2, j], tab[4, j]
-    return k_a, k_b, k_c, g_a, g_b, g_c, l_a, l_b, l_c, 1.0 / (k_a + k_b + k_c)
+    return k_a, k_b, k_c, g_a, g_b, g_c, l_a, l_b, l_c, i0, i1, frac, kf
 
 
 @numba.njit(cache=True, fastmath=True, inline="always")
-def _mesh(par, st, x, v):
-    """Force factors and forces of the pairs in contact (``st``: :func:`_mesh_state`) at
-    deflection ``x`` and its rate ``v``. The mesh damping ``c`` is shared between the pairs by
-    stiffness."""
-    k_a, k_b, k_c, g_a, g_b, g_c, l_a, l_b, l_c, k_inv = st
-    c_v = par[DAMPING] * v * k_inv
-    f_a = _contact(k_a, x - g_a, par[HALF_BACKLASH], k_a * c_v)
-    f_b = _contact(k_b, x - g_b, par[HALF_BACKLASH], k_b * c_v)
+def _mesh(par, tab, st, x, v):
+    """Force factors and forces of the pairs (``st``: :func:`_mesh_state`) at deflection ``x``
+    and its rate ``v``: pairs A (with an early-entering C) and B, and the off-path pairs'
+    summed force (drive flanks only; factor 1). The mesh damping ``c`` is shared by stiffness
+    between the pairs in contact at ``x``: a pair whose flanks are apart carries none."""
+    k_a, k_b, k_c, g_a, g_b, g_c, l_a, l_b, l_c, i0, i1, frac, kf = st
+    half = par[HALF_BACKLASH]
+    coast = x < -half
+    engaged = 0.0
+    if coast or x - g_a > half:
+        engaged += k_a
+    if coast or x - g_b > half:
+        engaged += k_b
+    if k_c > 0.0 and (coast or x - g_c > half):
+        engaged += k_c
+    n_rows = tab.shape[0]
+    for row in range(6, n_rows, 2):
+        k_x = _lerp(tab, row, i0, i1, frac) * kf
+        if k_x > 0.0 and x - _lerp(tab, row + 1, i0, i1, frac) > half:
+            engaged += k_x
+    c_v = par[DAMPING] * v / engaged if engaged > 0.0 else 0.0
+    f_a = _contact(k_a, x, g_a, half, k_a * c_v)
+    f_b = _contact(k_b, x, g_b, half, k_b * c_v)
     if k_c > 0.0:
-        f_a += _contact(k_c, x - g_c, par[HALF_BACKLASH], k_c * c_v) * l_c / l_a
-    return l_a, l_b, f_a, f_b
+        f_a += _contact(k_c, x, g_c, half, k_c * c_v) * l_c / l_a
+    f_x = 0.0
+    if not coast:
+        for row in range(6, n_rows, 2):
+            k_x = _lerp(tab, row, i0, i1, frac) * kf
+            u = x - _lerp(tab, row + 1, i0, i1, frac) - half
+            if k_x > 0.0 and u > 0.0:
+                f_x += max(k_x * (u + c_v), 0.0)
+    return l_a, l_b, f_a, f_b, f_x
 
 
 @numba.njit(cache=True, fastmath=True, inline="always")
-def _accel(par, st, x, v, e_dd, w, inv_m):
+def _accel(par, tab, st, x, v, e_dd, w, inv_m):
     """x'' of the reduced model in mesh state ``st``, given e'' and the static force w there
     (``inv_m``: the inverse of the equivalent mass), and the mesh force.
 
     Each pair's force enters with its factor (1, or the sliding-friction moment factor).
     """
-    l_a, l_b, f_a, f_b = _mesh(par, st, x, v)
-    return (w - l_a * f_a - l_b * f_b) * inv_m - e_dd, f_a + f_b
+    l_a, l_b, f_a, f_b, f_x = _mesh(par, tab, st, x, v)
+    return (w - l_a * f_a - l_b * f_b - f_x) * inv_m - e_dd, f_a + f_b + f_x
 
 
 @numba.njit(cache=True, fastmath=True, inline="always")
@@ -526,9 +624,9 @@ def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins, half, ste
         st0 = _mesh_state(p, tab, pos, da0, kf0 * _pinion_factor(mu_c, mu_s, s1, c1))
         for step in range(step0, total + 1):
             # the mesh at (t, x) serves both the record of the state reached and stage 1 of RK4
-            l_a, l_b, f_a, f_b = _mesh(p, st0, x, v)
+            l_a, l_b, f_a, f_b, f_x = _mesh(p, tab, st0, x, v)
             k = step - n_transient
-            f = f_a + f_b
+            f = f_a + f_b + f_x
             recorded = k_first <= k <= k_last
             if recorded:
                 dte[j, k - k_first] = x
@@ -554,15 +652,15 @@ def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins, half, ste
             e0 = x0e - (a_l * s1 + a_s * s2)
             eh = xhe - (a_l * s1h + a_s * s2h)
             e1 = x1e - (a_l * s1n + a_s * s2n)
-            a1 = (w0 - l_a * f_a - l_b * f_b) * inv_m - e0
+            a1 = (w0 - l_a * f_a - l_b * f_b - f_x) * inv_m - e0
             pos_h = _wrap(pos + 0.5 * inc, n_tab)
             pos_1 = _wrap(pos + inc, n_tab)
             st_h = _mesh_state(p, tab, pos_h, dah, kfh * _pinion_factor(mu_c, mu_s, s1h, c1h))
             st1 = _mesh_state(p, tab, pos_1, da1, kf1 * _pinion_factor(mu_c, mu_s, s1n, c1n))
-            a2, f2 = _accel(p, st_h, x + 0.5 * dt * v, v + 0.5 * dt * a1, eh, wh, inv_m)
-            a3, f3 = _accel(p, st_h, x + 0.5 * dt * (v + 0.5 * dt * a1), v + 0.5 * dt * a2, eh,
+            a2, f2 = _accel(p, tab, st_h, x + 0.5 * dt * v, v + 0.5 * dt * a1, eh, wh, inv_m)
+            a3, f3 = _accel(p, tab, st_h, x + 0.5 * dt * (v + 0.5 * dt * a1), v + 0.5 * dt * a2, eh,
                             wh, inv_m)
-            a4, f4 = _accel(p, st1, x + dt * (v + 0.5 * dt * a2), v + dt * a3, e1, w1, inv_m)
+            a4, f4 = _accel(p, tab, st1, x + dt * (v + 0.5 * dt * a2), v + dt * a3, e1, w1, inv_m)
             if recorded:
                 force[j, k - k_first] = (f + 2.0 * (f2 + f3) + f4) / 6.0
             x += dt * (v + dt * (a1 + a2 + a3) / 6.0)
@@ -609,7 +707,8 @@ def simulate_two_dof(model: PairModel, t_eval: np.ndarray, rtol: float = 1e-9,
     j1, j2 = m.inertias
     rb1, rb2, n = geom.rb1, geom.rb2, len(m.k_a)
     cells = np.arange(n + 1)
-    tables = [np.append(a, a[0]) for a in (m.k_a, m.k_b, m.g_a, m.g_b)]
+    rows = off_path_rows(m)
+    tables = [np.append(a, a[0]) for a in (m.k_a, m.k_b, m.g_a, m.g_b, *rows)]
 
     def error(t):
         return (m.long_error * np.sin(m.omega1 * t), m.long_error * m.omega1
@@ -621,15 +720,22 @@ def simulate_two_dof(model: PairModel, t_eval: np.ndarray, rtol: float = 1e-9,
         x = rb1 * th1 - rb2 * th2 - el - es
         v = rb1 * w1 - rb2 * w2 - eld - esd
         pos = np.mod(m.roll_speed * t, geom.base_pitch) / geom.base_pitch * n
-        k_a, k_b, g_a, g_b = (np.interp(pos, cells, tab) for tab in tables)
-        dz, k_sum = m.half_backlash, k_a + k_b
+        k_a, k_b, g_a, g_b, *off = (np.interp(pos, cells, tab) for tab in tables)
+        dz = m.half_backlash
+        pairs = [(k_a, g_a, True), (k_b, g_b, True)] + [
+            (off[2 * i], off[2 * i + 1], False) for i in range(OFF_PATH)]
+        # the damping shared by stiffness among the pairs in contact
+        engaged = sum(np.where((x - g > dz) | (coast & (x < -dz)), k, 0.0)
+                      for k, g, coast in pairs)
+        c_v = np.where(engaged > 0, m.damping * v / np.where(engaged > 0, engaged, 1.0), 0.0)
 
-        def pair(k, u):
-            c_v = m.damping * v * k / k_sum
-            return np.where(u > dz, np.maximum(k * (u - dz) + c_v, 0.0),
-                            np.where(u < -dz, np.minimum(k * (u + dz) + c_v, 0.0), 0.0))
+        def pair(k, g, coast):
+            drive = np.where(x - g > dz, np.maximum(k * (x - g - dz + c_v), 0.0), 0.0)
+            if not coast:
+                return drive
+            return np.where(x < -dz, np.minimum(k * (x + dz + c_v), 0.0), drive)
 
-        return x, pair(k_a, x - g_a) + pair(k_b, x - g_b)
+        return x, sum(pair(*p) for p in pairs)
 
     def rhs(t, y):
         th1, th2, w1, w2 = y

@@ -68,8 +68,9 @@ def with_model_form(m, v: dict):
     stiffer = float(np.mean(k_a + k_b)) / float(np.mean(m.k_a + m.k_b))
     s_m = stiffer / f_r**2
     j1, j2 = m.inertias
+    k_off = None if m.k_off is None else m.k_off * r * s_k  # off-path: where two pairs touch
     return dataclasses.replace(
-        m, k_a=k_a, k_b=k_b, mass=m.mass * s_m, inertias=(j1 * s_m, j2 * s_m),
+        m, k_a=k_a, k_b=k_b, k_off=k_off, mass=m.mass * s_m, inertias=(j1 * s_m, j2 * s_m),
         damping=m.damping * math.sqrt(stiffer * s_m),
         half_backlash=m.half_backlash if backlash is None else float(backlash) * 1e-6)
 
@@ -84,9 +85,10 @@ def revolution_tables(m):
     if m.periods != 1:
         raise ValueError(f"tables of {m.periods} mesh periods: one period or one pinion "
                          f"revolution ({z1} periods) expected")
-    names = [k for k in ("k_a", "k_b", "g_a", "g_b", "lam_a", "lam_b")
+    names = [k for k in ("k_a", "k_b", "g_a", "g_b", "lam_a", "lam_b", "k_off", "g_off")
              if getattr(m, k) is not None]
-    return dataclasses.replace(m, periods=z1, **{k: np.tile(getattr(m, k), z1) for k in names})
+    return dataclasses.replace(m, periods=z1, **{k: np.tile(getattr(m, k), (1,) * (getattr(
+        m, k).ndim - 1) + (z1,)) for k in names})
 
 
 def with_modulation(m, v: dict):

@@ -1,7 +1,8 @@
 """Gear geometry and elasticity (thesis 2.1-2.3, 3.1-3.2): line of action, kinematics, the
 rack-generated tooth, Hertz line contact, potential-energy mesh stiffness of worn teeth, its
-finite-element check, double-tooth load sharing, and the manufacturing tolerances of an
-accuracy grade. Imports numpy/scipy and ``physics.params``."""
+finite-element check, double-tooth load sharing, the tooth contact of flanks of any shape on and
+off the path, and the manufacturing tolerances of an accuracy grade. Imports numpy/scipy and
+``physics.params``."""
 
 from __future__ import annotations
 
@@ -24,6 +25,9 @@ _SOURCES = {
         "MeshStiffness", "SainsotRangeWarning", "ToothCompliances", "sainsot_coefficients",
         "iso6336_single_pair_stiffness", "mesh_stiffness"),
     "physics.gear.tooth": ("ToothForm", "generate_tooth"),
+    "physics.gear.tooth_contact": (
+        "PairGaps", "WornFlank", "worn_flank", "flank_coordinate", "LoadedContact",
+        "loaded_contact", "share_load", "pair_slots", "clamped", "NO_CONTACT"),
     "physics.gear.tooth_fem": ("FEResult", "fe_pair_stiffness"),
 }
 __all__, __getattr__, __dir__ = lazy_exports(__name__, _SOURCES)

@@ -185,8 +185,12 @@ class MeshStiffness:
         if np.any(wear < 0) or not np.all(np.isfinite(wear)):
             raise ValueError("wear depths must be finite and >= 0 (negative wear adds material)")
         radius = self.geometry.flank_radii(s)[wheel - 1]
-        order = np.argsort(radius)
-        depth = np.interp(form.radius, radius[order], wear[order], left=0.0, right=0.0)
+        # the grid may reach below this wheel's involute (a fillet's wear, continued by arc
+        # length: physics.gear.tooth_contact.flank_coordinate); its involute part is mapped here
+        R = self.geometry.curvature_radii(s)[wheel - 1]
+        on = R >= 0
+        order = np.argsort(radius[on])
+        depth = np.interp(form.radius, radius[on][order], wear[on][order], left=0.0, right=0.0)
         return depth / form.nx
 
     def tooth(self, wheel: int, radius: np.ndarray, cumulative: _Cumulative | None = None

@@ -1,5 +1,6 @@
 """Tribology of the tooth contact: Hertz contact, lubrication (regressions and the numerical
-mixed-EHL solver), flash temperature, contact state, wear. Imports numpy/scipy and
+mixed-EHL solver), flash temperature, contact state, wear (on the path, and driven by the tooth
+contact of the flanks as they are). Imports numpy/scipy and
 physics.params/physics.gear only."""
 
 from __future__ import annotations
@@ -13,6 +14,8 @@ _SOURCES = {
     "physics.tribology.calibration": (
         "THESIS_WEAR_COEFF", "calibrate_wear_coeff", "root_wear", "total_load_coefficient"),
     "physics.tribology.contact_state": ("ContactState", "solve_contact_state"),
+    "physics.tribology.contact_wear": (
+        "ContactWear", "simulate_contact_wear", "wear_per_cycle", "whole_flank_grid"),
     "physics.tribology.lubrication": (
         "viscosity", "density", "roelands_exponents", "dimensionless_groups", "min_film_thickness",
         "asperity_load_ratio_pct"),
