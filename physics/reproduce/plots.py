@@ -146,3 +146,26 @@ def plot_ehl_pressure_film(solutions: dict[str, EHLSolution], path: Path) -> Non
     fig.tight_layout()
     save_figure(fig, path)
     plt.close(fig)
+
+
+def plot_table15(table: pd.DataFrame, path: Path) -> None:
+    """Table 15's rises against induced root wear: measured (where given), one tooth, all."""
+    plt = pyplot()
+    names = list(dict.fromkeys(table["feature"]))
+    fig, axes = plt.subplots(1, len(names), figsize=(3.2 * len(names), 3.2))
+    for ax, name in zip(np.atleast_1d(axes), names, strict=True):
+        df = table[table["feature"] == name]
+        um = df["wear_mm"] * 1e3
+        for col, style, label in (("rise_measured", "ko-", "measured (thesis Table 15)"),
+                                  ("rise_one_tooth", "s--", "model, one tooth"),
+                                  ("rise_all_teeth", "^-", "model, every tooth")):
+            if df[col].notna().any():
+                ax.plot(np.r_[0, um], np.r_[1.0, df[col]], style, label=label)
+        ax.set_title(name.replace("_", " "))
+        ax.set_xlabel("pinion root wear [um]")
+        ax.set_yscale("log")
+        ax.grid(alpha=0.3)
+    np.atleast_1d(axes)[0].set_ylabel("over the new pair's")
+    np.atleast_1d(axes)[0].legend(fontsize=7)
+    save_figure(fig, path)
+    plt.close(fig)

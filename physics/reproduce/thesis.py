@@ -64,6 +64,7 @@ from physics.params import (
     scenario_from_config,
 )
 from physics.reproduce import plots
+from physics.reproduce.localised import table15_model
 from physics.scope import check_record, check_scope
 from physics.signals.features import features
 from physics.tribology.asperity_table import check_scenario
@@ -649,6 +650,8 @@ def run(plan: ReproducePlan) -> dict[str, pd.DataFrame]:
         tables[f"table12_evolution_fits_case{case}"] = df
     base = simulate_wear(scn, cycles)
     tables["wear_profile"] = wear_profile_frame(base)
+    tables["table15_model"] = table15_model(
+        scn, base, None if plan.thesis14 is None else plan.thesis14.parent)
     mixed = scn.tribology.regime == "mixed"
     regression = (simulate_wear(_with(scn, "tribology", asperity_model="regression"), 0.0)
                   if mixed and scn.tribology.asperity_model == "solver" else None)
@@ -662,6 +665,7 @@ def run(plan: ReproducePlan) -> dict[str, pd.DataFrame]:
                             scn.dynamics.sample_rate_hz, out / "dte_spectrum.png")
     plots.plot_wear_evolution(tables["wear_evolution"], out / "wear_evolution.png")
     plots.plot_feature_trends(tables["table14_dte_features_case3"], out / "feature_trends.png")
+    plots.plot_table15(tables["table15_model"], out / "table15_model.png")
     if mixed:
         plots.plot_ehl_pressure_film(ehl_profiles(scn, base), out / "ehl_pressure_film.png")
     log.info("wrote %d tables and wear_profile.png to %s", len(tables), out)

@@ -1,0 +1,81 @@
+"""Table 15 by the model alone: pinion-root wear on one tooth and on every tooth.
+
+The thesis's only measurement (4.3, Table 15) is the housing acceleration of its rig with wear
+"induced" at the pinion root, 5, 10 and 15 um; it does not say on how many teeth. Here the
+thesis pair at the reproduction's operating point (case 3 by default) carries that root wear on
+pinion tooth 0 alone and, beside it, on every pinion tooth (the gear unworn), with the contact of
+the flanks as they are (``dynamics.flank_contact = "exact"``) and each pinion tooth its own
+flank over whole revolutions (:func:`physics.dynamics.teeth.per_tooth_model`). The induced wear's
+shape along the flank is the model's own pinion wear (the reproduction's base run) scaled to
+its root depth. Each feature of the rigid-housing acceleration
+(:func:`physics.signals.measurement.housing_acceleration`; RMS, peak-to-peak, Pearson's
+kurtosis) is divided by the new pair's, beside the measured rises when the thesis's tables are
+given.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from physics.dynamics.model import build_model, simulate
+from physics.dynamics.teeth import per_tooth_model
+from physics.gear.stiffness import mesh_stiffness
+from physics.params import Scenario
+from physics.signals.features import features
+from physics.signals.measurement import housing_acceleration
+from physics.tribology.wear import WearResult
+
+#: the root depths the thesis's rig was given (4.3) [um]
+DEPTHS_UM = (5.0, 10.0, 15.0)
+#: the features compared, and their columns in the thesis's Table 15 CSV
+FEATURES = {"rms": "rms_m_per_s2", "peak_to_peak": "peak_to_peak_m_per_s2",
+            "kurtosis": "kurtosis"}
+#: whole pinion revolutions in each record
+REVOLUTIONS = 10
+MEASURED_TABLE = "table15_measured_acceleration_features.csv"
+
+
+def measured_rises(folder: Path | None) -> pd.DataFrame | None:
+    """Table 15's features over its new-gear row, from the thesis's tables folder (None: not
+    given)."""
+    if folder is None:
+        return None
+    table = pd.read_csv(folder / MEASURED_TABLE)
+    new = table.loc[table["wear_mm"] == 0].iloc[0]
+    return pd.DataFrame({"wear_mm": table["wear_mm"],
+                         **{f: table[c] / new[c] for f, c in FEATURES.items()}})
+
+
+def table15_model(scn: Scenario, base: WearResult, thesis_tables: Path | None) -> pd.DataFrame:
+    """One row per depth and feature: ``wear_mm``, ``feature``, ``rise_measured`` (NaN without
+    the thesis's tables), ``rise_one_tooth``, ``rise_all_teeth`` (module doc)."""
+    dyn = dataclasses.replace(scn.dynamics, flank_contact="exact",
+                              duration_s=REVOLUTIONS * 60.0 / scn.operating.n1_rpm)
+    scn = dataclasses.replace(scn, dynamics=dyn)
+    ms = mesh_stiffness(scn.gear, scn.material)
+    shape = base.pinion / base.pinion.max()
+    z1 = scn.gear.z1
+    new = build_model(scn, ms)
+    models = [per_tooth_model([new] * z1)]
+    for depth in DEPTHS_UM:
+        worn = build_model(scn, ms, base.s, shape * depth * 1e-6, np.zeros_like(shape))
+        models += [per_tooth_model([worn] + [new] * (z1 - 1)), per_tooth_model([worn] * z1)]
+    force = simulate(models, dyn, every_phase=False).force
+    values = features(housing_acceleration(force, dyn.housing_mass_kg))
+    measured = measured_rises(thesis_tables)
+    rows = []
+    for i, depth in enumerate(DEPTHS_UM):
+        wear_mm = depth * 1e-3
+        for name in FEATURES:
+            v = values[name]
+            hit = (None if measured is None else
+                   measured.loc[np.isclose(measured["wear_mm"], wear_mm), name])
+            rows.append({"wear_mm": wear_mm, "feature": name,
+                         "rise_measured": np.nan if hit is None or hit.empty else hit.iloc[0],
+                         "rise_one_tooth": v[1 + 2 * i] / v[0],
+                         "rise_all_teeth": v[2 + 2 * i] / v[0]})
+    return pd.DataFrame(rows)

@@ -1,0 +1,94 @@
+"""Each pinion tooth its own flank (physics.dynamics.teeth): a uniform set of teeth is the
+one-period model, one worn tooth repeats once per revolution, and Table 15 by the model."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from physics.dynamics.model import build_model, simulate
+from physics.dynamics.teeth import per_tooth_model
+from physics.gear.stiffness import mesh_stiffness
+from physics.params import Scenario
+from physics.reproduce.localised import FEATURES, table15_model
+from physics.tribology.wear import simulate_wear
+
+THESIS_TABLES = Path(__file__).resolve().parents[3] / "shared" / "reference" / "thesis_tables"
+
+
+def _scn(contact: str, revolutions: float = 2.0, eccentricity_um: float = 7.5) -> Scenario:
+    base = Scenario()
+    return dataclasses.replace(base, dynamics=dataclasses.replace(
+        base.dynamics, flank_contact=contact, duration_s=revolutions * 60 / 2000,
+        eccentricity1_um=eccentricity_um))
+
+
+@pytest.fixture(scope="module")
+def worn_state():
+    scn = Scenario()
+    res = simulate_wear(scn, 1e6)
+    return res.s, res.pinion / res.pinion.max() * 10e-6
+
+
+@pytest.mark.parametrize("contact", ["path", "exact"])
+def test_a_uniform_set_of_teeth_is_the_one_period_model(contact, worn_state):
+    scn = _scn(contact)
+    ms = mesh_stiffness(scn.gear, scn.material)
+    s, w1 = worn_state
+    one = build_model(scn, ms, s, w1, np.zeros_like(w1))
+    tiled = per_tooth_model([one] * scn.gear.z1)
+    assert tiled.periods == scn.gear.z1 and len(tiled.k_a) == scn.gear.z1 * len(one.k_a)
+    a, b = simulate([one], scn.dynamics), simulate([tiled], scn.dynamics)
+    np.testing.assert_allclose(b.force, a.force, rtol=1e-9, atol=1e-9 * one.static_force)
+
+
+def test_one_worn_tooth_repeats_once_per_revolution(worn_state):
+    """All teeth worn alike excite the mesh orders only; one worn tooth adds the shaft orders
+    around them (its sidebands), what a synchronous average reads (no run-out here: it makes
+    shaft orders of its own)."""
+    scn = _scn("exact", revolutions=5, eccentricity_um=0.0)  # 6144 samples: whole revolutions
+    ms = mesh_stiffness(scn.gear, scn.material)
+    s, w1 = worn_state
+    new = build_model(scn, ms)
+    worn = build_model(scn, ms, s, w1, np.zeros_like(w1))
+    z1 = scn.gear.z1
+    models = [per_tooth_model([worn] * z1), per_tooth_model([worn] + [new] * (z1 - 1))]
+    force = simulate(models, scn.dynamics, every_phase=False).force
+    force -= force.mean(axis=1, keepdims=True)
+    spectrum = np.abs(np.fft.rfft(force, axis=1))  # 5 revolutions: shaft order k at bin 5 k
+    shaft = spectrum[:, 5 * np.arange(1, 3 * z1)]
+    mesh_orders = np.arange(1, 3 * z1) % z1 == 0
+    energy = (shaft[:, ~mesh_orders] ** 2).sum(axis=1) / (shaft[:, mesh_orders] ** 2).sum(axis=1)
+    assert energy[0] < 1e-5  # the tables' grid leaves a trace
+    assert energy[1] > 1e-4
+
+
+def test_a_tooth_count_that_is_not_the_pinions_is_refused():
+    scn = _scn("path")
+    m = build_model(scn, mesh_stiffness(scn.gear, scn.material))
+    with pytest.raises(ValueError, match="17 tooth models for a pinion of 18 teeth"):
+        per_tooth_model([m] * 17)
+
+
+def test_table15_by_the_model(worn_state):
+    """Root wear on every tooth raises the housing RMS with its depth; on one tooth less; the
+    measured rises come from the thesis's table when it is given, NaN otherwise."""
+    scn = Scenario()
+    base = simulate_wear(scn, 1e6)
+    given = THESIS_TABLES if THESIS_TABLES.is_dir() else None
+    table = table15_model(scn, base, given)
+    assert list(table.columns) == ["wear_mm", "feature", "rise_measured", "rise_one_tooth",
+                                   "rise_all_teeth"]
+    assert len(table) == 3 * len(FEATURES)
+    rms = table[table["feature"] == "rms"]
+    assert np.all(np.diff(rms["rise_all_teeth"]) > 0)
+    assert np.all(rms["rise_one_tooth"] < rms["rise_all_teeth"])
+    assert np.all(table["rise_one_tooth"] > 1.0)
+    if given is None:
+        assert table["rise_measured"].isna().all()
+    else:
+        assert rms["rise_measured"].iloc[-1] == pytest.approx(2.278 / 1.066)
+    assert table15_model(scn, base, None)["rise_measured"].isna().all()

@@ -1,0 +1,43 @@
+"""The Table 15 figures docs/reproduction.md quotes are the model's as it computes them now."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+from physics.params import Scenario
+from physics.reproduce.localised import table15_model
+from physics.tribology.wear import simulate_wear
+
+ROOT = Path(__file__).resolve().parents[2]
+THESIS_TABLES = ROOT.parent / "shared" / "reference" / "thesis_tables"
+
+
+def test_the_docs_table15_is_the_models():
+    text = (ROOT / "docs" / "reproduction.md").read_text()
+    start = text.index("## Table 15 by the model alone")
+    section = text[start:text.index("\n## ", start + 1)]
+    rows = [[c.strip() for c in line.strip("|").split("|")]
+            for line in section.splitlines() if re.match(r"\| \d+ \| ", line)]
+    scn = Scenario()
+    given = THESIS_TABLES if THESIS_TABLES.is_dir() else None
+    table = table15_model(scn, simulate_wear(scn, 1e6), given)  # the reproduction's base run
+    assert len(rows) == len(table)
+    for cells, (_, r) in zip(rows, table.iterrows(), strict=True):
+        assert cells[:2] == [f"{r.wear_mm * 1e3:g}", r.feature.replace("_", "-")]
+        assert cells[3:] == [f"{r.rise_one_tooth:.2f}", f"{r.rise_all_teeth:.2f}"]
+        if given is not None:
+            assert cells[2] == f"{r.rise_measured:.2f}"
+    kurtosis = table[table.feature == "kurtosis"]
+    assert f"at most {kurtosis.rise_one_tooth.max():.2f}" in section
+    if given is None:
+        pytest.skip("the thesis's tables are not beside the checkout: measured column unchecked")
+    # the prose's claims
+    rms = table[table.feature == "rms"].set_index("wear_mm")
+    for depth in (0.005, 0.015):
+        assert rms.rise_all_teeth[depth] == pytest.approx(rms.rise_measured[depth], rel=0.1)
+    p2p = table[table.feature == "peak_to_peak"]
+    ratio = p2p.rise_measured / p2p.rise_one_tooth
+    assert ratio.max() < 1.6 and ratio.min() > 1 / 1.6
