@@ -316,7 +316,12 @@ def _solve_rows(at: np.ndarray, low: np.ndarray, b: np.ndarray, R: np.ndarray,
     x0 = low - cells * dX / 2
     X = x0[:, None] + (np.arange(cells) + 0.5) * dX
     gap = X**2 / 2 + worn_gap(at, X, b, R, scale1, scale2, h1, h2)
-    P, _ = solve_gap_contact(gap, dX)
+    try:
+        P, _ = solve_gap_contact(gap, dX)
+    except RuntimeError as err:  # a stated end of the model's scope, not a crash
+        raise OutOfScope(f"{err}: the worn flanks no longer meet as one line contact (positions "
+                         f"at {at.min() * 1e3:+.3f} to {at.max() * 1e3:+.3f} mm of roll); "
+                         "physics.tribology.contact_wear follows wear beyond it") from None
     edge = (P[:, 0] > 0) | (P[:, -1] > 0)
     if not edge.any():
         return P, x0

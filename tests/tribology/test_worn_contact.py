@@ -148,3 +148,19 @@ def test_unloaded_positions_press_nothing_and_keep_the_sweep_small():
     assert swept.sum() * (grid[1] - grid[0]) == pytest.approx(
         np.sum(weight * w * np.diff(edges)), rel=1e-3)
     assert peak < 50e6
+
+
+def test_a_contact_that_does_not_settle_is_a_stated_scope_end(monkeypatch):
+    """The pressure iteration's failure on deeply worn flanks ends the wear run as a scope end
+    (OutOfScope, with the history a caller keeps), never as a raw RuntimeError."""
+    import physics.tribology.worn_contact as wc
+    from physics.params import OutOfScope, Scenario
+    from physics.tribology.wear import simulate_wear
+
+    original = wc.solve_gap_contact
+    monkeypatch.setattr(wc, "solve_gap_contact",
+                        lambda gap, dX: original(gap, dX, max_iter=1))
+    with pytest.raises(OutOfScope, match="no longer meet as one line contact") as err:
+        simulate_wear(Scenario(), 5e7)
+    s, cycles, pinion, gear = err.value.history
+    assert cycles.size == pinion.shape[0] >= 1
