@@ -10,7 +10,8 @@ shape along the flank is the model's own pinion wear (the reproduction's base ru
 its root depth. Each feature of the rigid-housing acceleration
 (:func:`physics.signals.measurement.housing_acceleration`; RMS, peak-to-peak, Pearson's
 kurtosis) is divided by the new pair's, beside the measured rises when the thesis's tables are
-given.
+given; and so are the condition indicators of its synchronous average that the thesis did not
+read (:mod:`physics.signals.indicators`: FM0, FM4, NA4, energy ratio, sideband level).
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from physics.dynamics.teeth import per_tooth_model
 from physics.gear.stiffness import mesh_stiffness
 from physics.params import Scenario
 from physics.signals.features import features
+from physics.signals.indicators import indicators
 from physics.signals.measurement import housing_acceleration
 from physics.tribology.wear import WearResult
 
@@ -34,6 +36,8 @@ DEPTHS_UM = (5.0, 10.0, 15.0)
 #: the features compared, and their columns in the thesis's Table 15 CSV
 FEATURES = {"rms": "rms_m_per_s2", "peak_to_peak": "peak_to_peak_m_per_s2",
             "kurtosis": "kurtosis"}
+#: the indicators of the synchronous average beside them (no measured values)
+INDICATOR_ROWS = ("fm0", "fm4", "na4", "energy_ratio", "sideband_level")
 #: whole pinion revolutions in each record
 REVOLUTIONS = 10
 MEASURED_TABLE = "table15_measured_acceleration_features.csv"
@@ -51,8 +55,9 @@ def measured_rises(folder: Path | None) -> pd.DataFrame | None:
 
 
 def table15_model(scn: Scenario, base: WearResult, thesis_tables: Path | None) -> pd.DataFrame:
-    """One row per depth and feature: ``wear_mm``, ``feature``, ``rise_measured`` (NaN without
-    the thesis's tables), ``rise_one_tooth``, ``rise_all_teeth`` (module doc)."""
+    """One row per depth and feature (Table 15's, then the indicators): ``wear_mm``,
+    ``feature``, ``rise_measured`` (NaN without the thesis's tables, and for the indicators),
+    ``rise_one_tooth``, ``rise_all_teeth`` (module doc)."""
     dyn = dataclasses.replace(scn.dynamics, flank_contact="exact",
                               duration_s=REVOLUTIONS * 60.0 / scn.operating.n1_rpm)
     scn = dataclasses.replace(scn, dynamics=dyn)
@@ -65,14 +70,16 @@ def table15_model(scn: Scenario, base: WearResult, thesis_tables: Path | None) -
         worn = build_model(scn, ms, base.s, shape * depth * 1e-6, np.zeros_like(shape))
         models += [per_tooth_model([worn] + [new] * (z1 - 1)), per_tooth_model([worn] * z1)]
     force = simulate(models, dyn, every_phase=False).force
-    values = features(housing_acceleration(force, dyn.housing_mass_kg))
+    accel = housing_acceleration(force, dyn.housing_mass_kg)
+    values = features(accel)
+    values |= indicators(accel, dyn.sample_rate_hz, scn.operating.n1_rpm / 60.0, z1)
     measured = measured_rises(thesis_tables)
     rows = []
     for i, depth in enumerate(DEPTHS_UM):
         wear_mm = depth * 1e-3
-        for name in FEATURES:
+        for name in (*FEATURES, *INDICATOR_ROWS):
             v = values[name]
-            hit = (None if measured is None else
+            hit = (None if measured is None or name not in FEATURES else
                    measured.loc[np.isclose(measured["wear_mm"], wear_mm), name])
             rows.append({"wear_mm": wear_mm, "feature": name,
                          "rise_measured": np.nan if hit is None or hit.empty else hit.iloc[0],

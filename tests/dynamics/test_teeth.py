@@ -13,7 +13,7 @@ from physics.dynamics.model import build_model, simulate
 from physics.dynamics.teeth import per_tooth_model
 from physics.gear.stiffness import mesh_stiffness
 from physics.params import Scenario
-from physics.reproduce.localised import FEATURES, table15_model
+from physics.reproduce.localised import FEATURES, INDICATOR_ROWS, table15_model
 from physics.tribology.wear import simulate_wear
 
 THESIS_TABLES = Path(__file__).resolve().parents[3] / "shared" / "reference" / "thesis_tables"
@@ -82,11 +82,14 @@ def test_table15_by_the_model(worn_state):
     table = table15_model(scn, base, given)
     assert list(table.columns) == ["wear_mm", "feature", "rise_measured", "rise_one_tooth",
                                    "rise_all_teeth"]
-    assert len(table) == 3 * len(FEATURES)
+    assert len(table) == 3 * (len(FEATURES) + len(INDICATOR_ROWS))
+    fm4 = table[table["feature"] == "fm4"]
+    assert np.all(fm4["rise_one_tooth"] > 5 * fm4["rise_all_teeth"])  # a local fault's mark
     rms = table[table["feature"] == "rms"]
     assert np.all(np.diff(rms["rise_all_teeth"]) > 0)
     assert np.all(rms["rise_one_tooth"] < rms["rise_all_teeth"])
     assert np.all(table["rise_one_tooth"] > 1.0)
+    assert table.loc[table["feature"].isin(INDICATOR_ROWS), "rise_measured"].isna().all()
     if given is None:
         assert table["rise_measured"].isna().all()
     else:

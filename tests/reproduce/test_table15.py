@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from physics.params import Scenario
-from physics.reproduce.localised import table15_model
+from physics.reproduce.localised import FEATURES, table15_model
 from physics.tribology.wear import simulate_wear
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -24,8 +24,14 @@ def test_the_docs_table15_is_the_models():
     scn = Scenario()
     given = THESIS_TABLES if THESIS_TABLES.is_dir() else None
     table = table15_model(scn, simulate_wear(scn, 1e6), given)  # the reproduction's base run
-    assert len(rows) == len(table)
-    for cells, (_, r) in zip(rows, table.iterrows(), strict=True):
+    features = table[table.feature.isin(list(FEATURES))]
+    shown = table[~table.feature.isin(list(FEATURES)) & (table.wear_mm == 0.015)]
+    assert [cells[1:] for cells in rows[len(features):]] == [
+        [r.feature.replace("_", " "), f"{r.rise_one_tooth:.2f}", f"{r.rise_all_teeth:.2f}"]
+        for _, r in shown.iterrows()]
+    rows = rows[:len(features)]
+    assert len(rows) == len(features)
+    for cells, (_, r) in zip(rows, features.iterrows(), strict=True):
         assert cells[:2] == [f"{r.wear_mm * 1e3:g}", r.feature.replace("_", "-")]
         assert cells[3:] == [f"{r.rise_one_tooth:.2f}", f"{r.rise_all_teeth:.2f}"]
         if given is not None:

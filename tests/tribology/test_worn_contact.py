@@ -163,4 +163,4 @@ def test_a_contact_that_does_not_settle_is_a_stated_scope_end(monkeypatch):
     with pytest.raises(OutOfScope, match="no longer meet as one line contact") as err:
         simulate_wear(Scenario(), 5e7)
     s, cycles, pinion, gear = err.value.history
-    assert cycles.size == pinion.shape[0] >= 1
+    assert cycles.size == pinion.shape[0] == gear.shape[0] >= 1 and pinion.shape[1] == s.size
