@@ -126,6 +126,18 @@ def generate_tooth(gear: GearPair, wheel: int, n_fillet: int = 400, n_involute: 
                      np.hypot(xy[:, 0], xy[:, 1]), len(fillet))
 
 
+def checked_wear(s_grid: np.ndarray, wear: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``s_grid`` and ``wear`` [m] as float arrays, a ``ValueError`` naming the rule where the
+    wear is not one finite depth >= 0 per grid point."""
+    s_grid, wear = np.asarray(s_grid, dtype=float), np.asarray(wear, dtype=float)
+    if wear.shape != s_grid.shape:
+        raise ValueError(f"wear array of shape {wear.shape} does not match the roll grid of "
+                         f"shape {s_grid.shape}; give one wear depth per grid point")
+    if np.any(wear < 0) or not np.all(np.isfinite(wear)):
+        raise ValueError("wear depths must be finite and >= 0 (negative wear adds material)")
+    return s_grid, wear
+
+
 def _inv(a: float) -> float:
     return math.tan(a) - a
 

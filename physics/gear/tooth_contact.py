@@ -52,7 +52,7 @@ import numba
 import numpy as np
 
 from physics.gear.geometry import MeshGeometry
-from physics.gear.tooth import ToothForm
+from physics.gear.tooth import ToothForm, checked_wear
 
 #: a point of one tooth is compared with the other's flank only within the flank's radii
 #: (fillet foot to tip); farther points cannot touch it: their gap is this [m]
@@ -108,13 +108,7 @@ def worn_flank(form: ToothForm, geom: MeshGeometry, wheel: int, s_grid: np.ndarr
     x, y = form.x.copy(), form.y.copy()
     s_pt = flank_coordinate(form, geom, wheel)
     if wear is not None:
-        s_grid = np.asarray(s_grid, dtype=float)
-        wear = np.asarray(wear, dtype=float)
-        if wear.shape != s_grid.shape:
-            raise ValueError(f"wear of shape {wear.shape} does not match its roll grid of shape "
-                             f"{s_grid.shape}; give one depth per grid point")
-        if np.any(wear < 0) or not np.all(np.isfinite(wear)):
-            raise ValueError("wear depths must be finite and >= 0 (negative wear adds material)")
+        s_grid, wear = checked_wear(s_grid, wear)
         order = np.argsort(s_grid)
         depth = np.interp(s_pt, s_grid[order], wear[order], left=0.0, right=0.0)
         # the outward normal of the +x flank, root to tip: (dy, -dx) / |(dx, dy)|

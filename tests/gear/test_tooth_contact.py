@@ -164,7 +164,7 @@ def test_gap_converges_as_the_flanks_are_refined():
 def test_bad_wear_is_refused(ms):
     g = ms.geometry
     grid = np.linspace(g.s_start, g.s_end, 11)
-    with pytest.raises(ValueError, match="does not match its roll grid"):
+    with pytest.raises(ValueError, match="does not match the roll grid"):
         worn_flank(ms.forms[0], g, 1, grid, np.zeros(5))
     with pytest.raises(ValueError, match=">= 0"):
         worn_flank(ms.forms[0], g, 1, grid, -np.ones(11))

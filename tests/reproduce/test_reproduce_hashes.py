@@ -15,9 +15,8 @@ import sys
 from pathlib import Path
 
 import pytest
-from hydra import compose, initialize_config_module
 from hydra.core.hydra_config import HydraConfig
-from omegaconf import DictConfig, open_dict, read_write
+from omegaconf import DictConfig
 
 from physics.command import register_schema
 from physics.reproduce import thesis
@@ -30,6 +29,7 @@ from physics.reproduce.thesis import (
     table_hashes,
     write_hash_record,
 )
+from tests.acceptance.test_bad_input import APPS, composed
 
 ROOT = Path(__file__).resolve().parents[2]
 RECORD_IT = "python -m physics.reproduce record_hashes=true"
@@ -149,14 +149,7 @@ def test_a_malformed_line_fails(tables):
 def _composed(overrides: list[str], out: Path) -> DictConfig:
     """The reproduce app's config as Hydra gives it to the app, with its overrides recorded."""
     register_schema("reproduce_schema", ReproduceConfig)  # as the app does
-    with initialize_config_module("gearwear_conf.reproduce", version_base="1.3"):
-        cfg = compose("reproduce", overrides=overrides, return_hydra_config=True)
-    with read_write(cfg.hydra.runtime), open_dict(cfg.hydra.runtime):
-        cfg.hydra.runtime.output_dir = str(out)
-    HydraConfig.instance().set_config(cfg)
-    with read_write(cfg), open_dict(cfg):
-        del cfg["hydra"]
-    return cfg
+    return composed(APPS["reproduce"], overrides, out)
 
 
 def test_recording_outside_a_checkout_is_refused_first(tmp_path, monkeypatch):
