@@ -205,7 +205,11 @@ COMMANDS: dict[str, Case] = {
     TRAIN_CASE3: Case(TINY_DATA + FAST_TRAIN, check=trained),
     "python -m physics.reproduce": Case(FAST_REPRO, check=files(
         "outputs/*/*/table02_speed.csv", "outputs/*/*/wear_profile.png",
-        "outputs/*/*/table14_dte_features_case3.csv")),
+        "outputs/*/*/table14_dte_features_case3.csv", "outputs/*/*/table15_model.csv")),
+    # the rig's contact-driven wear to 0.93 mm at four torques: about 8 minutes
+    "python -m physics.reproduce.rig": Case(slow=True, needs_shared=True, timeout=2700, check=files(
+        "outputs/rig/rig_comparison.csv", "outputs/rig/rig_summary.csv",
+        "outputs/rig/rig_comparison.png")),
     "python -m physics.dataset": Case(SMALL_DATASET, check=files(
         "data/dataset.parquet", "data/dataset.json")),
     SWEEP: Case(TINY_DATA + FAST_TRAIN, start=TRAIN_CASE3, only=("data",), check=swept),
@@ -266,6 +270,7 @@ DOCS: dict[str, Case] = {
     "python -m physics.loop --help": Case(),
     "python -m surrogate.benchmark": Case(("--max-epochs", "3"), slow=True),
     "python bench/bench_stiffness.py": Case(slow=True),
+    "python bench/bench_contact.py": Case(slow=True),
     "python bench/bench_dynamics.py": Case(slow=True),
     "python bench/bench_dataset.py": Case(slow=True),
     "python bench/bench_mixed_ehl.py": Case(slow=True),
