@@ -6,9 +6,9 @@ case of thesis Table 11, ``all`` for one network of the five.
 
 from __future__ import annotations
 
-from physics.interrupt import deferred, install_signal_handlers
+from physics.interrupt import deferred, install_at_start
 
-install_signal_handlers()  # before the slow imports: Ctrl-C is handled from the start
+install_at_start(__name__)  # Ctrl-C and SIGTERM handled from here on, during the slow imports
 
 import hydra  # noqa: E402
 from omegaconf import DictConfig  # noqa: E402

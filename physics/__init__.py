@@ -9,9 +9,7 @@ coupling; 3.3-4.1), ``signals`` (features, order analysis, measurement chain; 4.
 what they run), ``testbeds`` (the synthetic and independent bundle makers for trying the loop
 and the surrogate without measurements; not imported by the product). ``params`` (validated
 parameters), ``scope`` (the model's operating scope), ``command`` and ``files`` serve them all.
-Each subpackage names its public API in ``__all__``.
+Each subpackage names its public API in ``__all__``. Importing the package changes no process
+state: each app installs its Ctrl-C and SIGTERM handlers itself when it starts
+(:func:`physics.interrupt.install_at_start`).
 """
-
-from physics.interrupt import install_for_apps as _install_for_apps
-
-_install_for_apps()  # an app's Ctrl-C and SIGTERM handled from its first import on

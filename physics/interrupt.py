@@ -7,9 +7,9 @@ The handlers (:func:`install_signal_handlers`) raise KeyboardInterrupt for SIGIN
 the signal, so that an interruption is reported as one whatever exception it became on its way
 out (a numba kernel's ``SystemError``, Lightning's ``exit(1)`` after its graceful shutdown, a
 joblib worker's error). :func:`guard` runs an app's entry and ends an interrupted run with the
-line; what it says is set as the run goes (:func:`note`). An app started with ``python -m``
-gets the handlers when ``physics`` is first imported (:func:`install_for_apps`), before its
-slow imports; ``train.py`` installs them as its first statement.
+line; what it says is set as the run goes (:func:`note`). Each app installs the handlers as its
+first statement, before its slow imports (:func:`install_at_start`; :func:`guard` installs
+them too); importing ``physics`` or any of its modules touches no signal handler.
 
 Kept free of heavy imports: it runs before numpy, numba, torch or Hydra are loaded.
 """
@@ -30,9 +30,6 @@ class Terminated(KeyboardInterrupt):
 
 #: exit codes: 128 + the signal's number, as a shell reports a process the signal ended
 EXIT_CODES = {signal.SIGINT: 130, signal.SIGTERM: 143}
-#: the apps run as ``python -m <module>`` (``train.py`` installs the handlers itself)
-APPS = ("physics.dataset", "physics.reproduce", "physics.loop", "surrogate.predict",
-        "surrogate.benchmark")
 
 #: the first of SIGINT or SIGTERM this process received (None: neither)
 _SIGNAL: int | None = None
@@ -128,10 +125,12 @@ def quiet_workers() -> None:
     module.fork_exec = fork_exec
 
 
-def install_for_apps() -> None:
-    """The handlers, if this process is one of the :data:`APPS` (``python -m <app>``)."""
-    argv = list(getattr(sys, "orig_argv", []))
-    if "-m" in argv[:-1] and argv[argv.index("-m") + 1] in APPS:
+def install_at_start(name: str) -> None:
+    """The handlers, if the module named ``name`` (an app's ``__name__``) runs as the program
+    (``python -m <app>``, ``python train.py``): an app calls it as its first statement, so that
+    Ctrl-C and SIGTERM are handled during its slow imports. A module imported (by a test, by
+    another program) installs nothing."""
+    if name == "__main__":
         install_signal_handlers()
 
 

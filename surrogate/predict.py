@@ -21,7 +21,12 @@ From Python::
     wear = Surrogate.load("wear_surrogate.pt").predict(features_df, gearbox=["rig"])
 """
 
+# ruff: noqa: E402 (the imports after the handlers: see install_at_start)
 from __future__ import annotations
+
+from physics.interrupt import install_at_start
+
+install_at_start(__name__)  # Ctrl-C and SIGTERM handled from here on, during the slow imports
 
 import logging
 import os

@@ -4,7 +4,12 @@
 See :mod:`physics.dataset.generation` for what a row holds and how chunks, resume and merge work.
 """
 
+# ruff: noqa: E402 (the imports after the handlers: see install_at_start)
 from __future__ import annotations
+
+from physics.interrupt import install_at_start
+
+install_at_start(__name__)  # Ctrl-C and SIGTERM handled from here on, during the slow imports
 
 import logging
 

@@ -33,6 +33,7 @@ wear, so a whole mesh cycle costs a few interpolations (no quadrature per mesh p
 from __future__ import annotations
 
 import functools
+import logging
 import math
 import warnings
 from dataclasses import dataclass
@@ -41,8 +42,10 @@ import numpy as np
 from scipy.integrate import cumulative_simpson
 
 from physics.gear.geometry import MeshGeometry, mesh_geometry
-from physics.gear.tooth import ToothForm, generate_tooth
+from physics.gear.tooth import ToothForm, checked_wear, generate_tooth
 from physics.params import GearPair, Material, OutOfScope
+
+log = logging.getLogger(__name__)
 
 # Sainsot, Velex & Duverger (2004), Table 1: X*(h_f, theta_f) = A/theta_f^2 + B h_f^2
 # + C h_f/theta_f + D/theta_f + E h_f + F, for L*, M*, P*, Q*.
@@ -53,14 +56,15 @@ SAINSOT = {
     "Q": (-6.2042e-5, 9.0889e-3, -4.0964e-4, 7.8297e-3, -0.1472, 0.6904),
 }
 #: ranges of h_f = r_f / r_bore and theta_f [rad] over which Sainsot et al. fitted the
-#: polynomials; outside them the polynomials are extrapolated with a warning (the thesis pinion,
-#: z = 18, has theta_f = 0.167 rad; the FE check of Table 7 covers it).
+#: polynomials; outside them the polynomials are extrapolated (see :class:`MeshStiffness`: an
+#: h_f outside warns, a theta_f outside is logged at debug level).
 SAINSOT_HF_RANGE = (1.4, 7.0)
 SAINSOT_THETA_RANGE = (0.01, 0.12)
 
 
 class SainsotRangeWarning(UserWarning):
-    """The gear-body formula is used outside the range it was fitted on."""
+    """The gear-body formula is used outside the range of r_f/r_bore it was fitted on (a bore
+    the user chose: worth a look at the gear's parameters)."""
 
 
 def sainsot_coefficients(h_f: float, theta_f: float) -> dict[str, float]:
@@ -140,6 +144,16 @@ class MeshStiffness:
     plane : ``"strain"`` (default for face width > 5 modules) or ``"stress"``.
     n_fillet, n_involute : profile points of each tooth (quadrature nodes).
 
+    Limits
+    ------
+    The gear-body (foundation) compliance extrapolates the Sainsot et al. (2004) polynomials,
+    fitted for theta_f in (0.01, 0.12) rad, to the thesis pinion's theta_f = 0.167 rad (z = 18;
+    with the thesis's tooth proportions every wheel of 25 teeth or fewer lies beyond the fitted
+    range); the 2-D FE check of thesis Table 7 (:func:`physics.gear.tooth_fem.fe_pair_stiffness`)
+    covers that pinion. The extrapolation follows from the tooth count, not from a choice the
+    user can change: it is logged at debug level, not warned. An r_f/r_bore outside (1.4, 7.0)
+    (a bore radius far from the thesis's proportions) issues a :class:`SainsotRangeWarning`.
+
     Examples
     --------
     >>> from physics.params import GearPair, Material
@@ -165,25 +179,21 @@ class MeshStiffness:
         self.k_hertz = math.pi * material.E * gear.face_width / (4 * (1 - nu**2))
         for form, name in zip(self.forms, ("pinion", "gear"), strict=True):
             h_f, th = form.rf / form.bore, form.theta_f
-            if not (SAINSOT_HF_RANGE[0] <= h_f <= SAINSOT_HF_RANGE[1]
-                    and SAINSOT_THETA_RANGE[0] <= th <= SAINSOT_THETA_RANGE[1]):
-                warnings.warn(
-                    f"{name}: r_f/r_bore = {h_f:.2f} and theta_f = {th:.3f} rad; the Sainsot "
+            text = (f"{name}: r_f/r_bore = {h_f:.2f} and theta_f = {th:.3f} rad; the Sainsot "
                     f"gear-body polynomials were fitted for r_f/r_bore in {SAINSOT_HF_RANGE} and "
-                    f"theta_f in {SAINSOT_THETA_RANGE} and are extrapolated here",
-                    SainsotRangeWarning, stacklevel=2)
+                    f"theta_f in {SAINSOT_THETA_RANGE} and are extrapolated here")
+            if not SAINSOT_HF_RANGE[0] <= h_f <= SAINSOT_HF_RANGE[1]:
+                warnings.warn(f"{text}; check the bore radius", SainsotRangeWarning,
+                              stacklevel=2)
+            elif not SAINSOT_THETA_RANGE[0] <= th <= SAINSOT_THETA_RANGE[1]:
+                log.debug(text)  # the tooth count's: stated in the class's Limits
         self._healthy = tuple(_cumulative(f, np.zeros_like(f.x), gear.face_width)
                               for f in self.forms)
 
     # -- one tooth ---------------------------------------------------------------------------
     def _cut(self, form: ToothForm, s: np.ndarray, wear: np.ndarray, wheel: int) -> np.ndarray:
         """Reduction of the drive half-width at each profile height for wear on the grid s."""
-        wear = np.asarray(wear, dtype=float)
-        if wear.shape != s.shape:
-            raise ValueError(f"wear array of shape {wear.shape} does not match the roll grid of "
-                             f"shape {s.shape}; give one wear depth per grid point")
-        if np.any(wear < 0) or not np.all(np.isfinite(wear)):
-            raise ValueError("wear depths must be finite and >= 0 (negative wear adds material)")
+        s, wear = checked_wear(s, wear)
         radius = self.geometry.flank_radii(s)[wheel - 1]
         # the grid may reach below this wheel's involute (a fillet's wear, continued by arc
         # length: physics.gear.tooth_contact.flank_coordinate); its involute part is mapped here

@@ -2,7 +2,12 @@
 :class:`~physics.loop.config.LoopConfig`, choices ``conf/loop/loop.yaml``; method in
 :mod:`physics.loop.bundle_loop` and :mod:`physics.loop.table_loop`)."""
 
+# ruff: noqa: E402 (the imports after the handlers: see install_at_start)
 from __future__ import annotations
+
+from physics.interrupt import install_at_start
+
+install_at_start(__name__)  # Ctrl-C and SIGTERM handled from here on, during the slow imports
 
 import logging
 from dataclasses import dataclass

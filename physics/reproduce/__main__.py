@@ -1,7 +1,12 @@
 """``python -m physics.reproduce``: the thesis tables and figures (schema
 :class:`physics.reproduce.thesis.ReproduceConfig`, choices ``conf/reproduce/reproduce.yaml``)."""
 
+# ruff: noqa: E402 (the imports after the handlers: see install_at_start)
 from __future__ import annotations
+
+from physics.interrupt import install_at_start
+
+install_at_start(__name__)  # Ctrl-C and SIGTERM handled from here on, during the slow imports
 
 import hydra
 from omegaconf import DictConfig

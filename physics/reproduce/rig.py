@@ -28,7 +28,12 @@ per torque, Spearman's rank correlation over the stages and the rises at the sta
 0.4 and 0.9 mm, model beside rig.
 """
 
+# ruff: noqa: E402 (the imports after the handlers: see install_at_start)
 from __future__ import annotations
+
+from physics.interrupt import guard, install_at_start, note
+
+install_at_start(__name__)  # Ctrl-C and SIGTERM handled from here on, during the slow imports
 
 import argparse
 import dataclasses
@@ -179,10 +184,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ValueError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
+    note(lambda: "nothing is written before the comparison is complete; run the command again")
+    return guard(lambda: _run(table, args.out))
+
+
+def _run(table: pd.DataFrame, out: Path) -> int:
     stages, summary = rig_comparison(table)
-    write_csv(stages, args.out / "rig_comparison.csv")
-    write_csv(summary, args.out / "rig_summary.csv")
-    plot_rig_comparison(stages, args.out / "rig_comparison.png")
+    write_csv(stages, out / "rig_comparison.csv")
+    write_csv(summary, out / "rig_summary.csv")
+    plot_rig_comparison(stages, out / "rig_comparison.png")
     print(summary.to_string(index=False, float_format=lambda v: f"{v:.3g}"))
     return 0
 
