@@ -9,7 +9,7 @@ from physics.exports import lazy_exports
 #: the public names, by the module that defines each (imported on first use: physics.exports)
 _SOURCES = {
     "physics.dynamics.model": (
-        "PairModel", "Response", "build_model", "simulate", "simulate_two_dof",
+        "PairModel", "Response", "EXACT_PHASES", "build_model", "simulate", "simulate_two_dof",
         "force_per_position", "blank_inertia", "kernel_parameters", "time_step", "output_samples",
         "anti_aliasing_filter", "anti_aliased"),
     "physics.dynamics.teeth": ("per_tooth_model",),

@@ -53,7 +53,7 @@ from physics.dynamics.model_form import FACTORS, with_model_form
 from physics.gear.accuracy import form_deviation
 from physics.gear.geometry import MeshGeometry
 from physics.gear.stiffness import MeshStiffness, mesh_stiffness
-from physics.gear.tooth_contact import NO_CONTACT, PairGaps, clamped, pair_slots
+from physics.gear.tooth_contact import NO_CONTACT, PairGaps, clamped, pair_slots, share_load
 from physics.params import Dynamics, Scenario
 from physics.scope import check_scope
 
@@ -133,7 +133,13 @@ class PairModel:
                 ones if self.lam_b is None else self.lam_b)
 
 
-def path_gaps(s_a: np.ndarray, s_b: np.ndarray, on_b: np.ndarray, s_grid: np.ndarray | None,
+#: mesh phases the exact contact's tables need: its early and late contact engage over a few
+#: per cent of the mesh period (a new pair's force spread within 1.2 % of 8192 phases' at 2048,
+#: 3.5 % at 1024, 13 % at 512; the path contact's within 0.3 % at 1024)
+EXACT_PHASES = 2048
+
+
+def path_gaps(s_a: np.ndarray, s_b: np.ndarray, s_grid: np.ndarray | None,
               wear1: np.ndarray | None, wear2: np.ndarray | None
               ) -> tuple[np.ndarray, np.ndarray]:
     """Gaps of pairs A and B as the thesis (2.2) has them: the two flanks' wear summed at the
@@ -188,7 +194,7 @@ def build_model(scn: Scenario, stiffness: MeshStiffness | None = None,
     if dyn.flank_contact == "exact":
         g_a, g_b, k_off, g_off = exact_contact(ms, k_of, s_a, on_b, s_grid, wear1, wear2)
     else:
-        g_a, g_b = path_gaps(s_a, s_b, on_b, s_grid, wear1, wear2)
+        g_a, g_b = path_gaps(s_a, s_b, s_grid, wear1, wear2)
         k_off = g_off = None
     if dyn.form_deviation_um > 0:  # the flank's form deviation, a gap like the wear's
         wave = (geom.s_start, geom.path_length, dyn.form_deviation_um, dyn.form_waves,
@@ -249,7 +255,7 @@ class Response:
 (MASS, DAMPING, STATIC_FORCE, HALF_BACKLASH, LONG_ERROR, SHORT_ERROR, OMEGA1, OMEGA_MESH,
  ROLL_SPEED, BASE_PITCH, GEAR_ERROR, OMEGA2, RIPPLE_FORCE, OMEGA_RIPPLE, CELLS_PER_PERIOD,
  CENTRE_RUNOUT, CELLS_PER_METRE, GEAR_MODULATION, GEAR_MODULATION_PHASE, PINION_MODULATION,
- PINION_MODULATION_PHASE, N_PARAMETERS) = range(22)
+ PINION_MODULATION_PHASE, OFF_PATH_PAIRS, N_PARAMETERS) = range(23)
 
 
 def kernel_parameters(m: PairModel) -> np.ndarray:
@@ -266,6 +272,7 @@ def kernel_parameters(m: PairModel) -> np.ndarray:
     row[PINION_MODULATION], row[PINION_MODULATION_PHASE] = (m.pinion_modulation,
                                                             m.pinion_modulation_phase)
     row[RIPPLE_FORCE], row[OMEGA_RIPPLE] = m.ripple_force, m.omega_ripple
+    row[OFF_PATH_PAIRS] = 0.0 if m.k_off is None else 1.0
     row[CELLS_PER_PERIOD] = len(m.k_a) / m.periods
     row[CELLS_PER_METRE] = row[CELLS_PER_PERIOD] / (m.geometry.base_pitch
                                                     * math.sin(m.geometry.alpha_w))
@@ -392,22 +399,14 @@ def simulate(models: Sequence[PairModel] | PairModel, dyn: Dynamics,
 
 def static_deflection(m: PairModel) -> float:
     """The static ``x`` at phase 0: ``sum_i k_i max(x - g_i - Delta_n, 0) = W0`` over the
-    pairs of the tables' first cell (off-path ones included), solved exactly (the engaged
-    pairs are those with the smallest gaps; piecewise linear): the start of every
-    integration, so that a worn pair starts in contact as it stands, not from an impact."""
+    pairs of the tables' first cell, off-path ones included
+    (:func:`physics.gear.tooth_contact.share_load`): the start of every integration, so that
+    a worn pair starts in contact as it stands, not from an impact."""
     off = off_path_rows(m)[:, 0]
     k = np.concatenate([[m.k_a[0], m.k_b[0]], off[0::2]])
     g = np.concatenate([[m.g_a[0], m.g_b[0]], off[1::2]])
-    order = np.argsort(g)
-    k, g = k[order], g[order]
-    for n in range(1, len(k) + 1):
-        stiff = k[:n].sum()
-        if stiff <= 0:
-            continue
-        x = (m.static_force + (k[:n] * g[:n]).sum()) / stiff
-        if n == len(k) or x <= g[n]:
-            return float(x + m.half_backlash)
-    raise ValueError("the tables' first cell has no pair that can carry the load")
+    approach, _ = share_load(g[None, :], k[None, :], m.static_force)
+    return float(approach[0] + m.half_backlash)
 
 
 def off_path_rows(m: PairModel) -> np.ndarray:
@@ -462,16 +461,22 @@ def _entry_shift(q, u_in):
 
 @numba.njit(cache=True, fastmath=True, inline="always")
 def _mesh_state(par, tab, pos, da, kf):
-    """The pairs in contact at table position ``pos``: stiffness, gap and force factor of pair
-    A, pair B and an early-entering pair C (``k_c`` 0 without one), and where the off-path
-    pairs' rows are read (cells ``i0``, ``i1``, fraction, stiffness factor).
+    """The pairs at table position ``pos``: stiffness, gap and force factor of pair A, pair B
+    and an early-entering pair C (``k_c`` 0 without one), and stiffness and gap of the three
+    off-path pairs (:func:`off_path_rows`).
 
     ``pos`` in [0, n) is the mesh phase in table cells; the tables are interpolated linearly and
-    periodically. ``da`` is the centre-distance change [m] (gear run-out): it moves the ends of
-    the path of contact; ``kf`` a factor on every pair's stiffness (the run-outs' modulations,
-    :func:`_pinion_factor` and :func:`_extra`). It depends on the instant only, not on the
-    state, so an RK4 step evaluates it at its two new instants (``t + dt/2``, shared by stages
-    2 and 3, and ``t + dt``, also the next step's stage 1).
+    periodically. In the last cell of a mesh period the pairs move on by one slot (the pair
+    before its entry becomes A, A becomes B, B past the end becomes the pair after it): where
+    the model has off-path pairs each is interpolated to its own value at the next cell, not to
+    the next pair's (a slot's table jumps there from one tooth to the next, and a gap that
+    jumps from the entering pair's to the far one of the pair behind it would part the entering
+    pair within the cell). ``da`` is the centre-distance change [m] (gear run-out): it moves
+    the ends of the path of contact (without off-path pairs; with them the entering pair is
+    the one before its entry already); ``kf`` a factor on every pair's stiffness (the
+    run-outs' modulations, :func:`_pinion_factor` and :func:`_extra`). It depends on the
+    instant only, not on the state, so an RK4 step evaluates it at its two new instants
+    (``t + dt/2``, shared by stages 2 and 3, and ``t + dt``, also the next step's stage 1).
     """
     n = tab.shape[1]
     i0 = int(pos)
@@ -479,36 +484,55 @@ def _mesh_state(par, tab, pos, da, kf):
         i0 = n - 1
     frac = pos - i0
     i1 = i0 + 1 if i0 + 1 < n else 0
-    k_a, k_b = _lerp(tab, 0, i0, i1, frac), _lerp(tab, 1, i0, i1, frac)
-    g_a, g_b = _lerp(tab, 2, i0, i1, frac), _lerp(tab, 3, i0, i1, frac)
-    l_a, l_b = _lerp(tab, 4, i0, i1, frac), _lerp(tab, 5, i0, i1, frac)
+    off = par[OFF_PATH_PAIRS] != 0.0
+    n_per = int(par[CELLS_PER_PERIOD] + 0.5)
+    if off and i1 % n_per == 0:  # the slots move on across this cell
+        k_a, g_a = _lerp2(tab, 6, 0, i0, i1, frac), _lerp2(tab, 7, 2, i0, i1, frac)
+        k_b, g_b = _lerp2(tab, 0, 1, i0, i1, frac), _lerp2(tab, 2, 3, i0, i1, frac)
+        l_a, l_b = tab[4, i1], _lerp2(tab, 4, 5, i0, i1, frac)
+        k0, g0, k1, g1 = 0.0, 1.0, 0.0, 1.0
+        k2, g2 = _lerp2(tab, 8, 10, i0, i1, frac), _lerp2(tab, 9, 11, i0, i1, frac)
+    else:
+        k_a, k_b = _lerp(tab, 0, i0, i1, frac), _lerp(tab, 1, i0, i1, frac)
+        g_a, g_b = _lerp(tab, 2, i0, i1, frac), _lerp(tab, 3, i0, i1, frac)
+        l_a, l_b = _lerp(tab, 4, i0, i1, frac), _lerp(tab, 5, i0, i1, frac)
+        k0, g0 = _lerp(tab, 6, i0, i1, frac), _lerp(tab, 7, i0, i1, frac)
+        k1, g1 = _lerp(tab, 8, i0, i1, frac), _lerp(tab, 9, i0, i1, frac)
+        k2, g2 = _lerp(tab, 10, i0, i1, frac), _lerp(tab, 11, i0, i1, frac)
     if kf != 1.0:
-        k_a, k_b = k_a * kf, k_b * kf
+        k_a, k_b, k0, k1, k2 = k_a * kf, k_b * kf, k0 * kf, k1 * kf, k2 * kf
     k_c, g_c, l_c = 0.0, 0.0, 0.0
-    if da != 0.0:
+    if da != 0.0 and not off:
         # in the pinion's roll frame the exit (pinion tip) stays put and the entry (gear tip)
         # moves by d(a sin aw')/da = 1/sin aw' per unit centre distance: pairs enter later
         # when the centres part, earlier (the next pair ahead of time) when they close
-        n_per = par[CELLS_PER_PERIOD]
-        q = pos % n_per  # cells from the nearest period boundary (where a pair enters)
-        if q > 0.5 * n_per:
-            q -= n_per
+        n_cells = par[CELLS_PER_PERIOD]
+        q = pos % n_cells  # cells from the nearest period boundary (where a pair enters)
+        if q > 0.5 * n_cells:
+            q -= n_cells
         j = int(pos - q + 0.5) % n  # the boundary's cell (pos - q >= 0)
         share = _entry_shift(q, da * par[CELLS_PER_METRE])
         if share < 0.0:  # the entering pair (slot a) comes later
             k_a = max(k_a + share * tab[0, j] * kf, 0.0)
         elif share > 0.0:  # it comes earlier, beside the pairs of the tables
             k_c, g_c, l_c = share * tab[0, j] * kf, tab[2, j], tab[4, j]
-    return k_a, k_b, k_c, g_a, g_b, g_c, l_a, l_b, l_c, i0, i1, frac, kf
+    return k_a, k_b, k_c, g_a, g_b, g_c, l_a, l_b, l_c, k0, g0, k1, g1, k2, g2
 
 
 @numba.njit(cache=True, fastmath=True, inline="always")
-def _mesh(par, tab, st, x, v):
+def _lerp2(tab, row0, row1, i0, i1, frac):
+    """From row ``row0`` at cell ``i0`` to row ``row1`` at cell ``i1``: one pair's value as it
+    moves from one slot to the next across a period boundary."""
+    return tab[row0, i0] + (tab[row1, i1] - tab[row0, i0]) * frac
+
+
+@numba.njit(cache=True, fastmath=True, inline="always")
+def _mesh(par, st, x, v):
     """Force factors and forces of the pairs (``st``: :func:`_mesh_state`) at deflection ``x``
     and its rate ``v``: pairs A (with an early-entering C) and B, and the off-path pairs'
     summed force (drive flanks only; factor 1). The mesh damping ``c`` is shared by stiffness
     between the pairs in contact at ``x``: a pair whose flanks are apart carries none."""
-    k_a, k_b, k_c, g_a, g_b, g_c, l_a, l_b, l_c, i0, i1, frac, kf = st
+    k_a, k_b, k_c, g_a, g_b, g_c, l_a, l_b, l_c, k0, g0, k1, g1, k2, g2 = st
     half = par[HALF_BACKLASH]
     coast = x < -half
     engaged = 0.0
@@ -518,11 +542,13 @@ def _mesh(par, tab, st, x, v):
         engaged += k_b
     if k_c > 0.0 and (coast or x - g_c > half):
         engaged += k_c
-    n_rows = tab.shape[0]
-    for row in range(6, n_rows, 2):
-        k_x = _lerp(tab, row, i0, i1, frac) * kf
-        if k_x > 0.0 and x - _lerp(tab, row + 1, i0, i1, frac) > half:
-            engaged += k_x
+    if not coast:
+        if k0 > 0.0 and x - g0 > half:
+            engaged += k0
+        if k1 > 0.0 and x - g1 > half:
+            engaged += k1
+        if k2 > 0.0 and x - g2 > half:
+            engaged += k2
     c_v = par[DAMPING] * v / engaged if engaged > 0.0 else 0.0
     f_a = _contact(k_a, x, g_a, half, k_a * c_v)
     f_b = _contact(k_b, x, g_b, half, k_b * c_v)
@@ -530,22 +556,27 @@ def _mesh(par, tab, st, x, v):
         f_a += _contact(k_c, x, g_c, half, k_c * c_v) * l_c / l_a
     f_x = 0.0
     if not coast:
-        for row in range(6, n_rows, 2):
-            k_x = _lerp(tab, row, i0, i1, frac) * kf
-            u = x - _lerp(tab, row + 1, i0, i1, frac) - half
-            if k_x > 0.0 and u > 0.0:
-                f_x += max(k_x * (u + c_v), 0.0)
+        f_x = _drive(k0, x - g0 - half, c_v) + _drive(k1, x - g1 - half, c_v) + _drive(
+            k2, x - g2 - half, c_v)
     return l_a, l_b, f_a, f_b, f_x
 
 
 @numba.njit(cache=True, fastmath=True, inline="always")
-def _accel(par, tab, st, x, v, e_dd, w, inv_m):
+def _drive(k, u, c_v):
+    """Force of an off-path pair at drive-flank deflection ``u`` past its gap (0 apart)."""
+    if k > 0.0 and u > 0.0:
+        return max(k * (u + c_v), 0.0)
+    return 0.0
+
+
+@numba.njit(cache=True, fastmath=True, inline="always")
+def _accel(par, st, x, v, e_dd, w, inv_m):
     """x'' of the reduced model in mesh state ``st``, given e'' and the static force w there
     (``inv_m``: the inverse of the equivalent mass), and the mesh force.
 
     Each pair's force enters with its factor (1, or the sliding-friction moment factor).
     """
-    l_a, l_b, f_a, f_b, f_x = _mesh(par, tab, st, x, v)
+    l_a, l_b, f_a, f_b, f_x = _mesh(par, st, x, v)
     return (w - l_a * f_a - l_b * f_b - f_x) * inv_m - e_dd, f_a + f_b + f_x
 
 
@@ -624,7 +655,7 @@ def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins, half, ste
         st0 = _mesh_state(p, tab, pos, da0, kf0 * _pinion_factor(mu_c, mu_s, s1, c1))
         for step in range(step0, total + 1):
             # the mesh at (t, x) serves both the record of the state reached and stage 1 of RK4
-            l_a, l_b, f_a, f_b, f_x = _mesh(p, tab, st0, x, v)
+            l_a, l_b, f_a, f_b, f_x = _mesh(p, st0, x, v)
             k = step - n_transient
             f = f_a + f_b + f_x
             recorded = k_first <= k <= k_last
@@ -657,10 +688,10 @@ def _integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins, half, ste
             pos_1 = _wrap(pos + inc, n_tab)
             st_h = _mesh_state(p, tab, pos_h, dah, kfh * _pinion_factor(mu_c, mu_s, s1h, c1h))
             st1 = _mesh_state(p, tab, pos_1, da1, kf1 * _pinion_factor(mu_c, mu_s, s1n, c1n))
-            a2, f2 = _accel(p, tab, st_h, x + 0.5 * dt * v, v + 0.5 * dt * a1, eh, wh, inv_m)
-            a3, f3 = _accel(p, tab, st_h, x + 0.5 * dt * (v + 0.5 * dt * a1), v + 0.5 * dt * a2, eh,
+            a2, f2 = _accel(p, st_h, x + 0.5 * dt * v, v + 0.5 * dt * a1, eh, wh, inv_m)
+            a3, f3 = _accel(p, st_h, x + 0.5 * dt * (v + 0.5 * dt * a1), v + 0.5 * dt * a2, eh,
                             wh, inv_m)
-            a4, f4 = _accel(p, tab, st1, x + dt * (v + 0.5 * dt * a2), v + dt * a3, e1, w1, inv_m)
+            a4, f4 = _accel(p, st1, x + dt * (v + 0.5 * dt * a2), v + dt * a3, e1, w1, inv_m)
             if recorded:
                 force[j, k - k_first] = (f + 2.0 * (f2 + f3) + f4) / 6.0
             x += dt * (v + dt * (a1 + a2 + a3) / 6.0)
@@ -721,6 +752,20 @@ def simulate_two_dof(model: PairModel, t_eval: np.ndarray, rtol: float = 1e-9,
         v = rb1 * w1 - rb2 * w2 - eld - esd
         pos = np.mod(m.roll_speed * t, geom.base_pitch) / geom.base_pitch * n
         k_a, k_b, g_a, g_b, *off = (np.interp(pos, cells, tab) for tab in tables)
+        if m.k_off is not None:  # the last cell: each pair to its own next value
+            frac = pos - (n - 1)
+            last = frac >= 0
+
+            def moved(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+                return a[n - 1] + (b[0] - a[n - 1]) * frac
+
+            k_a = np.where(last, moved(rows[0], m.k_a), k_a)
+            g_a = np.where(last, moved(rows[1], m.g_a), g_a)
+            k_b = np.where(last, moved(m.k_a, m.k_b), k_b)
+            g_b = np.where(last, moved(m.g_a, m.g_b), g_b)
+            off = [np.where(last, v, o) for v, o in zip(
+                (0.0, NO_CONTACT, 0.0, NO_CONTACT, moved(rows[2], rows[4]),
+                 moved(rows[3], rows[5])), off, strict=True)]
         dz = m.half_backlash
         pairs = [(k_a, g_a, True), (k_b, g_b, True)] + [
             (off[2 * i], off[2 * i + 1], False) for i in range(OFF_PATH)]

@@ -43,6 +43,7 @@ from scipy.integrate import cumulative_simpson
 
 from physics.gear.geometry import MeshGeometry, mesh_geometry
 from physics.gear.tooth import ToothForm, checked_wear, generate_tooth
+from physics.gear.tooth_contact import flank_coordinate
 from physics.params import GearPair, Material, OutOfScope
 
 log = logging.getLogger(__name__)
@@ -194,13 +195,11 @@ class MeshStiffness:
     def _cut(self, form: ToothForm, s: np.ndarray, wear: np.ndarray, wheel: int) -> np.ndarray:
         """Reduction of the drive half-width at each profile height for wear on the grid s."""
         s, wear = checked_wear(s, wear)
-        radius = self.geometry.flank_radii(s)[wheel - 1]
-        # the grid may reach below this wheel's involute (a fillet's wear, continued by arc
-        # length: physics.gear.tooth_contact.flank_coordinate); its involute part is mapped here
-        R = self.geometry.curvature_radii(s)[wheel - 1]
-        on = R >= 0
-        order = np.argsort(radius[on])
-        depth = np.interp(form.radius, radius[on][order], wear[on][order], left=0.0, right=0.0)
+        # each profile point's depth at its flank coordinate: on the involute the roll that
+        # brings it onto the line of action, on the fillet its arc below the involute
+        order = np.argsort(s)
+        depth = np.interp(flank_coordinate(form, self.geometry, wheel), s[order], wear[order],
+                          left=0.0, right=0.0)
         return depth / form.nx
 
     def tooth(self, wheel: int, radius: np.ndarray, cumulative: _Cumulative | None = None

@@ -56,6 +56,10 @@ def prepare(cfg: DictConfig) -> LoopJob:
     opts = OmegaConf.to_container(cfg.loop, resolve=True)
     settings = LoopSettings(**opts)
     base = scenario_from_config(cfg)
+    if base.dynamics.flank_contact != "path":
+        raise ValueError(f"dynamics.flank_contact = {base.dynamics.flank_contact!r}: the loop's "
+                         "effects modify the contact on the path (the off-path pairs of the "
+                         "exact contact are not in them yet); leave it at 'path'")
     data, scn = read_measurements(cfg.data, base)
     history = parse_history(cfg.reference)
     reference = None

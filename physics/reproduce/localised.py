@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from physics.dynamics.model import build_model, simulate
+from physics.dynamics.model import EXACT_PHASES, build_model, simulate
 from physics.dynamics.teeth import per_tooth_model
 from physics.gear.stiffness import mesh_stiffness
 from physics.params import Scenario
@@ -54,20 +54,23 @@ def measured_rises(folder: Path | None) -> pd.DataFrame | None:
                          **{f: table[c] / new[c] for f, c in FEATURES.items()}})
 
 
-def table15_model(scn: Scenario, base: WearResult, thesis_tables: Path | None) -> pd.DataFrame:
+def table15_model(scn: Scenario, base: WearResult, thesis_tables: Path | None,
+                  contact: str = "exact") -> pd.DataFrame:
     """One row per depth and feature (Table 15's, then the indicators): ``wear_mm``,
     ``feature``, ``rise_measured`` (NaN without the thesis's tables, and for the indicators),
-    ``rise_one_tooth``, ``rise_all_teeth`` (module doc)."""
-    dyn = dataclasses.replace(scn.dynamics, flank_contact="exact",
+    ``rise_one_tooth``, ``rise_all_teeth`` (module doc); ``contact``: the dynamics'
+    ``flank_contact``."""
+    dyn = dataclasses.replace(scn.dynamics, flank_contact=contact,
                               duration_s=REVOLUTIONS * 60.0 / scn.operating.n1_rpm)
     scn = dataclasses.replace(scn, dynamics=dyn)
     ms = mesh_stiffness(scn.gear, scn.material)
     shape = base.pinion / base.pinion.max()
     z1 = scn.gear.z1
-    new = build_model(scn, ms)
+    new = build_model(scn, ms, n_phase=EXACT_PHASES)
     models = [per_tooth_model([new] * z1)]
     for depth in DEPTHS_UM:
-        worn = build_model(scn, ms, base.s, shape * depth * 1e-6, np.zeros_like(shape))
+        worn = build_model(scn, ms, base.s, shape * depth * 1e-6, np.zeros_like(shape),
+                           n_phase=EXACT_PHASES)
         models += [per_tooth_model([worn] + [new] * (z1 - 1)), per_tooth_model([worn] * z1)]
     force = simulate(models, dyn, every_phase=False).force
     accel = housing_acceleration(force, dyn.housing_mass_kg)

@@ -9,8 +9,8 @@ here, each choice named:
 - speed: 15 rev/s of the pinion (900 r/min); face width, bores and materials: the project's
   defaults (:mod:`physics.params`);
 - load: not stated. The model runs at each torque of ``TORQUES_NM`` (a plausible range for a
-  module-3 pair of this size, 20-200 N m); ``rms_model`` is the middle one and every torque has
-  a column of its own. Nothing is calibrated to the rig;
+  module-3 pair of this size, 20-200 N m); ``rms_model`` is the 100 N m one and every torque
+  has a column of its own. Nothing is calibrated to the rig;
 - wear state of a stage: the pair worn from new under the dry Archard law by the contact its
   worn flanks make (:func:`physics.tribology.contact_wear.simulate_contact_wear`, at the
   stage's torque) until the deepest point of either active profile reaches the stage's depth
@@ -24,8 +24,8 @@ here, each choice named:
   gear's, whatever the housing mass.
 
 Each column is divided by its new-gear value (the rig's healthy stage mean). The summary gives,
-per torque, Spearman's rank correlation over the stages and the rises at the stages nearest
-0.4 and 0.9 mm, model beside rig.
+per contact and torque, Spearman's rank correlation over the stages and the rises at the stages
+nearest 0.4 and 0.9 mm, model beside rig.
 """
 
 # ruff: noqa: E402 (the imports after the handlers: see install_at_start)
@@ -45,7 +45,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from physics.dynamics.model import build_model, simulate
+from physics.dynamics.model import EXACT_PHASES, build_model, simulate
 from physics.files import check_writable, pyplot, save_figure, write_csv
 from physics.params import Scenario
 from physics.tribology.contact_wear import simulate_contact_wear
@@ -53,7 +53,7 @@ from physics.tribology.contact_wear import simulate_contact_wear
 #: the rig's stated geometry and speed
 RIG_GEAR = {"module_mm": 3.0, "z1": 18, "z2": 35}
 RIG_SPEED_RPM = 900.0
-#: torques the unknown load is swept over [N m]; the middle one is ``rms_model``
+#: torques the unknown load is swept over [N m]; the 100 N m one is ``rms_model``
 TORQUES_NM = (20.0, 50.0, 100.0, 200.0)
 #: record length of each stage's simulation [s] (7.5 pinion revolutions)
 DURATION_S = 0.5
@@ -94,10 +94,6 @@ def rig_scenario(torque_Nm: float) -> Scenario:
         dynamics=dataclasses.replace(base.dynamics, duration_s=DURATION_S))
 
 
-#: mesh phases of the dynamic model's tables (the rig runs at 270 Hz mesh frequency)
-N_PHASE = 512
-
-
 def model_rms(torque_Nm: float, depths_mm: np.ndarray) -> dict[str, np.ndarray]:
     """Housing-acceleration RMS of the rig's pair worn to each depth, over the new pair's, with
     the exact and the path contact (keys ``exact``, ``path``)."""
@@ -108,7 +104,7 @@ def model_rms(torque_Nm: float, depths_mm: np.ndarray) -> dict[str, np.ndarray]:
     for contact in ("exact", "path"):
         sc = dataclasses.replace(scn, dynamics=dataclasses.replace(scn.dynamics,
                                                                    flank_contact=contact))
-        models = [build_model(sc, s_grid=run.s, wear1=w1, wear2=w2, n_phase=N_PHASE)
+        models = [build_model(sc, s_grid=run.s, wear1=w1, wear2=w2, n_phase=EXACT_PHASES)
                   for w1, w2 in states]
         spread = simulate(models, sc.dynamics, every_phase=False).force.std(axis=1)
         out[contact] = spread / spread[np.flatnonzero(depths_mm == 0)[0]]
@@ -117,42 +113,51 @@ def model_rms(torque_Nm: float, depths_mm: np.ndarray) -> dict[str, np.ndarray]:
 
 def rig_comparison(table: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
     """One row per stage (``wear_mm``, ``rms_measured``, ``rms_model`` and one column per
-    torque) and the summary per torque (rank correlation, rises at ``RISE_AT_MM``)."""
+    torque and contact) and the summary per contact and torque (rank correlation, rises at
+    ``RISE_AT_MM``)."""
     means = stage_means(table)
     depths = means["wear_mm"].to_numpy(dtype=float)
     for torque in TORQUES_NM:
         rms = model_rms(torque, depths)
         means[f"rms_model_{torque:g}Nm"] = rms["exact"]
         means[f"rms_path_{torque:g}Nm"] = rms["path"]
-    means["rms_model"] = means[f"rms_model_{TORQUES_NM[len(TORQUES_NM) // 2]:g}Nm"]
+    means["rms_model"] = means["rms_model_100Nm"]
     rows = []
-    for torque in TORQUES_NM:
-        col = means[f"rms_model_{torque:g}Nm"]
-        row = {"torque_Nm": torque,
-               "rank_correlation": stats.spearmanr(means["rms_measured"], col).statistic}
-        for at in RISE_AT_MM:
-            i = int(np.argmin(np.abs(depths - at)))
-            row[f"rise_measured_{at:g}mm"] = means["rms_measured"].iloc[i]
-            row[f"rise_model_{at:g}mm"] = col.iloc[i]
-            row[f"model_over_measured_{at:g}mm"] = col.iloc[i] / means["rms_measured"].iloc[i]
-        rows.append(row)
+    for contact, prefix in (("exact", "rms_model"), ("path", "rms_path")):
+        for torque in TORQUES_NM:
+            col = means[f"{prefix}_{torque:g}Nm"]
+            row = {"contact": contact, "torque_Nm": torque,
+                   "rank_correlation": stats.spearmanr(means["rms_measured"], col).statistic}
+            for at in RISE_AT_MM:
+                i = int(np.argmin(np.abs(depths - at)))
+                row[f"rise_measured_{at:g}mm"] = means["rms_measured"].iloc[i]
+                row[f"rise_model_{at:g}mm"] = col.iloc[i]
+                row[f"model_over_measured_{at:g}mm"] = (col.iloc[i]
+                                                        / means["rms_measured"].iloc[i])
+            rows.append(row)
     return means, pd.DataFrame(rows)
 
 
 def plot_rig_comparison(means: pd.DataFrame, path: Path) -> None:
-    """Measured and modelled RMS rise against wear, one line per torque."""
+    """Measured and modelled RMS rise against wear, one line per torque; the exact contact on
+    the left, the path contact on the right."""
     plt = pyplot()
-    fig, ax = plt.subplots(figsize=(6.4, 4.0))
-    ax.plot(means["wear_mm"], means["rms_measured"], "ko-", label="rig (stage means)")
-    for torque in TORQUES_NM:
-        ax.plot(means["wear_mm"], means[f"rms_model_{torque:g}Nm"], ".-",
-                label=f"model, {torque:g} N m")
-    ax.set_xlabel("wear depth of the stage [mm]")
-    ax.set_ylabel("housing acceleration RMS / new")
-    ax.set_yscale("log")
-    ax.legend(fontsize=8)
-    ax.grid(alpha=0.3)
+    fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.0), sharey=True)
+    for ax, (prefix, title) in zip(axes, (("rms_model", "flanks as they meet (exact)"),
+                                          ("rms_path", "contact on the path (thesis 2.2)")),
+                                   strict=True):
+        ax.plot(means["wear_mm"], means["rms_measured"], "ko-", label="rig (stage means)")
+        for torque in TORQUES_NM:
+            ax.plot(means["wear_mm"], means[f"{prefix}_{torque:g}Nm"], ".-",
+                    label=f"model, {torque:g} N m")
+        ax.set_title(title)
+        ax.set_xlabel("wear depth of the stage [mm]")
+        ax.set_yscale("log")
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("housing acceleration RMS / new")
+    axes[0].legend(fontsize=8)
     save_figure(fig, path)
+    plt.close(fig)
 
 
 def default_table() -> Path:

@@ -156,6 +156,8 @@ CASES = [
     ("train", ["data.val_replicates=0"], None, "data.val_replicates = 0"),
     ("predict", ["ckpt=missing.pt", "input=x.csv"], None, "missing.pt"),
     ("loop", ["data=missing"], None, "'missing'"),
+    ("loop", ["data=missing", "dynamics.flank_contact=exact"], None,
+     "dynamics.flank_contact = 'exact': the loop's effects"),
     ("loop", ["data={input}"], _empty_manifest, "manifest.csv"),
     ("loop", ["data={input}"], _garbage_npy, "record 'r01': signals/r01.npy"),
     ("loop", ["data={input}"], _bad_gear, "gear.z1 = 'abc'"),

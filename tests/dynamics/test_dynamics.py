@@ -10,6 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from physics.dynamics.model import (
+    EXACT_PHASES,
     _entry_shift,
     anti_aliased,
     anti_aliasing_filter,
@@ -392,3 +393,13 @@ def test_exact_contact_of_new_teeth_takes_the_corners_load(ms):
     exact = simulate(build_model(scn, ms), scn.dynamics)
     assert exact.force.std() < path.force.std()
     assert exact.force.mean() == pytest.approx(path.force.mean(), rel=5e-3)
+
+
+def test_exact_contact_converges_in_the_tables_phases(ms):
+    """The early and late contact of the exact contact engage over a few per cent of the mesh
+    period: at EXACT_PHASES the new pair's force spread is within 2 % of four times as many
+    phases' (each pair interpolated to its own value where the slots move on)."""
+    scn = _scn(flank_contact="exact", eccentricity1_um=0.0, duration_s=0.05)
+    spread = [simulate([build_model(scn, ms, n_phase=n)], scn.dynamics,
+                       every_phase=False).force.std() for n in (EXACT_PHASES, 4 * EXACT_PHASES)]
+    assert spread[0] == pytest.approx(spread[1], rel=0.02)

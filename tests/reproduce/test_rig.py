@@ -40,29 +40,46 @@ def test_the_comparison_has_a_row_per_stage_each_over_its_new_value(stages):
 
 def test_the_docs_summary_table_is_the_files(summary):
     """Every row of the summary table in the docs is the file's, to the digits printed."""
-    rows = [line for line in _section().splitlines() if re.match(r"\| \d+ \|", line)]
-    assert len(rows) == len(summary)
+    rows = [line for line in _section().splitlines() if re.match(r"\| (exact|path) \|", line)]
+    assert len(rows) == len(summary) == 2 * len(rig.TORQUES_NM)
     for line, (_, row) in zip(rows, summary.iterrows(), strict=True):
         cells = [c.strip() for c in line.strip("|").split("|")]
-        expected = [f"{row['torque_Nm']:g}", f"{row['rank_correlation']:.2f}",
+        expected = [row["contact"], f"{row['torque_Nm']:g}", f"{row['rank_correlation']:.2f}",
                     *(f"{row[f'{k}_{at:g}mm']:.2f}" for at in rig.RISE_AT_MM
                       for k in ("rise_measured", "rise_model", "model_over_measured"))]
         assert cells == expected
 
 
-def test_the_docs_prose_figures_are_the_files(stages):
+def test_the_docs_prose_figures_are_the_files(stages, summary):
     text = _section()
     first = stages.loc[stages["wear_mm"] > 0].iloc[0]
+    late = stages["wear_mm"] >= 0.5
+    exact = [f"rms_model_{t:g}Nm" for t in rig.TORQUES_NM]
+    path = [f"rms_path_{t:g}Nm" for t in rig.TORQUES_NM]
+    corr = summary.groupby("contact")["rank_correlation"]
     quoted = {
         "rig at its first worn stage": f"{first['rms_measured']:.2f} at "
                                        f"{first['wear_mm'] * 1e3:.0f} um",
         "rig's largest stage mean": f"{stages['rms_measured'].max():.2f}",
-        "model's largest at 50-200 N m": f"{max(stages[f'rms_model_{t:g}Nm'].max() for t in (50, 100, 200)):.2f}",  # noqa: E501
-        "path contact's largest at 20 N m": f"{stages['rms_path_20Nm'].max():.1f}",
-        "path contact's largest at 200 N m": f"{stages['rms_path_200Nm'].max():.2f}",
+        "exact at the first stage": f"{first[exact].min():.2f}-{first[exact].max():.2f} at 40 um",
+        "exact's late medians": f"{stages.loc[late, exact].median().min():.1f}-"
+                                f"{stages.loc[late, exact].median().max():.1f} times new",
+        "rig's late median": f"{stages.loc[late, 'rms_measured'].median():.1f}",
+        "exact's largest": f"{stages[exact].max().max():.2f}",
+        "exact's rank correlations": f"{corr.min()['exact']:.2f}-{corr.max()['exact']:.2f}",
+        "path's rank correlations": f"{corr.min()['path']:.2f}-{corr.max()['path']:.2f}",
+        "path at 20 N m": f"{stages['rms_path_20Nm'].max():.2f} times new",
+        "path at 100-200 N m": f"at most {stages[path[2:]].max().max():.2f} times new",
+        "path's first relief": f"{first[path[1:]].min():.2f}-{first[path[1:]].max():.2f} at 40 um",
     }
     missing = {k: v for k, v in quoted.items() if v not in text}
     assert not missing, f"figures the docs do not quote as the files give them: {missing}"
+    at50 = summary[(summary.contact == "path") & (summary.torque_Nm == 50)].iloc[0]
+    assert at50.rank_correlation >= 0.9
+    assert all(1 / 1.5 <= at50[f"model_over_measured_{a:g}mm"] <= 1.5 for a in rig.RISE_AT_MM)
+    below = stages.loc[stages.wear_mm > 0, path[2:]].lt(
+        stages.loc[stages.wear_mm > 0, "rms_measured"], axis=0).all().all()
+    assert below  # "stays below the rig at every stage"
 
 
 def test_the_command_refuses_a_missing_table(tmp_path, capsys):

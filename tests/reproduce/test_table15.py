@@ -26,10 +26,11 @@ def test_the_docs_table15_is_the_models():
     table = table15_model(scn, simulate_wear(scn, 1e6), given)  # the reproduction's base run
     features = table[table.feature.isin(list(FEATURES))]
     shown = table[~table.feature.isin(list(FEATURES)) & (table.wear_mm == 0.015)]
-    assert [cells[1:] for cells in rows[len(features):]] == [
-        [r.feature.replace("_", " "), f"{r.rise_one_tooth:.2f}", f"{r.rise_all_teeth:.2f}"]
-        for _, r in shown.iterrows()]
-    rows = rows[:len(features)]
+    quoted = " ".join(section.split())
+    for _, r in shown.iterrows():
+        text = (f"{r.feature.replace('_', ' ')} {r.rise_one_tooth:.2f} "
+                f"({r.rise_all_teeth:.2f})")
+        assert text in quoted, text
     assert len(rows) == len(features)
     for cells, (_, r) in zip(rows, features.iterrows(), strict=True):
         assert cells[:2] == [f"{r.wear_mm * 1e3:g}", r.feature.replace("_", "-")]
@@ -43,7 +44,18 @@ def test_the_docs_table15_is_the_models():
     # the prose's claims
     rms = table[table.feature == "rms"].set_index("wear_mm")
     for depth in (0.005, 0.015):
-        assert rms.rise_all_teeth[depth] == pytest.approx(rms.rise_measured[depth], rel=0.1)
+        assert rms.rise_all_teeth[depth] == pytest.approx(rms.rise_measured[depth], rel=0.12)
     p2p = table[table.feature == "peak_to_peak"]
     ratio = p2p.rise_measured / p2p.rise_one_tooth
     assert ratio.max() < 1.6 and ratio.min() > 1 / 1.6
+    assert rms.rise_all_teeth[0.01] == pytest.approx(1.22 * rms.rise_measured[0.01], rel=0.01)
+
+
+def test_on_the_path_root_wear_is_a_relief():
+    """The docs' contrast: with the contact on the path the root wear on every tooth lowers
+    RMS, peak-to-peak and kurtosis, and on one tooth leaves them within 2 % of new."""
+    scn = Scenario()
+    table = table15_model(scn, simulate_wear(scn, 1e6), None, contact="path")
+    features = table[table.feature.isin(list(FEATURES))]
+    assert (features.rise_all_teeth < 1).all()
+    assert (abs(features.rise_one_tooth - 1) < 0.02).all()
