@@ -27,6 +27,16 @@ if os.environ.get("PYTEST_XDIST_WORKER"):
     threadpool_limits(1)
 
 
+@pytest.fixture(autouse=True)
+def _one_thread_each_worker():
+    """Keep the workers' thread settings for every test: a library that rewrites the
+    environment would otherwise leave numba, which reads NUMBA_NUM_THREADS again whenever it
+    compiles, refusing a thread count that differs from its running pool's."""
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        os.environ.update(dict.fromkeys(THREADS, "1"))
+    yield
+
+
 @pytest.fixture(scope="session")
 def baseline() -> Scenario:
     return Scenario()
