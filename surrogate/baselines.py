@@ -1,31 +1,28 @@
-"""The models every run scores beside the network, on the same test rows and target.
+"""The models every run scores beside the one it keeps, on the same test rows and target.
 
 - the **null model** (:func:`typical_wear`): the training rows' median wear, whatever the
-  features say; a network that does not beat it has learnt nothing from vibration;
-- a **linear model** (:class:`LinearModel`): least squares (numpy) of the target on the
-  network's own inputs, standardised as the network reads them, fitted on the training rows;
-  a network that does not beat it adds nothing a straight line of the same inputs does not;
+  features say; a model that does not beat it has learnt nothing from vibration;
 - the thesis's **estimator** (:func:`fit_estimator`, thesis 4.4,
-  :class:`physics.estimators.empirical_inverse.EmpiricalInverse`) where its inputs exist: DTE
-  peak-to-peak and kurtosis, and a cycle count in the training rows.
+  :class:`physics.estimators.empirical_inverse.EmpiricalInverse`) where its inputs exist in
+  the rows: DTE peak-to-peak and kurtosis, and a cycle count in the training rows;
+- the linear and monotone models of the same inputs (:mod:`surrogate.candidates`, which also
+  fits them as candidates).
 
-Each reading is clipped at zero wear, as the network's is.
+Each reading is clipped at zero wear.
 """
 
 from __future__ import annotations
-
-from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 
 from physics.estimators.empirical_inverse import EmpiricalInverse, wear_errors
+from surrogate import candidates
 
-#: the baselines, in the order reports list them
-NAMES = ("linear", "median", "estimator")
+#: the models scored beside the one kept, in the order reports list them
+NAMES = ("network", "linear", "monotone", "estimator", "median")
 #: how the log and the plot name them
-LABELS = {"network": "network", "linear": "linear model", "median": "median (null model)",
-          "estimator": "thesis estimator"}
+LABELS = {**candidates.LABELS, "kept": "model kept"}
 
 
 def typical_wear(train: pd.DataFrame, target: str) -> float:
@@ -55,31 +52,12 @@ def estimator_missing(train: pd.DataFrame) -> str | None:
     return None
 
 
-@dataclass(frozen=True)
-class LinearModel:
-    """``y = b0 + x_scaled b``: least squares (``numpy.linalg.lstsq``) on standardised inputs."""
-
-    coef: np.ndarray  # intercept first
-
-    @classmethod
-    def fit(cls, x: np.ndarray, y: np.ndarray) -> LinearModel:
-        a = np.column_stack([np.ones(len(x)), np.asarray(x, float)])
-        coef, *_ = np.linalg.lstsq(a, np.asarray(y, float), rcond=None)
-        return cls(coef)
-
-    def predict(self, x: np.ndarray) -> np.ndarray:
-        return np.maximum(self.coef[0] + np.asarray(x, float) @ self.coef[1:], 0.0)
-
-
-def baseline_readings(train_raw: pd.DataFrame, x_train: np.ndarray, test_raw: pd.DataFrame,
-                      x_test: np.ndarray, target: str) -> tuple[dict[str, np.ndarray], str | None]:
-    """Each baseline's reading of the test rows: ``x_*`` the network's standardised inputs of
-    the training and test rows, ``*_raw`` the rows as measured (for the median and the
-    estimator). Returns the readings (the estimator's only where :func:`estimator_missing`
+def baseline_readings(train_raw: pd.DataFrame, test_raw: pd.DataFrame, target: str
+                      ) -> tuple[dict[str, np.ndarray], str | None]:
+    """The median's and the estimator's readings of the test rows, fitted on the training rows
+    as measured. Returns the readings (the estimator's only where :func:`estimator_missing`
     finds nothing missing and its fit succeeds) and why the estimator is absent."""
-    y = train_raw[target].to_numpy(float)
-    out = {"linear": LinearModel.fit(x_train, y).predict(x_test),
-           "median": np.full(len(test_raw), typical_wear(train_raw, target))}
+    out = {"median": np.full(len(test_raw), typical_wear(train_raw, target))}
     why = estimator_missing(train_raw)
     dte = list(("dte_peak_to_peak", "dte_kurtosis"))
     if why is None and not (set(dte) <= set(test_raw.columns)
@@ -108,7 +86,8 @@ def shown(key: str, value: float) -> str:
 
 def not_better_line(network: dict[str, float], linear: dict[str, float]) -> str | None:
     """The one line a run prints when the network is not better than the linear model of
-    the same inputs on the same rows (None when it is better)."""
+    the same inputs on the same rows (None when it is better); where the run kept another
+    model, the line says so (:func:`surrogate.training.report_test`)."""
     key, net = headline(network)
     lin = linear.get(key, float("nan"))
     if not (np.isfinite(net) and np.isfinite(lin)) or net < lin:

@@ -65,7 +65,9 @@ beat the estimator refitted on the same (:func:`labelled_counts`); and ``one_rig
 user's table of one rig of the independent simulator, two speeds and 32 wear stages, the
 acceleration RMS and one other feature, trained at one speed and tested at the other, with
 stages left out, and cross-validated leaving each stage out in turn, beside the linear model
-and the estimator (:func:`one_rig`; its table ``one_rig_table.csv``).
+and the estimator (:func:`one_rig`; its table ``one_rig_table.csv``); and ``real_rig.csv``
+(``real_rig_stages.csv``): the public rig's measured table left out one stage at a time, every
+model's figures side by side (:func:`real_rig`; ``--real-rig-only`` runs this part alone).
 """
 
 from __future__ import annotations
@@ -461,7 +463,8 @@ def one_rig(root: Path, out: Path, extra: list[str], seed: int = 0) -> list[dict
     """The one-rig table (:func:`one_rig_table`) written to ``out`` and trained on as a user
     would, once per split of :data:`ONE_RIG_SPLITS`; per split a row of the network's, the
     linear model's and the estimator's test errors (their ``metrics.json``), the interval's
-    coverage, the flagged share and the share missed and not flagged."""
+    coverage, the flagged share and the share missed and not flagged; ``kept`` the kind the
+    run kept (``data.cv=logo``: each kind and how many folds kept it, ``linear:30 network:2``)."""
     table = out / "one_rig_table.csv"
     frame = one_rig_table()
     atomic_write(table, lambda p: frame.to_csv(p, index=False))
@@ -472,8 +475,12 @@ def one_rig(root: Path, out: Path, extra: list[str], seed: int = 0) -> list[dict
                            *extra, f"seed={seed}"))
         m = json.loads((folder / "metrics.json").read_text())
         rows.append({"scenario": f"one_rig/{split}", "seed": seed,
+                     "kept": m.get("model_kind") or " ".join(  # logo: each fold's own
+                         f"{k[len('folds_kept_'):]}:{n}" for k, n in sorted(m.items())
+                         if k.startswith("folds_kept_")),
                      **{f"{who}_mre_pct": m.get(f"test_{p}mean_relative_error_pct", math.nan)
-                        for who, p in (("network", ""), ("linear", "linear_"),
+                        for who, p in (("kept", ""), ("network", "network_"),
+                                       ("linear", "linear_"), ("monotone", "monotone_"),
                                        ("estimator", "estimator_"), ("median", "median_"))},
                      "interval_coverage": m["test_interval_coverage"],
                      "flag_rate": m["test_flagged_share"],
@@ -481,7 +488,61 @@ def one_rig(root: Path, out: Path, extra: list[str], seed: int = 0) -> list[dict
     return rows
 
 
-def run(out: Path, root: Path, extra: list[str], seeds: int = 5
+#: the public rig table (../shared/real/institute_rig, README there) beside the repository
+REAL_RIG = Path(__file__).resolve().parents[1].parent / "shared" / "real" / "institute_rig" \
+    / "rig_15rps_records.csv"
+#: its run as a user types it, every stage left out in turn (train.py overrides)
+REAL_RIG_RUN = ["data.inputs=[acc_rms_g,fm_energy]", "data.target=wear_mm",
+                "data.units={acc_rms_g: g, fm_energy: '1', wear_mm: mm}", "data.group=stage",
+                "data.group_by=stage", "data.cv=logo", "data.val_replicates=4"]
+#: the models real_rig.csv lists, the kept one first
+REAL_RIG_MODELS = ("kept", "network", "linear", "monotone", "median")
+
+
+def real_rig(root: Path, out: Path, extra: list[str], table: Path = REAL_RIG
+             ) -> pd.DataFrame | None:
+    """The real rig's table (:data:`REAL_RIG`) left out one stage at a time as a user runs it
+    (:data:`REAL_RIG_RUN`; each fold chooses its model by cross-validation over its own
+    training stages): one row per model of its mean relative error over the worn stages'
+    folds and its 95 % interval's coverage over every fold's rows (the kept model's own
+    interval; the linear and monotone models' CV+ intervals), and how many folds kept each
+    kind. Writes ``real_rig.csv`` and ``real_rig_stages.csv`` (each stage's errors). None,
+    with a log line, where the table is absent (an installed copy has no ../shared)."""
+    table = Path(table)
+    if not table.is_file():
+        log.warning("the real rig's table %s is absent: its leave-one-stage-out part is "
+                    "skipped (pass --real-rig PATH)", table)
+        return None
+    folder = out / "models" / "real_rig"
+    start = time.perf_counter()
+    train(train_config(root, folder, f"data.table={table}", *REAL_RIG_RUN, *extra))
+    seconds = time.perf_counter() - start
+    cv = pd.read_csv(folder / "cv.csv")
+    rows = []
+    for who in REAL_RIG_MODELS:
+        p = "" if who == "kept" else f"{who}_"
+        mre = cv.get(f"test_{p}mean_relative_error_pct")
+        cover = cv.get(f"test_{p}interval_coverage")
+        weights = cv.test_rows
+        rows.append({"model": who, "mean_relative_error_pct":
+                     float(mre.mean()) if mre is not None else math.nan,
+                     "interval_coverage_rows": float(np.average(cover, weights=weights))
+                     if cover is not None and cover.notna().all() else math.nan,
+                     "interval_coverage_stages": float(cover.mean())
+                     if cover is not None and cover.notna().all() else math.nan,
+                     "folds_kept": int((cv.model_kind == who).sum()) if who != "kept"
+                     else len(cv), "seconds": seconds})
+    summary = pd.DataFrame(rows)
+    stages = cv[["stage", "test_rows", "model_kind",
+                 *[c for who in REAL_RIG_MODELS
+                   for c in [f"test_{'' if who == 'kept' else who + '_'}mean_relative_error_pct"]
+                   if c in cv.columns], "test_interval_coverage"]]
+    atomic_write(out / "real_rig.csv", lambda p: summary.to_csv(p, index=False))
+    atomic_write(out / "real_rig_stages.csv", lambda p: stages.to_csv(p, index=False))
+    return summary
+
+
+def run(out: Path, root: Path, extra: list[str], seeds: int = 5, real: Path = REAL_RIG
         ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Train the models of :data:`MODELS` (those of :data:`SEEDED` once per training seed: the
     seed draws their split and start, and one seed's figure says little) and, for
@@ -573,6 +634,7 @@ def run(out: Path, root: Path, extra: list[str], seeds: int = 5
     atomic_write(out / "labelled_counts.csv", lambda p: counts.to_csv(p, index=False))
     rig = pd.DataFrame(one_rig(root, out, extra))
     atomic_write(out / "one_rig.csv", lambda p: rig.to_csv(p, index=False))
+    real_rig(root, out, extra, real)
     return table, counts
 
 
@@ -668,6 +730,19 @@ def refusal(extra: list[str]) -> str | None:
     return None
 
 
+def copy_figures(out: Path, figures: Path | None,
+                 names: tuple[str, ...] = ("real_rig.csv", "real_rig_stages.csv")) -> None:
+    """Copy the real rig's tables from ``out`` into ``figures`` (``--figures``), atomically."""
+    if figures is None:
+        return
+    figures.mkdir(parents=True, exist_ok=True)
+    for name in names:
+        if (out / name).is_file():
+            data = (out / name).read_bytes()
+            atomic_write(figures / name, lambda p, data=data: Path(p).write_bytes(data))
+            print(f"-> {figures / name}")
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m surrogate.benchmark",
                                      description=__doc__.split("\n\n")[0],
@@ -692,6 +767,20 @@ def main(argv: list[str] | None = None) -> None:
                         help="a train.py override for every network trained (repeatable; "
                              "e.g. model.interval=0.975; not case, seed or data.*, which each "
                              "study sets), checked before any work")
+    parser.add_argument("--real-rig", type=Path, default=REAL_RIG, metavar="PATH",
+                        help="the real rig's record table left out one stage at a time "
+                             "(real_rig.csv; default ../shared/real/institute_rig/"
+                             "rig_15rps_records.csv beside the repository, skipped with a "
+                             "message where absent)")
+    parser.add_argument("--real-rig-only", action="store_true",
+                        help="instead: only the real rig's part (about 15 min on 2 cores)")
+    parser.add_argument("--one-rig-only", action="store_true",
+                        help="instead: only the one-rig part (one_rig.csv, seed 0; about "
+                             "15 min on 2 cores)")
+    parser.add_argument("--figures", type=Path, default=None, metavar="DIR",
+                        help="with --real-rig-only or --one-rig-only: also copy the tables "
+                             "it writes into DIR (docs/figures: the tables docs/surrogate.md "
+                             "quotes, checked by tests/surrogate/test_doc_figures.py)")
     parser.add_argument("--narrow-ranges", action="store_true",
                         help="instead: case-3 networks of the default nuisance ranges, of "
                              "narrow ones (NARROW_RANGES) and of two steps between, --seeds "
@@ -702,6 +791,9 @@ def main(argv: list[str] | None = None) -> None:
     out = args.out or Path("logs/benchmark") / datetime.now().strftime("%Y-%m-%d_%H-%M-%S")
     if args.seeds < 1:
         parser.error(f"--seeds {args.seeds}: give at least 1")
+    if args.figures is not None and not (args.real_rig_only or args.one_rig_only):
+        parser.error(f"--figures {args.figures}: copies the tables of --real-rig-only or "
+                     "--one-rig-only; add one of them")
     given = {**({f"--max-epochs {args.max_epochs}": f"trainer.max_epochs={args.max_epochs}"}
                  if args.max_epochs else {}),
              **{f"--override {o}": o for o in args.override}}
@@ -709,6 +801,21 @@ def main(argv: list[str] | None = None) -> None:
     refused = refusal(extra)
     if refused:
         parser.error(f"{' '.join(given)}: {refused}")
+    if args.real_rig_only:
+        summary = real_rig(Path.cwd(), out.resolve(), extra, args.real_rig)
+        if summary is not None:
+            copy_figures(out.resolve(), args.figures)
+            print(summary.to_string(index=False))
+            print(f"\n-> {out / 'real_rig.csv'}, {out / 'real_rig_stages.csv'}")
+        return
+    if args.one_rig_only:
+        rig = pd.DataFrame(one_rig(Path.cwd(), out.resolve(), extra))
+        atomic_write(out.resolve() / "one_rig.csv", lambda p: rig.to_csv(p, index=False))
+        copy_figures(out.resolve(), args.figures, ("one_rig.csv",))
+        with pd.option_context("display.width", 200, "display.float_format", "{:.4g}".format):
+            print(rig.to_string(index=False))
+        print(f"\n-> {out / 'one_rig.csv'}")
+        return
     if args.narrow_ranges:
         table = narrow_ranges(Path.cwd(), out.resolve(), extra, args.seeds)
         atomic_write(out.resolve() / "narrow_ranges.csv",
@@ -717,7 +824,7 @@ def main(argv: list[str] | None = None) -> None:
             print(range_summary(table).to_string())
         print(f"\n-> {out / 'narrow_ranges.csv'}")
         return
-    table, counts = run(out.resolve(), Path.cwd(), extra, args.seeds)
+    table, counts = run(out.resolve(), Path.cwd(), extra, args.seeds, args.real_rig)
     rig = pd.read_csv(out.resolve() / "one_rig.csv")
     cols = ["scenario", "estimator", "seed", "rmse", "r2", "mean_relative_error_pct",
             "max_relative_error_pct", "interval_coverage", "flag_rate", "missed_not_flagged",

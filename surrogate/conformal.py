@@ -17,6 +17,15 @@ of the held-out rows:
 
 Rows one by one are groups of one row each: one computation serves both. Where ``level``
 exceeds what the units can give (``K / (K + 1)``: :func:`attainable`), the largest score.
+
+:func:`cv_plus` is the interval of CV+ (Barber, Candes, Ramdas & Tibshirani, "Predictive
+inference with the jackknife+", Ann. Statist. 49 (2021) 486, sec. 2.3 and 3) with the same
+weights: each held-out row ``i`` of cross-validation fold ``k(i)`` gives ``mu_-k(i)(x) - R_i``
+and ``mu_-k(i)(x) + R_i``, ``R_i`` its out-of-fold residual, and the bounds are the weighted
+``level`` quantiles of those values from below and above, each group (a wear stage, a
+gearbox) weighing ``1 / (K + 1)`` however many rows it holds. MAPIE's ``CrossConformalRegressor``
+splits by group but weighs every row alike (its documentation: "conformity scores are still
+uniformly weighted"), so a group of 250 rows would count 250 times.
 """
 
 from __future__ import annotations
@@ -35,18 +44,9 @@ def attainable(level: float, units: int) -> bool:
     return units / (units + 1) >= level * (1 - SLACK)
 
 
-def exchangeable_quantile(scores: np.ndarray, level: float,
-                          groups: np.ndarray | None = None) -> float:
-    """The conformal ``level`` quantile of ``scores`` (module text); ``groups`` labels each
-    score's gearbox (any hashable labels; None: every row its own)."""
-    scores = np.asarray(scores, float)
-    if scores.ndim != 1 or scores.size == 0:
-        raise ValueError("the held-out scores must be a non-empty 1-D array")
-    if not np.isfinite(scores).all():
-        raise ValueError(f"{int((~np.isfinite(scores)).sum())} held-out scores are not finite")
-    if not 0 < level < 1:
-        raise ValueError(f"level = {level!r} must lie in (0, 1)")
-    n = scores.size
+def unit_weights(n: int, groups: np.ndarray | None = None) -> np.ndarray:
+    """Each of ``n`` held-out rows' weight: ``1 / ((K + 1) rows of its group)`` for ``K``
+    groups (``groups`` None: every row its own), so that each group sums to ``1 / (K + 1)``."""
     if groups is None:
         of_row = np.arange(n)
     else:
@@ -55,7 +55,40 @@ def exchangeable_quantile(scores: np.ndarray, level: float,
             raise ValueError(f"{len(labels)} group labels for {n} scores")
         of_row, _ = pd.factorize(labels, use_na_sentinel=False)
     sizes = np.bincount(of_row)
-    order = np.argsort(scores, kind="stable")
-    weight = 1.0 / ((len(sizes) + 1) * sizes[of_row])
-    reached = np.cumsum(weight[order]) >= level * (1 - SLACK)
-    return float(scores[order][int(np.argmax(reached)) if reached.any() else n - 1])
+    return 1.0 / ((len(sizes) + 1) * sizes[of_row])
+
+
+def exchangeable_quantile(scores: np.ndarray, level: float,
+                          groups: np.ndarray | None = None) -> float | np.ndarray:
+    """The conformal ``level`` quantile of ``scores`` (module text); ``groups`` labels each
+    score's gearbox (any hashable labels; None: every row its own). ``scores`` of shape
+    ``(m, n)``: the quantile of each of the ``m`` rows over the same ``n`` held-out units."""
+    scores = np.asarray(scores, float)
+    if scores.ndim not in (1, 2) or scores.size == 0:
+        raise ValueError("the held-out scores must be a non-empty 1-D (or 2-D) array")
+    if not np.isfinite(scores).all():
+        raise ValueError(f"{int((~np.isfinite(scores)).sum())} held-out scores are not finite")
+    if not 0 < level < 1:
+        raise ValueError(f"level = {level!r} must lie in (0, 1)")
+    n = scores.shape[-1]
+    weight = unit_weights(n, groups)
+    flat = scores.reshape(-1, n)
+    order = np.argsort(flat, axis=1, kind="stable")
+    reached = np.cumsum(weight[order], axis=1) >= level * (1 - SLACK)
+    at = np.where(reached.any(axis=1), np.argmax(reached, axis=1), n - 1)
+    value = np.take_along_axis(flat, order, axis=1)[np.arange(len(flat)), at]
+    return float(value[0]) if scores.ndim == 1 else value
+
+
+def cv_plus(fold_means: np.ndarray, fold_of: np.ndarray, residuals: np.ndarray, level: float,
+            groups: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The CV+ interval (module text) of ``m`` new rows: ``fold_means`` ``(m, K)`` each fold
+    model's reading of them, ``fold_of`` the fold of each of the ``n`` held-out rows,
+    ``residuals`` their out-of-fold ``|y - mu_-k(x)|``, ``groups`` their groups. Returns the
+    lower and upper bounds (``level`` quantiles of ``mu - R`` from below, ``mu + R`` from
+    above)."""
+    means = np.asarray(fold_means, float)[:, np.asarray(fold_of, int)]  # (m, n)
+    r = np.asarray(residuals, float)[None, :]
+    upper = exchangeable_quantile(means + r, level, groups)
+    lower = -exchangeable_quantile(-(means - r), level, groups)
+    return np.atleast_1d(lower), np.atleast_1d(upper)

@@ -19,6 +19,7 @@ import copy
 import io
 import math
 import warnings
+from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -30,7 +31,8 @@ import torch
 from omegaconf import OmegaConf
 
 from physics.files import atomic_write
-from surrogate.conformal import exchangeable_quantile
+from surrogate.candidates import Candidate
+from surrogate.conformal import cv_plus, exchangeable_quantile
 from surrogate.network import Network, mixture
 from surrogate.novelty import Novelty, difficulty
 from surrogate.schema import FeatureSchema
@@ -40,6 +42,52 @@ if TYPE_CHECKING:  # the training module imports Lightning, which inference does
 
 # 2: with the conformal interval scale; 3: with the novelty (normalised conformal interval)
 FORMAT = "gearwear-wear-surrogate-3"
+#: a model other than the network chosen by cross-validation (surrogate.candidates), with the
+#: fold models and out-of-fold residuals of its CV+ interval
+CHOSEN_FORMAT = "gearwear-wear-chosen-1"
+
+
+@dataclass
+class Chosen:
+    """A non-network model kept by cross-validation (:mod:`surrogate.candidates`) and its
+    CV+ interval (:func:`~surrogate.conformal.cv_plus`): the model fitted on all training
+    groups, the fold models, each training row's fold, out-of-fold residual and group."""
+
+    schema: FeatureSchema
+    model: Candidate
+    folds: list[Candidate]
+    fold_of: np.ndarray
+    residuals: np.ndarray
+    groups: np.ndarray
+    level: float
+    reason: str = ""
+
+    def readings(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The model's reading of unscaled rows ``x`` and each fold model's (rows, folds)."""
+        xs = self.schema.scale(np.asarray(x, float))
+        return (self.model.predict(xs, x),
+                np.column_stack([f.predict(xs, x) for f in self.folds]))
+
+    def payload(self) -> dict:
+        return {"format": CHOSEN_FORMAT, "schema": self.schema.to_dict(),
+                "model": self.model.payload(), "folds": [f.payload() for f in self.folds],
+                "fold_of": torch.tensor(np.array(self.fold_of), dtype=torch.int64),
+                "residuals": torch.tensor(np.array(self.residuals), dtype=torch.float64),
+                "groups": torch.tensor(np.array(self.groups), dtype=torch.int64),
+                "level": float(self.level), "reason": self.reason}
+
+    @classmethod
+    def from_payload(cls, d: dict) -> Chosen:
+        return cls(FeatureSchema.from_dict(d["schema"]), Candidate.from_payload(d["model"]),
+                   [Candidate.from_payload(f) for f in d["folds"]], d["fold_of"].numpy(),
+                   d["residuals"].numpy(), d["groups"].numpy(), float(d["level"]),
+                   str(d.get("reason", "")))
+
+
+def export_chosen(chosen: Chosen, path: str | Path, novelty: Novelty) -> Path:
+    """Write a :class:`Chosen` model and the novelty reference to ``path`` (atomically)."""
+    payload = {**chosen.payload(), "novelty": novelty.payload()}
+    return atomic_write(path, lambda p: torch.save(payload, p))
 
 
 def export(model: Network | WearRegressor, path: str | Path, interval_scale: float,
@@ -190,10 +238,14 @@ def check_gearboxes(df: pd.DataFrame, gearbox: list[str], target: str | None = N
 class Surrogate:
     """A loaded ensemble: ``predict(df)`` returns wear with its interval and flags."""
 
-    def __init__(self, model: Network | WearRegressor, interval_scale: float,
-                 novelty: Novelty | None = None) -> None:
-        self.model = model.eval()
-        self.schema = FeatureSchema.from_dict(model.hparams["schema"])
+    def __init__(self, model: Network | WearRegressor | None, interval_scale: float,
+                 novelty: Novelty | None = None, chosen: Chosen | None = None) -> None:
+        #: the network (None where another model was chosen: ``chosen``)
+        self.model = None if model is None else model.eval()
+        #: the model other than the network kept by cross-validation, with its CV+ interval
+        self.chosen = chosen
+        self.schema = (chosen.schema if chosen is not None
+                       else FeatureSchema.from_dict(model.hparams["schema"]))
         # conformal: mu +- scale difficulty at the trained level
         self.interval_scale = interval_scale
         #: the training rows and the flag's threshold (None: a network not yet calibrated,
@@ -211,6 +263,14 @@ class Surrogate:
         except Exception as err:
             raise ValueError(f"{path} is not a safe wear-surrogate file ({err}); pass the "
                              "wear_surrogate.pt a training run exported") from None
+        if isinstance(payload, dict) and payload.get("format") == CHOSEN_FORMAT:
+            try:
+                chosen = Chosen.from_payload(payload)
+                novelty = Novelty.from_payload(payload["novelty"])
+            except (KeyError, TypeError, AttributeError, RuntimeError, ValueError) as err:
+                raise ValueError(f"{path} is incomplete or from another model ({err}); pass "
+                                 "the wear_surrogate.pt a training run exported") from None
+            return cls(None, 1.0, novelty, chosen)
         if not isinstance(payload, dict) or payload.get("format") != FORMAT:
             raise ValueError(f"{path} is not a {FORMAT} file; pass the wear_surrogate.pt a "
                              "training run exported")
@@ -234,6 +294,11 @@ class Surrogate:
                              "diverged; retrain (e.g. with a smaller model.lr)")
         return cls(model, scale, novelty)
 
+    @property
+    def kind(self) -> str:
+        """The model's kind: ``network`` or one of :data:`surrogate.candidates.KINDS`."""
+        return "network" if self.chosen is None else self.chosen.model.kind
+
     @cached_property
     def session(self) -> ort.InferenceSession:
         """The ONNX Runtime session (:func:`onnx_session`), built on first use from the weights
@@ -251,6 +316,9 @@ class Surrogate:
         if xs.ndim != 2 or xs.shape[1] != len(self.schema.inputs):
             raise ValueError(f"x has shape {xs.shape}; the model takes (rows, "
                              f"{len(self.schema.inputs)}) in the order {list(self.schema.inputs)}")
+        if self.chosen is not None:  # its reading, and the fold models' spread about it
+            mean, folds = self.chosen.readings(np.asarray(x, float))
+            return mean, folds.std(axis=1)
         mean, std = np.empty(len(xs), np.float32), np.empty(len(xs), np.float32)
         for lo in range(0, len(xs), batch):
             mean[lo:lo + batch], std[lo:lo + batch] = self.session.run(
@@ -292,13 +360,28 @@ class Surrogate:
             raise ValueError(f"the model gives a non-finite wear for row {int(np.argmax(bad))} "
                              f"({int(bad.sum())} of {len(bad)} rows); nothing is written")
         score, flagged = self.flags(x)
-        half = self.interval_scale * self.difficulty(std, score)
+        lower, upper = self.bounds(x, mean, std, score)
         t = self.schema.target
         return pd.DataFrame({f"{t}_pred": np.maximum(mean, 0.0), f"{t}_std": std,
-                             f"{t}_lower": np.maximum(mean - half, 0.0),
-                             f"{t}_upper": np.maximum(mean + half, 0.0),
+                             f"{t}_lower": np.maximum(lower, 0.0),
+                             f"{t}_upper": np.maximum(upper, 0.0),
                              "novelty": score,
                              "out_of_range": flagged}, index=df.index)
+
+    def bounds(self, x: np.ndarray, mean: np.ndarray, std: np.ndarray, score: np.ndarray,
+               batch: int = 2048) -> tuple[np.ndarray, np.ndarray]:
+        """The interval of unscaled rows ``x``: the network's normalised split-conformal one
+        (``mean +- scale difficulty``), or a chosen model's CV+ one over its training groups
+        (:func:`~surrogate.conformal.cv_plus`)."""
+        if self.chosen is None:
+            half = self.interval_scale * self.difficulty(std, score)
+            return mean - half, mean + half
+        c, lo, hi = self.chosen, np.empty(len(x)), np.empty(len(x))
+        for a in range(0, len(x), batch):
+            _, folds = c.readings(np.asarray(x[a:a + batch], float))
+            lo[a:a + batch], hi[a:a + batch] = cv_plus(folds, c.fold_of, c.residuals, c.level,
+                                                       c.groups)
+        return lo, hi
 
     def flags(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The novelty scores of the unscaled input rows ``x`` and the flag ``out_of_range``:

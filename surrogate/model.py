@@ -24,11 +24,14 @@ class WearRegressor(L.LightningModule):
 
     def __init__(self, n_inputs: int, schema: dict, width: int = 64, depth: int = 2,
                  members: int = 5, lr: float = 3e-3, weight_decay: float = 1e-5,
-                 interval: float = 0.95, trainable: str = "all") -> None:
+                 interval: float = 0.95, trainable: str = "all", kind: str = "auto",
+                 folds: int = 5) -> None:
         super().__init__()
+        # kind and folds choose the model a run keeps (surrogate.training.select), checked here
+        # with the rest of the config and not kept among the network's hyperparameters
         ModelConfig(width=width, depth=depth, members=members, lr=lr, weight_decay=weight_decay,
-                    interval=interval, trainable=trainable).check()
-        self.save_hyperparameters()
+                    interval=interval, trainable=trainable, kind=kind, folds=folds).check()
+        self.save_hyperparameters(ignore=["kind", "folds"])
         self.net = EnsembleMLP(n_inputs, [width] * depth, members)
         self.z = NormalDist().inv_cdf(0.5 + interval / 2)
 

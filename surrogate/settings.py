@@ -88,9 +88,23 @@ class ModelConfig:
     # which weights train: "all", or "head" (each member's output layer only: a fine-tune on a
     # few labelled gearboxes that keeps the physics-trained features, ``init_from``)
     trainable: str = "all"
+    #: which model a run keeps: auto (on a table of your own, the least error of a grouped
+    #: cross-validation over the training groups among the network, a linear model, a
+    #: monotone one and, where its inputs exist, the thesis's estimator; on the physics
+    #: dataset the network), or network, linear, monotone, estimator (surrogate.candidates)
+    kind: str = "auto"
+    folds: int = 5  # GroupKFold folds of that cross-validation (at most one per group)
+
+    #: the keys that choose the model, not the network's settings
+    CHOICE_KEYS = ("kind", "folds")
 
     def check(self) -> None:
         """Raise ``ValueError`` naming the first setting outside its range."""
+        kinds = ("auto", "network", "linear", "monotone", "estimator")
+        if self.kind not in kinds:
+            raise ValueError(f"model.kind = {self.kind!r} must be one of {list(kinds)}")
+        if isinstance(self.folds, bool) or not isinstance(self.folds, int) or self.folds < 2:
+            raise ValueError(f"model.folds = {self.folds!r} must be a whole number >= 2")
         if self.trainable not in ("all", "head"):
             raise ValueError(f"model.trainable = {self.trainable!r} must be 'all' or 'head' "
                              "(the output layers only, for fine-tuning with init_from)")

@@ -22,7 +22,8 @@ from hydra import compose, initialize_config_module
 
 from physics.estimators.empirical_inverse import wear_errors
 from surrogate import settings
-from surrogate.baselines import LinearModel, not_better_line
+from surrogate.baselines import not_better_line
+from surrogate.candidates import Candidate
 from surrogate.inference import Surrogate
 from surrogate.predict import predict_file
 from surrogate.training import prepare, train
@@ -184,8 +185,8 @@ def test_acceptance_leave_one_group_out_prints_each_fold_and_the_mean(tmp_path):
     assert run.returncode == 0, run.stderr[-3000:]
     out = run.stdout + run.stderr
     (folder,) = (tmp_path / "logs" / "train" / "runs").glob("rig_*")  # named after the table
-    assert "fold speed = 15 (24 test rows): network" in out
-    assert "fold speed = 45 (24 test rows): network" in out
+    assert "fold speed = 15 (24 test rows): model kept" in out
+    assert "fold speed = 45 (24 test rows): model kept" in out
     assert "leave-one-group-out over speed (2 folds)" in out
     cv = pd.read_csv(folder / "cv.csv")
     assert list(cv.speed) == [15, 45] and (cv.test_rows == 24).all()
@@ -247,8 +248,9 @@ def test_the_estimator_stands_beside_where_its_inputs_exist(tmp_path):
 def test_the_linear_model_and_the_verdict():
     rng = np.random.default_rng(0)
     x = rng.normal(size=(50, 2))
-    model = LinearModel.fit(x, 3 + x @ [1.0, -0.5])
-    assert model.coef == pytest.approx([3, 1, -0.5])
+    model = Candidate.fit("linear", x, 3 + x @ [1.0, -0.5], np.arange(50))
+    assert model.params["intercept"] == pytest.approx(3)
+    assert model.params["coef"] == pytest.approx([1, -0.5])
     assert model.predict(np.array([[-10.0, 0.0]]))[0] == 0.0  # no negative wear
     net, lin = {"mean_relative_error_pct": 13.5}, {"mean_relative_error_pct": 13.1}
     assert not_better_line(net, lin) == ("the network (13.5 %) is not better than a linear "
@@ -288,7 +290,8 @@ def test_the_interval_is_calibrated_on_trajectories_that_chose_no_epoch(tmp_path
     from surrogate.inference import conformal_scale
 
     write(tmp_path, rig_table(stages=30, records=2))
-    c = cfg(tmp_path, "data.group=stage", "data.val_replicates=16", "data.test_replicates=2",
+    c = cfg(tmp_path, "model.kind=network", "data.group=stage", "data.val_replicates=16",
+            "data.test_replicates=2",
             epochs=5)
     job = prepare(c)
     train(c)

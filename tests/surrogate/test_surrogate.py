@@ -383,7 +383,8 @@ def test_training_on_a_users_table_from_scratch_and_fine_tuned(trained, dataset,
     mine.drop(columns=["case", "replicate"]).to_csv(tmp_path / "mine.csv", index=False)
     common = [f"data.table={tmp_path / 'mine.csv'}", "data.group=gearbox",
               "+data.columns.p2p=dte_peak_to_peak", "data.operating_point=false",
-              "data.test_replicates=1", "trainer.max_epochs=5", "logger=csv"]
+              "data.test_replicates=1", "trainer.max_epochs=5", "logger=csv",
+              "model.kind=network"]  # the network's fine-tuning, whichever model CV prefers
     assert np.isfinite(train(train_cfg(tmp_path / "a", dataset, "model.members=3", *common)))
     tuned = train_cfg(tmp_path / "b", dataset, f"init_from={trained / 'wear_surrogate.pt'}",
                       "model.lr=0.0003", *common)
@@ -871,7 +872,7 @@ def test_a_users_table_of_mesh_lines_trains_a_baseline_network_and_is_read_by_pa
     common = [f"data.table={tmp_path / 'mine.csv'}", "data.group=rig", "data.baseline=true",
               "data.test_replicates=1", "trainer.max_epochs=5", "model.members=2",
               "logger=csv"]
-    assert np.isfinite(train(train_cfg(tmp_path, dataset, *common)))
+    assert np.isfinite(train(train_cfg(tmp_path, dataset, "model.kind=network", *common)))
     s = Surrogate.load(tmp_path / "run" / "wear_surrogate.pt")
     assert set(s.schema.vectors) == {f"dte_line{k}" for k in LINE_ORDERS}
     mine.drop(columns=["dte_line4_re", "dte_line4_im"]).to_csv(tmp_path / "less.csv", index=False)
