@@ -43,6 +43,7 @@ from surrogate.schema import (
     FeatureSchema,
     first_rows,
     network_frame,
+    repeated_header,
     source_columns,
     vector_columns,
     vector_inputs,
@@ -339,6 +340,10 @@ def read_user_table(path: str | Path, columns: dict[str, str]) -> pd.DataFrame:
     path = Path(path)
     if path.suffix not in (".csv", ".parquet") or not path.is_file():
         raise ValueError(f"data.table = {str(path)!r} must be an existing .csv or .parquet file")
+    twice = repeated_header(path)
+    if twice:
+        raise ValueError(f"data.table = {path} has column(s) {twice} more than once; keep one "
+                         "of each")
     try:
         df = pd.read_parquet(path) if path.suffix == ".parquet" else pd.read_csv(path)
     except (pd.errors.EmptyDataError, pd.errors.ParserError, UnicodeDecodeError,

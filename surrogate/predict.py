@@ -42,6 +42,7 @@ from physics.command import entry, run_command
 from physics.files import atomic_write, check_writable
 from surrogate.inference import Surrogate, check_gearboxes
 from surrogate.novelty import envelope_report
+from surrogate.schema import repeated_header
 
 log = logging.getLogger(__name__)
 
@@ -52,6 +53,9 @@ def read_table(path: str | Path) -> pd.DataFrame:
         raise ValueError(f"input = {path} does not exist; pass a CSV or parquet feature table")
     if path.suffix not in (".parquet", ".csv"):
         raise ValueError(f"input = {path}: use a .csv or .parquet file")
+    twice = repeated_header(path)
+    if twice:
+        raise ValueError(f"input = {path} has column(s) {twice} more than once; keep one of each")
     try:
         return pd.read_parquet(path) if path.suffix == ".parquet" else pd.read_csv(path)
     except (pd.errors.EmptyDataError, pd.errors.ParserError, UnicodeDecodeError,

@@ -136,3 +136,20 @@ def test_acceptance_train_refuses_a_table_of_1e300_before_training(tmp_path):
     assert len(lines) == 1 and "'acc_crest' = 1e+300" in lines[0]
     assert "Traceback" not in run.stderr
     assert not (tmp_path / "run" / "wear_surrogate.pt").exists()
+
+
+def test_a_csv_header_that_repeats_a_column_is_refused(tmp_path):
+    """pandas reads a repeated CSV column as ``a`` and ``a.1``: the repetition is read from the
+    header itself, for a training table and for a prediction input alike."""
+    from surrogate.data import read_user_table
+    from surrogate.predict import read_table
+
+    bad = tmp_path / "twice.csv"
+    bad.write_text("rig,dte_rms,dte_rms,wear_mm\nA,1.0,2.0,0.1\n")
+    with pytest.raises(ValueError, match=r"has column\(s\) \['dte_rms'\] more than once"):
+        read_user_table(bad, {})
+    with pytest.raises(ValueError, match=r"input = .* has column\(s\) \['dte_rms'\] more than"):
+        read_table(bad)
+    good = tmp_path / "once.csv"
+    good.write_text("rig,dte_rms,wear_mm\nA,1.0,0.1\n")
+    assert list(read_table(good).columns) == ["rig", "dte_rms", "wear_mm"]
