@@ -612,6 +612,9 @@ class WearDataModule(L.LightningDataModule):
         self.inputs = (list(inputs) if inputs else
                        input_columns(list(sensors), operating_point, baseline))
         self.target = target or ("mean_wear_mm" if baseline else "root_wear_mm")
+        if self.target in self.inputs:
+            raise ValueError(f"data.target = {self.target!r} is also among data.inputs: a model "
+                             "given its own answer learns nothing; remove it from data.inputs")
         # the features, not the operating point, are read against the baseline record
         self.baseline = tuple(c for c in self.inputs if c not in CONDITIONS) if baseline else ()
         self.vectors: tuple[str, ...] = ()  # the complex-line inputs, found among the columns

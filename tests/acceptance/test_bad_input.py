@@ -154,6 +154,8 @@ CASES = [
     ("train", ["+data.generate.replicates=0"], None, "replicates = 0"),
     ("train", ["data.gearboxes=0"], None, "data.gearboxes = 0"),
     ("train", ["data.val_replicates=0"], None, "data.val_replicates = 0"),
+    ("train", ["data.inputs=[dte_rms,mean_wear_mm]"], None,
+     "data.target = 'mean_wear_mm' is also among data.inputs"),
     ("predict", ["ckpt=missing.pt", "input=x.csv"], None, "missing.pt"),
     ("loop", ["data=missing"], None, "'missing'"),
     ("loop", ["data=missing", "dynamics.flank_contact=exact"], None,
