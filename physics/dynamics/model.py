@@ -19,9 +19,12 @@ so the mesh force never turns negative while the flanks are apart. The pairs in 
 stiffnesses ``k_i`` are the potential-energy stiffnesses of the worn teeth
 (:mod:`physics.stiffness`) and ``g_i`` their wear gaps (pinion plus gear wear at the contact
 point): the wear-induced error of the thesis enters pair by pair, so load sharing and contact loss
-follow from the same equation. ``e(t)`` holds the long-period (pinion eccentricity on the line of
-action, shaft rate) and short-period (profile, mesh rate) errors. The thesis's "combined error" is
-``e(t) + sum k_i g_i / sum k_i``.
+follow from the same equation; a gap moves a pair's drive-flank contact only (wear widens its
+backlash). With ``dynamics.flank_contact = "exact"`` the gaps are the rigid gaps of the flanks as
+they are (:mod:`physics.gear.tooth_contact`) and three more pairs may touch off the path: the one
+before its entry, B past the end and the one after it (drive flanks only). ``e(t)`` holds the
+long-period (pinion eccentricity on the line of action, shaft rate) and short-period (profile,
+mesh rate) errors. The thesis's "combined error" is ``e(t) + sum k_i g_i / sum k_i``.
 
 Integration is the fixed-step classical Runge-Kutta of the thesis, compiled with numba and run in
 parallel over a batch of scenarios; the step is ``step_factor / omega_max`` with ``omega_max`` the
