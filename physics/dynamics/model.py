@@ -168,8 +168,8 @@ def exact_contact(ms: MeshStiffness, k_of, s_a: np.ndarray, on_b: np.ndarray,
     pair_gaps = PairGaps(geom, ms.forms, s_grid, wear1, wear2)
     gaps = pair_gaps(slots)
     k_slots = k_of(clamped(geom, slots).ravel()).reshape(slots.shape)
-    off = np.stack([slots[:, 0] < geom.s_start, ~on_b, np.ones_like(on_b)])
-    reach = (gaps[:, [0, 2, 3]].T < NO_CONTACT) & off
+    reach = gaps[:, [0, 2, 3]].T < NO_CONTACT
+    reach[1] &= ~on_b  # pair B is past the end of the path
     end = pair_gaps(np.array([geom.s_end]))[0]
     return (gaps[:, 1], np.where(on_b, gaps[:, 2], end),  # B held at the end: path_gaps
             np.where(reach, k_slots[:, [0, 2, 3]].T, 0.0),
@@ -558,18 +558,10 @@ def _mesh(par, st, x, v):
     if k_c > 0.0:
         f_a += _contact(k_c, x, g_c, half, k_c * c_v) * l_c / l_a
     f_x = 0.0
-    if not coast:
-        f_x = _drive(k0, x - g0 - half, c_v) + _drive(k1, x - g1 - half, c_v) + _drive(
-            k2, x - g2 - half, c_v)
+    if not coast:  # the off-path pairs touch on their drive flanks only
+        f_x = (_contact(k0, x, g0, half, k0 * c_v) + _contact(k1, x, g1, half, k1 * c_v)
+               + _contact(k2, x, g2, half, k2 * c_v))
     return l_a, l_b, f_a, f_b, f_x
-
-
-@numba.njit(cache=True, fastmath=True, inline="always")
-def _drive(k, u, c_v):
-    """Force of an off-path pair at drive-flank deflection ``u`` past its gap (0 apart)."""
-    if k > 0.0 and u > 0.0:
-        return max(k * (u + c_v), 0.0)
-    return 0.0
 
 
 @numba.njit(cache=True, fastmath=True, inline="always")

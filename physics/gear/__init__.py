@@ -24,7 +24,7 @@ _SOURCES = {
     "physics.gear.stiffness": (
         "MeshStiffness", "SainsotRangeWarning", "ToothCompliances", "sainsot_coefficients",
         "iso6336_single_pair_stiffness", "mesh_stiffness"),
-    "physics.gear.tooth": ("ToothForm", "generate_tooth", "checked_wear"),
+    "physics.gear.tooth": ("ToothForm", "generate_tooth", "checked_wear", "involute_angle"),
     "physics.gear.tooth_contact": (
         "PairGaps", "WornFlank", "worn_flank", "flank_coordinate", "LoadedContact",
         "loaded_contact", "share_load", "pair_slots", "clamped", "NO_CONTACT"),

@@ -42,7 +42,7 @@ import numpy as np
 from scipy.integrate import cumulative_simpson
 
 from physics.gear.geometry import MeshGeometry, mesh_geometry
-from physics.gear.tooth import ToothForm, checked_wear, generate_tooth
+from physics.gear.tooth import ToothForm, checked_wear, generate_tooth, involute_angle
 from physics.gear.tooth_contact import flank_coordinate
 from physics.params import GearPair, Material, OutOfScope
 
@@ -208,9 +208,7 @@ class MeshStiffness:
         form = self.forms[wheel - 1]
         c = cumulative or self._healthy[wheel - 1]
         radius = np.asarray(radius, dtype=float)
-        a_r = np.arccos(form.rb / radius)
-        theta = math.pi / (2 * form.z) + (math.tan(self.gear.alpha) - self.gear.alpha) - (
-            np.tan(a_r) - a_r)
+        theta, a_r = involute_angle(form.z, self.gear.alpha, form.rb, radius)
         a1 = a_r - theta
         y_l = radius * np.cos(theta)
         x_l = np.interp(y_l, c.y, c.x_drive)  # worn load point on the drive flank

@@ -52,22 +52,11 @@ import numba
 import numpy as np
 
 from physics.gear.geometry import MeshGeometry
-from physics.gear.tooth import ToothForm, checked_wear
+from physics.gear.tooth import ToothForm, checked_wear, involute_angle
 
 #: a point of one tooth is compared with the other's flank only within the flank's radii
 #: (fillet foot to tip); farther points cannot touch it: their gap is this [m]
 NO_CONTACT = 1.0
-
-
-def _inv(a: np.ndarray | float) -> np.ndarray | float:
-    return np.tan(a) - a
-
-
-def _involute_angle(form: ToothForm, alpha: float, radius: np.ndarray | float):
-    """Angle of the unworn involute from the tooth's centre line at ``radius`` [rad]
-    (:func:`physics.gear.tooth.generate_tooth`'s closed form)."""
-    a_r = np.arccos(np.clip(form.rb / np.asarray(radius, dtype=float), -1.0, 1.0))
-    return math.pi / (2 * form.z) + _inv(alpha) - _inv(a_r)
 
 
 @dataclass(frozen=True)
@@ -80,7 +69,6 @@ class WornFlank:
     angle: np.ndarray  # [rad]
     involute_from: int
     roll: np.ndarray  # each point's flank coordinate (:func:`flank_coordinate`) [m]
-
 
 
 def flank_coordinate(form: ToothForm, geom: MeshGeometry, wheel: int) -> np.ndarray:
@@ -140,8 +128,9 @@ class PairGaps:
         rw1 = geom.rb1 / math.cos(geom.alpha_w)
         rw2 = geom.rb2 / math.cos(geom.alpha_w)
         # rotations that put each involute through the pitch point (s = 0)
-        self._phi0 = (-0.5 * math.pi - float(_involute_angle(forms[0], alpha, rw1)),
-                      0.5 * math.pi - float(_involute_angle(forms[1], alpha, rw2)))
+        self._phi0 = (
+            -0.5 * math.pi - float(involute_angle(forms[0].z, alpha, forms[0].rb, rw1)[0]),
+            0.5 * math.pi - float(involute_angle(forms[1].z, alpha, forms[1].rb, rw2)[0]))
 
     def rotations(self, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Conjugate rotations of pinion and gear for a contact at roll ``s`` [rad]."""
@@ -262,7 +251,7 @@ def loaded_contact(geom: MeshGeometry, gaps: PairGaps, stiffness, force: float,
     roll clamped to the path (:func:`clamped`)."""
     if not force > 0:
         raise ValueError(f"force = {force!r} must be > 0 (N)")
-    roll = geom.s_start + geom.base_pitch * np.arange(n) / n
+    roll = geom.mesh_period(n)[0]
     s = pair_slots(geom, roll)
     g = gaps(s)
     k = stiffness(clamped(geom, s).ravel()).reshape(s.shape)

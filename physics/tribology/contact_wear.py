@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
-from physics.gear import contact
+from physics.gear import contact, kinematics
 from physics.gear.stiffness import MeshStiffness, mesh_stiffness
 from physics.gear.tooth_contact import (
     PairGaps,
@@ -118,8 +118,8 @@ def wear_per_cycle(scn: Scenario, ms: MeshStiffness, grid: np.ndarray, wear1: np
     """Pinion and gear wear per pinion cycle [m] on ``grid`` for the flanks worn by ``wear1,
     wear2`` under the normal mesh force ``force`` [N] (module doc)."""
     geom, g, op = ms.geometry, scn.gear, scn.operating
-    roll = geom.s_start + geom.base_pitch * np.arange(POSITIONS) / POSITIONS
-    slots = pair_slots(geom, roll).T.ravel()  # every pair's pass, in order of roll
+    # every pair's pass through the mesh, in order of roll
+    slots = pair_slots(geom, geom.mesh_period(POSITIONS)[0]).T.ravel()
     gap, u1, u2 = PairGaps(geom, ms.forms, grid, wear1, wear2).contacts(slots)
     k = ms.pair_function(grid, wear1, wear2)(clamped(geom, slots))
     cols = (4, POSITIONS)
@@ -133,16 +133,18 @@ def wear_per_cycle(scn: Scenario, ms: MeshStiffness, grid: np.ndarray, wear1: np
     v1, v2 = omega1 * R1, omega2 * R2
     ds = geom.base_pitch / POSITIONS
     dt = ds / (geom.rb1 * omega1)
-    state = solve_contact_state(scn, np.where(on, load, 0.0), R1 * R2 / (R1 + R2), v1, v2)
+    R = contact.equivalent_radius(R1, R2)
+    state = solve_contact_state(scn, np.where(on, load, 0.0), R, v1, v2)
     psi = (np.ones_like(load) if scn.tribology.regime == "dry"
            else film_deficiency(state.v_s, state.temperature, scn.lubricant))
     k_eff = wear_coefficient(scn.tribology, state.asperity_ratio, psi)
     w = load / g.face_width
-    volume = k_eff * w * np.abs(v1 - v2) * dt / scn.material.hardness  # per unit width
+    volume = (k_eff * w * kinematics.sliding_velocity(v1, v2) * dt
+              / scn.material.hardness)  # per unit width
     e_star = contact.reduced_modulus(scn.material, scn.material)
-    band = 2 * contact.hertz_half_width(np.where(on, w, 0.0), R1 * R2 / (R1 + R2), e_star)
-    low1, low2 = (float(flank_coordinate(f, geom, w)[f.involute_from])
-                  for f, w in zip(ms.forms, (1, 2), strict=True))
+    band = 2 * contact.hertz_half_width(np.where(on, w, 0.0), R, e_star)
+    low1, low2 = (float(flank_coordinate(form, geom, wheel)[form.involute_from])
+                  for form, wheel in zip(ms.forms, (1, 2), strict=True))
     out = []
     for u, R, rb, fillet in ((u1, R1, geom.rb1, u1 < low1), (u2, R2, geom.rb2, u2 > low2)):
         # arc per unit of the flank coordinate: R / r_b on the involute (dl = R du / r_b), 1 on
@@ -154,10 +156,10 @@ def wear_per_cycle(scn: Scenario, ms: MeshStiffness, grid: np.ndarray, wear1: np
         out.append(_deposit(grid, u[on], width[on], volume[on] / arc[on]))
     # ripples shorter than the band are levelled (the elastic band bears on them as one, which
     # the rigid gap does not see): a Gaussian of the static band's half-width at the pitch
-    R_p = geom.curvature_radii(np.array([0.0]))
-    b_p = contact.hertz_half_width(force / g.face_width, R_p[0] * R_p[1] / (R_p[0] + R_p[1]),
+    R1_p, R2_p = geom.curvature_radii(np.array([0.0]))
+    b_p = contact.hertz_half_width(force / g.face_width, contact.equivalent_radius(R1_p, R2_p),
                                    e_star)[0]
-    sigma = b_p * geom.rb1 / R_p[0][0] / (grid[1] - grid[0])
+    sigma = b_p * geom.rb1 / R1_p[0] / (grid[1] - grid[0])
     return (ndimage.gaussian_filter1d(out[0], sigma, mode="nearest"),
             ndimage.gaussian_filter1d(out[1], sigma, mode="nearest") * g.z1 / g.z2)
 
@@ -165,9 +167,8 @@ def wear_per_cycle(scn: Scenario, ms: MeshStiffness, grid: np.ndarray, wear1: np
 def simulate_contact_wear(scn: Scenario, depth: float, cycles: float = math.inf,
                           stiffness: MeshStiffness | None = None) -> ContactWear:
     """Wear both flanks from new until the deepest point of either active profile reaches
-    ``depth`` [m] (or
-    ``cycles`` pinion cycles), in blocks that wear no point by more than ``solver.update_um``
-    or by ``RELATIVE_STEP`` of the deepest wear so far (module doc)."""
+    ``depth`` [m] (or ``cycles`` pinion cycles), in blocks that wear no point by more than
+    ``solver.update_um`` or by ``RELATIVE_STEP`` of the deepest wear so far (module doc)."""
     if not (math.isfinite(depth) and depth > 0):
         raise ValueError(f"depth = {depth!r} must be a finite depth > 0 (m)")
     if not cycles > 0:

@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from physics.gear.load_sharing import pair_loads
-from physics.gear.stiffness import MeshStiffness
+from physics.gear.stiffness import MeshStiffness, mesh_stiffness
 from physics.gear.tooth import generate_tooth
 from physics.gear.tooth_contact import PairGaps, loaded_contact, worn_flank
 from physics.params import GearPair, Scenario
@@ -59,7 +59,7 @@ def test_worn_flanks_never_part_by_more_than_their_conjugate_points(amp, centre,
                                                                     gear_share):
     """The conjugate points are one pair of candidates: the least gap is at most their summed
     wear, h1 + h2 (to first order it equals it; it is less where the flanks meet elsewhere)."""
-    ms = _module_ms()
+    ms = mesh_stiffness(Scenario().gear, Scenario().material)  # built once (cached)
     g = ms.geometry
     grid = np.linspace(g.s_start, g.s_end, 301)
     wear = amp * np.exp(-0.5 * ((grid - centre) / width) ** 2)
@@ -67,15 +67,6 @@ def test_worn_flanks_never_part_by_more_than_their_conjugate_points(amp, centre,
     s = _path(ms, 31)
     first_order = np.interp(s, grid, wear)
     assert np.all(gaps(s) <= first_order + 5e-9)
-
-
-_MS = {}
-
-
-def _module_ms():
-    if "ms" not in _MS:
-        _MS["ms"] = MeshStiffness(Scenario().gear, Scenario().material)
-    return _MS["ms"]
 
 
 def test_a_worn_band_relieves_the_approach_and_leaves_a_ridge(ms):
