@@ -36,6 +36,7 @@ from scipy.stats import spearmanr
 from threadpoolctl import threadpool_limits
 
 from physics.estimators.empirical_inverse import EmpiricalInverse
+from surrogate.conformal import unit_weights
 
 #: the kinds a run compares, in the order reports list them; ``model.kind`` forces one
 KINDS = ("network", "linear", "monotone", "estimator")
@@ -55,11 +56,9 @@ def relative_weights(y: np.ndarray, groups: np.ndarray, power: int = 1) -> np.nd
     text): ``1 / (rows of its group) / max(y, least nonzero y) ** power`` (``power`` 2 for a
     squared loss), normalised to a mean of 1."""
     y = np.asarray(y, float)
-    labels = pd.Series(np.asarray(groups))
-    size = labels.map(labels.value_counts()).to_numpy(float)
     worn = y[y > 0]
     least = float(worn.min()) if worn.size else 1.0
-    w = 1.0 / size / np.maximum(y, least) ** power
+    w = unit_weights(len(y), groups) / np.maximum(y, least) ** power  # each group once
     return w / w.mean()
 
 
