@@ -21,7 +21,7 @@ import timeit
 
 import numpy as np
 
-from physics.dynamics.model import build_model, simulate
+from physics.dynamics.model import EXACT_PHASES, build_model, simulate
 from physics.gear.stiffness import mesh_stiffness
 from physics.gear.tooth_contact import NO_CONTACT, PairGaps, pair_slots
 from physics.reproduce.rig import rig_scenario
@@ -84,7 +84,7 @@ def main() -> None:
     for contact in ("path", "exact"):
         sc = dataclasses.replace(scn, dynamics=dataclasses.replace(scn.dynamics,
                                                                    flank_contact=contact))
-        models = [build_model(sc, s_grid=grid, wear1=w1, wear2=w2, n_phase=512)
+        models = [build_model(sc, s_grid=grid, wear1=w1, wear2=w2, n_phase=EXACT_PHASES)
                   for w1, w2 in states]
         simulate(models[:1], sc.dynamics, every_phase=False)  # compile
         times[contact] = best_of(lambda sc=sc, models=models: simulate(
