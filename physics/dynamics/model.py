@@ -462,6 +462,10 @@ def _entry_shift(q, u_in):
     return min(1.0, max(0.0, q + 1.0 - u_in)) - min(1.0, max(0.0, q + 1.0))
 
 
+# The mesh state and the small helpers are inlined into the integrator (numba IR inlining);
+# the per-stage functions (_mesh, _accel, _extra) are calls: inlining those too ran the
+# integrator about 1.3 times faster but took its first compilation from about 12 s to 48 s,
+# paid by every fresh install and every test worker (bench/bench_dynamics.py).
 @numba.njit(cache=True, fastmath=True, inline="always")
 def _mesh_state(par, tab, pos, da, kf):
     """The pairs at table position ``pos``: stiffness, gap and force factor of pair A, pair B
@@ -529,7 +533,7 @@ def _lerp2(tab, row0, row1, i0, i1, frac):
     return tab[row0, i0] + (tab[row1, i1] - tab[row0, i0]) * frac
 
 
-@numba.njit(cache=True, fastmath=True, inline="always")
+@numba.njit(cache=True, fastmath=True)
 def _mesh(par, st, x, v):
     """Force factors and forces of the pairs (``st``: :func:`_mesh_state`) at deflection ``x``
     and its rate ``v``: pairs A (with an early-entering C) and B, and the off-path pairs'
@@ -564,7 +568,7 @@ def _mesh(par, st, x, v):
     return l_a, l_b, f_a, f_b, f_x
 
 
-@numba.njit(cache=True, fastmath=True, inline="always")
+@numba.njit(cache=True, fastmath=True)
 def _accel(par, st, x, v, e_dd, w, inv_m):
     """x'' of the reduced model in mesh state ``st``, given e'' and the static force w there
     (``inv_m``: the inverse of the equivalent mass), and the mesh force.
@@ -575,7 +579,7 @@ def _accel(par, st, x, v, e_dd, w, inv_m):
     return (w - l_a * f_a - l_b * f_b - f_x) * inv_m - e_dd, f_a + f_b + f_x
 
 
-@numba.njit(cache=True, fastmath=True, inline="always")
+@numba.njit(cache=True, fastmath=True)
 def _extra(par, t):
     """The effect library's time terms at t: the gear run-out's e'' on the line of action, its
     centre-distance change (the eccentricity's other component) and its modulation of the
