@@ -31,14 +31,14 @@ each operating point and wear state, as a rig with shaft encoders and an acceler
 them; what one sensor's records cannot tell apart (a DTE gain from the stiffness level, a
 transfer-path mode from the mesh) the other's may.
 ``--reference``: every bundle is read against a sister gearbox's clean records
-(:mod:`physics.loop.form_error`): the same generator, another unit of the series
+(:mod:`physics.loop.search.form_error`): the same generator, another unit of the series
 (:data:`physics.testbeds.SISTER_UNIT`: other errors within their tolerance, another damping and
 mounting), at the bundle's operating points and quantities; its calibration is made once and
 timed apart.
 ``--own-history N``: every effect appears during the bundle's life (in the records from
 :data:`ONSET` of the cycles on, with the independent generator of its largest wear, its records
 dated in order of wear; the earlier ones are clean) and every bundle is read against its own
-first ``N`` records of each group (``reference=first:N``, :func:`physics.loop.own_reference`),
+first ``N`` records of each group (``reference=first:N``, :func:`physics.loop.search.own_history.own_reference`),
 the reference a user with records from commissioning has.
 Also times one bundle alone (:func:`solo_timing`; ``--timing-only``: that alone), printed
 beside the serial design's time (:data:`REFERENCE_S`); the per-bundle seconds of
@@ -60,18 +60,11 @@ import numba
 import numpy as np
 import pandas as pd
 
-from physics.loop import (
-    EFFECTS,
-    FormReference,
-    LoopSettings,
-    model_signals,
-    own_reference,
-    read_bundle,
-    residuals,
-    rms,
-    run_loop,
-    write_report,
-)
+from physics.loop import EFFECTS, LoopSettings, read_bundle, run_loop, write_report
+from physics.loop.model.comparison import residuals, rms
+from physics.loop.model.simulation import model_signals
+from physics.loop.search.form_error import FormReference
+from physics.loop.search.own_history import own_reference
 from physics.testbeds import (
     BOTH,
     EFFECT_NAMES,
@@ -190,7 +183,7 @@ def main() -> None:
                     help="independent generator: DTE and acceleration records in every bundle")
     ap.add_argument("--reference", action="store_true",
                     help="read every bundle against a sister unit's clean records "
-                         "(physics.loop.form_error)")
+                         "(physics.loop.search.form_error)")
     ap.add_argument("--own-history", type=int, default=0, metavar="N",
                     help="effects appear during the life; each bundle read against its own "
                          "first N records of each group")

@@ -14,7 +14,7 @@ import pytest
 from omegaconf import OmegaConf
 
 from physics import command
-from physics.loop.bundle import write_bundle
+from physics.loop.measured.bundle import write_bundle
 from physics.params import OutOfScope
 
 

@@ -19,7 +19,11 @@ LAYERS = ["exports", "interrupt", "params", "files", "command", "gear", "scope",
           "dynamics", "signals", "estimators", "dataset", "reproduce", "loop", "testbeds"]
 #: the subpackages that name a public surface in ``__init__.py``
 SUBPACKAGES = sorted({".".join(p.parent.relative_to(ROOT).parts)
-                      for p in (ROOT / "physics").glob("*/__init__.py")} | {"surrogate"})
+                      for p in (ROOT / "physics").glob("*/**/__init__.py")} | {"surrogate"})
+#: the loop's stages in the order of its data, each importing only from those before it; the
+#: modules that serve every stage come first, the report and the orchestrators last
+LOOP_LAYERS = [("config", "effects", "threads"), ("measured",), ("model",), ("judge",),
+               ("search",), ("report",), ("bundle_loop", "table_loop"), ("__main__",)]
 #: product code that may import the test rigs (besides bench/ and tests/)
 TESTBED_USERS = {"surrogate.benchmark"}
 
@@ -137,7 +141,7 @@ def test_every_subpackage_names_its_public_surface(package):
     public = getattr(mod, "__all__", None)
     assert public, f"{package}/__init__.py names no public API (__all__)"
     folder = ROOT.joinpath(*package.split("."))
-    modules = {p.stem: p for p in folder.glob("*.py") if p.stem not in ("__init__", "__main__")}
+    modules = {p.stem: p for p in folder.rglob("*.py") if p.stem not in ("__init__", "__main__")}
     defined = set().union(*(top_level_names(p) for p in modules.values()))
     assert not set(public) - defined, f"{package}.__all__ names nothing: {set(public) - defined}"
     assert not set(public) & set(modules), f"{package}.__all__ hides submodules"
@@ -163,6 +167,24 @@ def test_the_product_does_not_import_the_test_rigs():
     users = {m for m, deps in graph().items() if not m.startswith("physics.testbeds")
              for i in deps if i.startswith("physics.testbeds")}
     assert users <= TESTBED_USERS, f"imports of physics.testbeds: {users - TESTBED_USERS}"
+
+
+def loop_layer(module: str) -> int:
+    """The place of a loop module's stage in :data:`LOOP_LAYERS`."""
+    stage = module.split(".")[2]
+    return next(k for k, names in enumerate(LOOP_LAYERS) if stage in names)
+
+
+def test_the_loops_stages_import_only_downwards():
+    """Records, then the model, the decisions, the search, the report, the orchestrators: a
+    stage's modules import from their own stage or those before it, never after (the adoption
+    rule decides, the report only writes)."""
+    loop = {m: deps for m, deps in graph().items()
+            if m.startswith("physics.loop.") and m.count(".") >= 2}
+    wrong = [(m, d) for m, deps in loop.items() for d in deps
+             if d.startswith("physics.loop.") and loop_layer(d) > loop_layer(m)]
+    assert not wrong, wrong
+    assert {m.split(".")[2] for m in loop} == {n for names in LOOP_LAYERS for n in names}
 
 
 def test_the_loops_orchestrator_is_imported_only_by_its_app():

@@ -9,7 +9,7 @@ model, the gear blanks' inertias against the shafts, hubs and couplings that tur
 factors below are that uncertainty, neutral at 1 (the declared model bit for bit). The
 scenario states them (``dynamics.stiffness_factor`` ... , :class:`physics.params.Dynamics`), so
 the wear evolution and the records of a dataset trajectory see the same model; the measured-data
-loop calibrates them (:mod:`physics.loop.fit`, ``loop.model_form``).
+loop calibrates them (:mod:`physics.loop.search.fit`, ``loop.model_form``).
 """
 
 from __future__ import annotations

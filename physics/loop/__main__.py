@@ -19,17 +19,17 @@ from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, OmegaConf
 
 from physics.command import entry, register_schema, run_command
-from physics.loop.attribution import candidates_for
-from physics.loop.bundle import Bundle, check_not_own_reference, read_measurements
 from physics.loop.bundle_loop import run_loop
 from physics.loop.config import LoopConfig, LoopSettings
-from physics.loop.form_error import check_reference, form_reference
-from physics.loop.own_history import parse_history, split_history
-from physics.loop.own_history import source as history_source
-from physics.loop.records import group_keys
+from physics.loop.measured.bundle import Bundle, check_not_own_reference, read_measurements
+from physics.loop.measured.records import group_keys
+from physics.loop.measured.usable import check_usable, shown_candidates
 from physics.loop.report import write_report
+from physics.loop.search.attribution import candidates_for
+from physics.loop.search.form_error import check_reference, form_reference
+from physics.loop.search.own_history import parse_history, split_history
+from physics.loop.search.own_history import source as history_source
 from physics.loop.table_loop import run_feature_table
-from physics.loop.usable import check_usable, shown_candidates
 from physics.params import (
     Scenario,
     scenario_from_config,

@@ -1,117 +1,119 @@
 """Close the loop with measured data: calibrate, find the residual, attribute it, extend, report.
 
 ``python -m physics.loop data=BUNDLE`` (Hydra app, ``conf/loop.yaml``) runs the steps below on a
-measured bundle (:mod:`physics.loop.bundle`) and writes ``report.json``, ``report.md`` and figures
-into its run folder.
+measured bundle (:mod:`physics.loop.measured.bundle`) and writes ``report.json``, ``report.md`` and
+figures into its run folder.
 
-1. **Records** (:mod:`physics.loop.records`, :mod:`physics.loop.worn_states`): each record becomes
-   a scenario (its speed, torque, lubricant and gear overrides) with its worn teeth: the
-   dynamically coupled wear evolution (:mod:`physics.dynamics.evolution`) is run once per operating
-   point to the records' cycle counts (or, where only the wear depth is known, to the cycle count
-   of that depth). A bundle may mix operating points, quantities, sampling rates and record
-   lengths: records of one (speed, torque, quantity, sampling rate) form a **group**
-   (:class:`~physics.loop.records.Group`) with its own signature definition and entry scatter.
-   Records are split into train and test by record within each group (the manifest's ``split``
-   column where given, else seeded), never by windows of one record.
-2. **Calibration** (:mod:`physics.loop.fit`; the parameters in :mod:`physics.loop.declared`) of the
-   declared nuisance parameters on the train records of all groups at once, before any effect is
-   considered: the physical ones (mesh damping ratio, pinion run-out and profile error amplitudes,
-   the once-per-revolution mesh modulation that the run-out makes, with its phase,
-   :data:`~physics.loop.declared.RUNOUT_MODULATION` and
+1. **Records** (:mod:`physics.loop.measured.records`, :mod:`physics.loop.measured.worn_states`):
+   each record becomes a scenario (its speed, torque, lubricant and gear overrides) with its worn
+   teeth: the dynamically coupled wear evolution (:mod:`physics.dynamics.evolution`) is run once per
+   operating point to the records' cycle counts (or, where only the wear depth is known, to the
+   cycle count of that depth). A bundle may mix operating points, quantities, sampling rates and
+   record lengths: records of one (speed, torque, quantity, sampling rate) form a **group**
+   (:class:`~physics.loop.measured.records.Group`) with its own signature definition and entry
+   scatter. Records are split into train and test by record within each group (the manifest's
+   ``split`` column where given, else seeded), never by windows of one record.
+2. **Calibration** (:mod:`physics.loop.search.fit`; the parameters in
+   :mod:`physics.loop.model.declared`) of the declared nuisance parameters on the train records of
+   all groups at once, before any effect is considered: the physical ones (mesh damping ratio,
+   pinion run-out and profile error amplitudes, the once-per-revolution mesh modulation that the
+   run-out makes, with its phase,
+   :data:`~physics.loop.model.declared.RUNOUT_MODULATION` and
    :func:`physics.dynamics.model_form.with_modulation`, and with ``loop.model_form`` the rest of
-   the model's own form uncertainty, :data:`~physics.loop.declared.MODEL_FORM`: mesh-stiffness
+   the model's own form uncertainty, :data:`~physics.loop.model.declared.MODEL_FORM`: mesh-stiffness
    level, double/single stiffness ratio, effective mass and backlash,
    :func:`physics.dynamics.model_form.with_model_form`) are one value for the whole bundle; the
    measurement chain's (the housing's effective mass ``m_h`` and, where the scenario declares them,
    the bearing support's mode and the housing mounting's, each with its damping,
-   :data:`~physics.loop.declared.CHAIN_MODES`) belong to the acceleration records only; the groups'
-   standardised residuals are concatenated into one cost. With a **reference** (``reference=``,
-   :mod:`physics.loop.form_error`: a sister gearbox's clean records at the same operating
+   :data:`~physics.loop.model.declared.CHAIN_MODES`) belong to the acceleration records only; the
+   groups' standardised residuals are concatenated into one cost. With a **reference**
+   (``reference=``,
+   :mod:`physics.loop.search.form_error`: a sister gearbox's clean records at the same operating
    points and sensors), the declared model is first calibrated on those, and its mean residual per
    group and entry there, the model's own form error, is removed from the measured signatures
    before this calibration. Where the reference is this unit's own earliest records
-   (``reference=first:N``), their calibration is held instead (:func:`physics.loop.fit.held`):
-   the same unit's nuisance and measurement chain, which nothing may recalibrate to absorb
-   what changed since. A parameter that does not move the residuals (the pinion run-out on the
-   line of action: a shaft-rate error is dynamically inert in the torsional model; the modulation's
-   phase, which no amplitude of the signature sees unless another once-per-revolution feature is in
-   the model; the backlash in acceleration records whose flanks never part) is held at its declared
-   value and reported as not identifiable. Every candidate effect is then fitted jointly with the
-   free parameters, model form included. The search (:func:`physics.loop.fit.search`): a scrambled
-   Sobol sample around the declared values, ``m_h`` levelled at each point, the best refined by
-   bounded least squares on the standardised signature residuals. Measurement noise is not fitted:
-   its level is read off each record's spectral floor
-   (:func:`physics.signals.order_analysis.white_noise_std`) and white noise of that level (seeded
-   per record) is added to the model's record.
-3. **Residual and model discrepancy** (:mod:`physics.loop.comparison`,
-   :mod:`physics.loop.discrepancy`): the signature of :mod:`physics.signals.order_analysis` (mesh
-   harmonics with pinion and gear sidebands up to 0.45 fs, half-octave bands, statistics,
+   (``reference=first:N``), their calibration is held instead
+   (:func:`physics.loop.search.fit.held`): the same unit's nuisance and measurement chain, which
+   nothing may recalibrate to absorb what changed since. A parameter that does not move the
+   residuals (the pinion run-out on the line of action: a shaft-rate error is dynamically inert in
+   the torsional model; the modulation's phase, which no amplitude of the signature sees unless
+   another once-per-revolution feature is in the model; the backlash in acceleration records whose
+   flanks never part) is held at its declared value and reported as not identifiable. Every
+   candidate effect is then fitted jointly with the free parameters, model form included. The search
+   (:func:`physics.loop.search.fit.search`): a scrambled Sobol sample around the declared values,
+   ``m_h`` levelled at each point, the best refined by bounded least squares on the standardised
+   signature residuals. Measurement noise is not fitted: its level is read off each record's
+   spectral floor (:func:`physics.signals.order_analysis.white_noise_std`) and white noise of that
+   level (seeded per record) is added to the model's record.
+3. **Residual and model discrepancy** (:mod:`physics.loop.model.comparison`,
+   :mod:`physics.loop.model.discrepancy`): the signature of :mod:`physics.signals.order_analysis`
+   (mesh harmonics with pinion and gear sidebands up to 0.45 fs, half-octave bands, statistics,
    synchronous-average kurtosis, all in dB) of measurement minus calibrated model, per entry,
    divided by the entry's scatter between the measured records' segments (pooled over the group's
    train records, plus a floor ``floor_db``) and a model discrepancy in quadrature. The discrepancy
-   (:func:`~physics.loop.discrepancy.discrepancy_sd`) is estimated on the train residuals of the
-   calibrated declared model, per entry family and group: with it the RMS standardised residual is
-   about 1 where model and measurement agree up to noise and the model's known form error. It
+   (:func:`~physics.loop.model.discrepancy.discrepancy_sd`) is estimated on the train residuals of
+   the calibrated declared model, per entry family and group: with it the RMS standardised residual
+   is about 1 where model and measurement agree up to noise and the model's known form error. It
    enters the judgement (held-out errors, the null test), not the fits: the calibration and every
    candidate's fit weigh the residuals by the noise alone, because a discrepancy estimated on
    records where an effect is missing is large exactly in that effect's entries and would
    down-weight them in its fit (a tip relief of 16 um in the project's own records was fitted at 11
    um with it). The report's headline error stays in units of the noise alone.
-4. **Attribution** (:mod:`physics.loop.attribution`): every effect of :mod:`physics.loop.effects`
-   that can show in the bundle's quantities is added in turn (a measurement-chain effect acts only
-   on its own quantities). Screening: the effect at a grid of sizes, nuisance at the calibration,
-   the best size polished by a short least squares. Every candidate (or the best ``refine`` by
-   train chi-square) then gets the same search as the calibration, their parameters jointly with
-   the identifiable nuisance (a missing effect biases the calibration, at worst to its bounds, so
-   the nuisance must move with the effect). Candidates are ranked by held-out error (RMS
-   standardised residual, with discrepancy, over the test records) with the Bayesian information
-   criterion on the train records beside it (chi-square plus k ln n, the scatter being known, k the
-   effect's parameters).
-   The **null test** (:func:`physics.loop.report.null_test`), judged where each candidate's own
-   signature lives (the entries its model moves by more than their noise,
-   :func:`~physics.loop.attribution.signature_gain`): the best by held-out error of those that pass
-   it is adopted (a candidate that soaks up form error across the spectrum can rank first and fail
-   it while the effect in the data passes); a candidate passes only if it lowers the held-out error
-   there (in units of the noise) by at least ``min_gain`` (20 %), its BIC by at least
+4. **Attribution** (:mod:`physics.loop.search.attribution`): every effect of
+   :mod:`physics.loop.effects` that can show in the bundle's quantities is added in turn (a
+   measurement-chain effect acts only on its own quantities). Screening: the effect at a grid of
+   sizes, nuisance at the calibration, the best size polished by a short least squares. Every
+   candidate (or the best ``refine`` by train chi-square) then gets the same search as the
+   calibration, their parameters jointly with the identifiable nuisance (a missing effect biases the
+   calibration, at worst to its bounds, so the nuisance must move with the effect). Candidates are
+   ranked by held-out error (RMS standardised residual, with discrepancy, over the test records)
+   with the Bayesian information criterion on the train records beside it (chi-square plus k ln n,
+   the scatter being known, k the effect's parameters).
+   The **null test** (:func:`physics.loop.judge.adoption.null_test`), judged where each candidate's
+   own signature lives (the entries its model moves by more than their noise,
+   :func:`~physics.loop.search.attribution.signature_gain`): the best by held-out error of those
+   that pass it is adopted (a candidate that soaks up form error across the spectrum can rank first
+   and fail it while the effect in the data passes); a candidate passes only if it lowers the
+   held-out error there (in units of the noise) by at least ``min_gain`` (20 %), its BIC by at least
    ``min_delta_bic`` (10, "very strong" on Kass & Raftery's scale), and, in every group where it
    shows (of the quantities it can act on), removes more standardised sum of squares per held-out
    record than the discrepancy lets a candidate of its size absorb by chance
-   (:func:`~physics.loop.discrepancy.discrepancy_allowance`) and cuts the group's held-out error
-   over all its entries by at least one standard error
-   (:func:`~physics.loop.attribution.whole_cut`). The records' wear takes no part in
-   this decision: an adopted effect **reads the wear** (:mod:`physics.loop.wear_reading`) only if,
-   where the train records' wear is known, it does not lower the model-based wear estimate's
-   leave-one-out skill on them by more than ``max_wear_loss`` (0.1: its mean absolute error may
-   grow by a tenth of the constant guess's; :func:`~physics.loop.wear_reading.wear_check`); else
-   the model before it keeps reading it. The held-out records' wear is only scored, before and
-   after, never used to decide (a decision on it would leave the held-out score no longer held
-   out). The rule is designed for a false-add rate of ``false_add_rate`` (1 %) per bundle when the
-   declared model's form error is unstructured (no effect of the library resembles it); a form
-   error that looks like an effect is not separable from it by any rule on these data. Each
-   candidate's **separability** is reported beside it
-   (:func:`~physics.loop.attribution.separable_share`): the share of its change of the train
+   (:func:`~physics.loop.model.discrepancy.discrepancy_allowance`) and cuts the group's held-out
+   error over all its entries by at least one standard error
+   (:func:`~physics.loop.search.attribution.whole_cut`). The records' wear takes no part in
+   this decision: an adopted effect **reads the wear** (:mod:`physics.loop.search.wear_reading`)
+   only if, where the train records' wear is known, it does not lower the model-based wear
+   estimate's leave-one-out skill on them by more than ``max_wear_loss`` (0.1: its mean absolute
+   error may grow by a tenth of the constant guess's;
+   :func:`~physics.loop.search.wear_reading.wear_check`); else the model before it keeps reading it.
+   The held-out records' wear is only scored, before and after, never used to decide (a decision on
+   it would leave the held-out score no longer held out). The rule is designed for a false-add rate
+   of ``false_add_rate`` (1 %) per bundle when the declared model's form error is unstructured (no
+   effect of the library resembles it); a form error that looks like an effect is not separable from
+   it by any rule on these data. Each candidate's **separability** is reported beside it
+   (:func:`~physics.loop.search.attribution.separable_share`): the share of its change of the train
    residuals that no linear combination of the free nuisance's directions reproduces (near 0: the
    declared model's own freedom makes the same change; a DTE sensor gain against a free stiffness
    level, whose lengths scale out of the equation of motion, is the exact case).
    The null is the declared model's best fit (:func:`best_null_round`): after an adoption the
    declared model is refitted from the adopted candidate's nuisance
-   (:func:`~physics.loop.fit.recalibrated`); where that fits the train records better by more
+   (:func:`~physics.loop.search.fit.recalibrated`); where that fits the train records better by more
    than 1 % of the chi-square, it becomes the calibration and the round is judged again, each
    candidate keeping its lowest fit, at most twice (a candidate's gain can be a better basin
    of the nuisance that its joint fit reached).
-   **Greedy second round** (:func:`~physics.loop.attribution.attribute` again): once an effect is
-   adopted, every other effect is tried on the model that carries it
-   (:func:`~physics.loop.attribution.stacked`, the first's parameters held at their fit, the
+   **Greedy second round** (:func:`~physics.loop.search.attribution.attribute` again): once an
+   effect is adopted, every other effect is tried on the model that carries it
+   (:func:`~physics.loop.search.attribution.stacked`, the first's parameters held at their fit, the
    nuisance refitted), judged by the same rule against that model.
 5. **Report** (:func:`run_loop`, :mod:`physics.loop.report`): error before and after on the
    held-out records, overall and per group, as the standardised signature residual (noise alone:
    the figure the report leads with; noise and discrepancy) and in dB, as the mean relative error
    of the Table 13 features [%], and, where the wear is known, as the error of a model-based wear
    estimate (the wear state whose simulated signature is nearest, relative to the group's train
-   records of known wear: :func:`~physics.loop.wear_reading.wear_estimates`) [%] and as its skill
-   against the train records' mean wear (:func:`~physics.loop.wear_reading.wear_skill`; at or below
-   0 the estimate reads no wear on these records, and the choice of the model that reads it above
-   then compares noise).
+   records of known wear: :func:`~physics.loop.search.wear_reading.wear_estimates`) [%] and as its
+   skill against the train records' mean wear (:func:`~physics.loop.search.wear_reading.wear_skill`;
+   at or below 0 the estimate reads no wear on these records, and the choice of the model that reads
+   it above then compares noise).
 """
 
 from __future__ import annotations
@@ -121,9 +123,13 @@ import time
 
 import numpy as np
 
-from physics.loop.attribution import Round, attribute, candidates_for, second_candidates
-from physics.loop.bundle import Bundle
-from physics.loop.comparison import (
+from physics.loop.config import LoopSettings
+from physics.loop.effects import Effect
+from physics.loop.judge.verdict import closest, group_lines, judge, unexplained_entries
+from physics.loop.measured.bundle import Bundle
+from physics.loop.measured.records import Records, prepare
+from physics.loop.measured.usable import check_usable, shown_candidates
+from physics.loop.model.comparison import (
     feature_error,
     group_errors,
     noise_only,
@@ -132,12 +138,13 @@ from physics.loop.comparison import (
     residuals_db,
     rms,
 )
-from physics.loop.config import LoopSettings
-from physics.loop.declared import TORQUE, declared_modes, declared_nuisance
-from physics.loop.detection import detection_limits
-from physics.loop.discrepancy import entry_family, with_discrepancy
-from physics.loop.effects import Effect
-from physics.loop.fit import (
+from physics.loop.model.declared import TORQUE, declared_modes, declared_nuisance
+from physics.loop.model.discrepancy import entry_family, with_discrepancy
+from physics.loop.model.simulation import model_signals
+from physics.loop.report import LoopReport
+from physics.loop.search.attribution import Round, attribute, candidates_for, second_candidates
+from physics.loop.search.detection import detection_limits
+from physics.loop.search.fit import (
     MAX_RECALIBRATIONS,
     Candidate,
     calibrate,
@@ -145,14 +152,9 @@ from physics.loop.fit import (
     recalibrated,
     screened,
 )
-from physics.loop.form_error import FormReference
-from physics.loop.records import Records, prepare
-from physics.loop.report import LoopReport
-from physics.loop.simulation import model_signals
+from physics.loop.search.form_error import FormReference
+from physics.loop.search.wear_reading import Reader, wear_score
 from physics.loop.threads import TimeLimit, one_blas_thread
-from physics.loop.usable import check_usable, shown_candidates
-from physics.loop.verdict import closest, group_lines, judge, unexplained_entries
-from physics.loop.wear_reading import Reader, wear_score
 from physics.params import Scenario
 
 log = logging.getLogger(__name__)
@@ -201,11 +203,11 @@ def best_null_round(rec: Records, nuisance: dict, free_nuisance: list[str],
                     candidates: list[tuple[Effect, dict]], progress: bool = False
                     ) -> tuple[Round, dict, Records, list[str], bool]:
     """The first round judged against the declared model's best fit: where the declared model
-    refitted from an adopted candidate's nuisance (:func:`~physics.loop.fit.recalibrated`) fits
-    the train records better than ``nuisance``, the refit becomes the calibration and the round
+    refitted from an adopted candidate's nuisance (:func:`~physics.loop.search.fit.recalibrated`)
+    fits the train records better than ``nuisance``, the refit becomes the calibration and the round
     is run again, each candidate keeping the lower of its fits
-    (:func:`~physics.loop.attribution.lowest_fits`), at most
-    :data:`~physics.loop.fit.MAX_RECALIBRATIONS` times. Returns the round, the calibration it
+    (:func:`~physics.loop.search.attribution.lowest_fits`), at most
+    :data:`~physics.loop.search.fit.MAX_RECALIBRATIONS` times. Returns the round, the calibration it
     was judged against, the records with that calibration's discrepancy, the candidates whose
     nuisance moved the calibration, and whether the cap left a better fit unused."""
     refits: list[str] = []
@@ -246,7 +248,7 @@ def calibrated_on(held: bool, refits: list[str], capped: bool) -> str:
 def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = None,
              progress: bool = False, reference: FormReference | None = None) -> LoopReport:
     """The whole loop on one bundle; returns its report (see the module text). With a
-    ``reference`` (:func:`physics.loop.form_error.form_reference`, a sister gearbox's
+    ``reference`` (:func:`physics.loop.search.form_error.form_reference`, a sister gearbox's
     records) the declared model's mean form error measured there is removed from the
     measured signatures first."""
     settings = settings or LoopSettings()

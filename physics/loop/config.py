@@ -39,13 +39,13 @@ class LoopSettings:
                           whole=True)
     explore: int = 32  # Sobol points searched before each refinement (0 or a power of 2)
     # best explored points each candidate's least squares starts from, the lowest fit kept
-    # (the calibration with ``model_form``: :data:`~physics.loop.fit.CALIBRATION_STARTS`)
+    # (the calibration with ``model_form``: :data:`~physics.loop.search.fit.CALIBRATION_STARTS`)
     starts: int = bounded(1, 1, 100, "explored points each candidate's fit starts from",
                           whole=True)
     floor_db: float = bounded(0.3, 0.0, 100.0, "model error floor added to each entry's scatter",
                               closed=True)
     # the model discrepancy: weight of the pooled variance in each entry family's estimate, in
-    # residuals (:func:`~physics.loop.discrepancy.discrepancy_sd`) ...
+    # residuals (:func:`~physics.loop.model.discrepancy.discrepancy_sd`) ...
     discrepancy_prior: float = bounded(10.0, 0.0, 1e6, closed=True)
     # ... and the false-add rate per bundle the adoption rule is designed for
     false_add_rate: float = bounded(0.01, 0.0, 1.0, "share of bundles without an effect that "
@@ -53,20 +53,20 @@ class LoopSettings:
     candidates: tuple[str, ...] | None = None  # effects to try; None: the whole library
     # an adopted effect reads the wear unless it lowers the model-based wear estimate's
     # leave-one-out skill on the train records of known wear by more than this
-    # (:func:`~physics.loop.wear_reading.wear_check`)
+    # (:func:`~physics.loop.search.wear_reading.wear_check`)
     max_wear_loss: float = bounded(0.1, 0.0, 100.0, "skill of the wear estimate an adopted "
                                    "effect may cost", closed=True)
     # calibrate the rest of the declared model's form uncertainty
-    # (:data:`~physics.loop.declared.MODEL_FORM`: the run-out modulation is calibrated either way)
-    # with the nuisance; off by default: better on the independent simulator's bundles, but on the
-    # project's own it absorbs a friction, leaves a tooth defect's error above half and lets the
+    # (:data:`~physics.loop.model.declared.MODEL_FORM`: the run-out modulation is calibrated either
+    # way) with the nuisance; off by default: better on the independent simulator's bundles, but on
+    # the project's own it absorbs a friction, leaves a tooth defect's error above half and lets the
     # greedy second round stack a spurious effect (docs/loop.md)
     model_form: bool = False
     # seconds of work after which the greedy second round stops and the report of the first
     # round is written, marked partial (0: no limit; the first round always runs to its end)
     time_limit_s: float = bounded(0.0, 0.0, 1e7, "seconds; 0 for no limit", closed=True)
     # where no effect is named: each candidate's detection limit, the smallest size the rule
-    # would name on these records (physics.loop.detection; a few simulations per candidate)
+    # would name on these records (physics.loop.search.detection; a few simulations per candidate)
     detection_limits: bool = True
 
     def __post_init__(self):
@@ -93,9 +93,9 @@ class LoopConfig(PhysicsConfig):
     data: str = MISSING  # a bundle folder (shared/specs/measured-bundle.md) or a feature table
     # a bundle of a sister gearbox without the effects sought, at the same operating points,
     # quantities and sampling rates: the declared model's mean form error is measured on it
-    # and removed (physics.loop.form_error); or this bundle's own earliest records, first:N or
-    # before:<cycles or ISO date> (physics.loop.own_history), left out of the analysis; None:
-    # no reference
+    # and removed (physics.loop.search.form_error); or this bundle's own earliest records, first:N
+    # or before:<cycles or ISO date> (physics.loop.search.own_history), left out of the analysis;
+    # None: no reference
     reference: str | None = None
     case: int | None = None  # 1-5: operating point and lubricant of Table 11 (feature tables)
     progress: bool = True

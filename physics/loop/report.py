@@ -1,10 +1,10 @@
 """The report of the measured-data loops (:mod:`physics.loop`): one type for bundles and feature
-tables, its null test, its markdown and figures."""
+tables, its markdown and figures. What it reports was decided before it is written (the
+adoption rule: :mod:`physics.loop.judge.adoption`)."""
 
 from __future__ import annotations
 
 import json
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from physics.files import atomic_write, pyplot
-from physics.loop.verdict import summary_line, unexplained_figure
+from physics.loop.judge.verdict import summary_line, unexplained_figure
 from physics.signals.order_analysis import line_amplitudes
 
 #: the keys every report.json leads with, in this order (docs/loop.md)
@@ -21,48 +21,6 @@ STABLE_KEYS = ("mode", "verdict", "unexplained", "partial", "chosen_effect", "ch
                "feature_error_before_pct", "feature_error_after_pct",
                "wear_error_before_pct", "wear_error_after_pct", "calibration", "calibrated_on",
                "nuisance_after", "null_bic", "ranking", "decision_rule")
-
-
-def null_test(heldout: float, null_heldout: float, delta_bic: float, min_gain: float,
-              min_delta_bic: float, explained: float | None = None, allowed: float = 0.0,
-              whole: float | None = None) -> dict[str, dict]:
-    """The conditions of the null test, each with the candidate's value, the bound it must
-    pass and whether it does: ``gain``, the held-out error's relative cut, at least
-    ``min_gain``; ``delta_bic``, at most ``-min_delta_bic``; and, where the loop measures them,
-    ``explained``, more than ``allowed``, and ``whole``, the whole signature's cut in every
-    group where the candidate shows, at least one standard error
-    (:func:`physics.loop.attribution.whole_cut`).
-
-    The bundle loop passes the held-out errors in the candidate's own signature entries (in units of
-    the noise), as ``explained`` the smallest over the groups (operating points and quantities; of
-    the quantities the candidate can act on) of the sum of squares (standardised by noise and model
-    discrepancy) it removes per held-out record there, and as ``allowed`` what the discrepancy lets
-    a candidate of its size absorb by chance
-    (:func:`physics.loop.bundle_loop.discrepancy_allowance`). The feature-table loop judges the
-    features as a whole and leaves the last two conditions out."""
-    gain = 1.0 - heldout / null_heldout if null_heldout > 0 else math.nan
-    checks = {"gain": {"value": gain, "bound": min_gain,
-                       "holds": bool(heldout <= (1 - min_gain) * null_heldout)},
-              "delta_bic": {"value": delta_bic, "bound": -min_delta_bic,
-                            "holds": bool(delta_bic <= -min_delta_bic)}}
-    if explained is not None:
-        checks["explained"] = {"value": explained, "bound": allowed,
-                               "holds": bool(explained > allowed)}
-    if whole is not None:
-        checks["whole"] = {"value": whole, "bound": 1.0, "holds": bool(whole >= 1.0)}
-    return checks
-
-
-def holds(checks: dict[str, dict]) -> bool:
-    """Whether every condition of a :func:`null_test` holds."""
-    return all(c["holds"] for c in checks.values())
-
-
-def first_passing(verdicts: list[dict[str, dict]]) -> int:
-    """The place of the candidate a round judges, from the :func:`null_test` conditions of its
-    candidates in ranking order: the first whose conditions all hold (the best that passes),
-    else the first."""
-    return next((k for k, checks in enumerate(verdicts) if holds(checks)), 0)
 
 
 #: how a verdict writes each condition: its value, then its bound
@@ -133,7 +91,7 @@ class LoopReport:
     decision_rule: dict
     details: dict = field(default_factory=dict)
     signals: Any = field(default=None, repr=False, compare=False)
-    # "effect", "unexplained_residual" or "none" (:func:`physics.loop.verdict.verdict`); where
+    # "effect", "unexplained_residual" or "none" (:func:`physics.loop.judge.verdict.verdict`); where
     # the residual is unexplained, its groups, entries, lines and the closest candidates
     verdict: str | None = None
     unexplained: dict | None = None
@@ -239,7 +197,7 @@ def markdown(r: dict) -> str:
     if limits:
         lines += ["", "## Detection limits (not named: the smallest size the rule would name "
                   "on these records, injected into the calibrated model, the other parameters "
-                  "at their typical values; physics/loop/detection.py)", "",
+                  "at their typical values; physics/loop/search/detection.py)", "",
                   "| effect | option | detection limit | typical size |", "|---|---|---|---|"]
         lines += [f"| {d['effect']} | {d['option'] or ''} | {limit_text(d)} | "
                   f"{d['typical']:.3g} |" for d in limits]

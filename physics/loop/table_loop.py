@@ -38,14 +38,21 @@ from scipy import optimize
 
 from physics.dynamics.model import PairModel, simulate
 from physics.gear.stiffness import mesh_stiffness
-from physics.loop.attribution import candidates_for
 from physics.loop.config import LoopSettings
-from physics.loop.declared import NUISANCE, declared_nuisance, from_unit, to_unit, with_nuisance
 from physics.loop.effects import EFFECTS, Effect
-from physics.loop.report import LoopReport, holds, null_test
-from physics.loop.simulation import SETTLE_DECAYS
+from physics.loop.judge.adoption import holds, null_test
+from physics.loop.measured.worn_states import cycles_for_wear, wear_reach, worn_models
+from physics.loop.model.declared import (
+    NUISANCE,
+    declared_nuisance,
+    from_unit,
+    to_unit,
+    with_nuisance,
+)
+from physics.loop.model.simulation import SETTLE_DECAYS
+from physics.loop.report import LoopReport
+from physics.loop.search.attribution import candidates_for
 from physics.loop.threads import one_blas_thread
-from physics.loop.worn_states import cycles_for_wear, wear_reach, worn_models
 from physics.params import OutOfScope, Scenario
 from physics.signals.features import FEATURES, features
 from physics.signals.measurement import declared_chain, sensed

@@ -120,7 +120,7 @@ import numpy as np
 import pandas as pd
 from scipy import signal
 
-from physics.loop.bundle import write_bundle
+from physics.loop.measured.bundle import write_bundle
 
 QUANTITIES = ("dte_m", "accel_m_s2")
 STEEL_E = 206e9  # Pa, ISO 6336-1 steel reference modulus
@@ -146,7 +146,7 @@ _ALIASES = {"defect": "tooth_defect"}
 EFFECT_NAMES = tuple(_EFFECTS)
 
 #: another unit of the default pair's series (``IndependentPair(**SISTER_UNIT)``), the sister
-#: of the loop's form reference (:mod:`physics.loop.form_error`): other manufacturing
+#: of the loop's form reference (:mod:`physics.loop.search.form_error`): other manufacturing
 #: errors (run-out and profile within one ISO 1328 grade), mesh damping, bearing and housing
 #: data of another installation (10-30 % off the defaults; a choice, no standard)
 SISTER_UNIT = {"mesh_damping_ratio": 0.065, "runout1_um": 9.0,

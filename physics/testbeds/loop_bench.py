@@ -13,7 +13,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from physics.loop import FormReference, LoopSettings, entry_family, form_reference, read_bundle
+from physics.loop import LoopSettings, read_bundle
+from physics.loop.model.discrepancy import entry_family
+from physics.loop.search.form_error import FormReference, form_reference
 from physics.params import scenario_from_config
 from physics.testbeds.independent_simulator import (
     SISTER_UNIT,
@@ -71,7 +73,7 @@ def report_label(generator: str, name: str | None, seed: int, quantity: str) -> 
 def residual_cells(report: Path) -> dict[tuple[str, str], float]:
     """A bundle's residual before any effect (measured minus calibrated declared model, the
     mean over the held-out records, ``residual_before`` of report.json), RMS [dB] per group
-    and cell: each entry family (:func:`physics.loop.discrepancy.entry_family`: one kind of
+    and cell: each entry family (:func:`physics.loop.model.discrepancy.entry_family`: one kind of
     line at every mesh harmonic) and each mesh harmonic with its sidebands (every kind of line
     at one harmonic: where a structural mode shows)."""
     out = {}

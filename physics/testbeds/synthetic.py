@@ -18,11 +18,11 @@ import numpy as np
 import pandas as pd
 
 from physics.dynamics.model import simulate
-from physics.loop.bundle import write_bundle
-from physics.loop.declared import declared_modes, declared_nuisance, modes_of, with_nuisance
 from physics.loop.effects import effect
-from physics.loop.records import shaft_rates
-from physics.loop.worn_states import mesh_stiffness, worn_models
+from physics.loop.measured.bundle import write_bundle
+from physics.loop.measured.records import shaft_rates
+from physics.loop.measured.worn_states import mesh_stiffness, worn_models
+from physics.loop.model.declared import declared_modes, declared_nuisance, modes_of, with_nuisance
 from physics.params import Scenario
 from physics.signals.measurement import add_noise, declared_chain, sensed
 

@@ -25,7 +25,7 @@ from hydra import compose, initialize_config_module
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, open_dict, read_write
 
-from physics.loop.bundle import write_bundle
+from physics.loop.measured.bundle import write_bundle
 
 ROOT = Path(__file__).resolve().parents[2]
 FS = 40960.0

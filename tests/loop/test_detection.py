@@ -1,21 +1,15 @@
 """Detection limits: beside every candidate not named, the smallest size the rule would name on
-the bundle's own records (physics.loop.detection)."""
+the bundle's own records (physics.loop.search.detection)."""
 
 from __future__ import annotations
 
 import pytest
 
-from physics.loop import (
-    EFFECTS,
-    LoopSettings,
-    model_signals,
-    read_bundle,
-    run_loop,
-    with_discrepancy,
-    write_report,
-)
-from physics.loop.detection import judged_at, size_param
-from physics.loop.report import holds
+from physics.loop import EFFECTS, LoopSettings, read_bundle, run_loop, write_report
+from physics.loop.judge.adoption import holds
+from physics.loop.model.discrepancy import with_discrepancy
+from physics.loop.model.simulation import model_signals
+from physics.loop.search.detection import judged_at, size_param
 from physics.params import scenario_from_config
 from physics.testbeds import make_bundle
 

@@ -56,8 +56,8 @@ FORBIDDEN = (  # the project's model, effects, measurement chain, loops, testbed
     "physics.dynamics", "physics.gear.stiffness", "physics.signals.measurement",
     "physics.testbeds.synthetic", "physics.testbeds.loop_bench", "surrogate",
 )
-#: of the loop, only the bundle format (the writer) may be loaded
-LOOP_ALLOWED = ("physics.loop", "physics.loop.bundle")
+#: of the loop, only the bundle format (the writer) and its lazy packages may be loaded
+LOOP_ALLOWED = ("physics.loop", "physics.loop.measured", "physics.loop.measured.bundle")
 
 
 def test_independent_of_the_project_model():

@@ -18,41 +18,42 @@ from scipy import signal
 
 from physics.dynamics.model import build_model, simulate
 from physics.loop import (
-    DYNAMIC_NUISANCE,
     EFFECTS,
     STABLE_KEYS,
-    Candidate,
     LoopSettings,
-    calibrate,
-    candidates_for,
+    effect,
+    read_bundle,
+    read_feature_table,
+    run_loop,
+    write_bundle,
+)
+from physics.loop.measured.records import prepare, shaft_rates, split_records
+from physics.loop.model.comparison import residuals, residuals_db, rms
+from physics.loop.model.declared import (
+    DYNAMIC_NUISANCE,
     completed,
     declared_modes,
     declared_nuisance,
-    effect,
-    fit,
-    free_directions,
-    identifiable,
-    model_signals,
-    parse_columns,
-    prepare,
-    read_bundle,
-    read_feature_table,
-    residuals,
-    residuals_db,
-    responses,
-    rms,
-    run_loop,
-    search,
-    separable_share,
-    shaft_rates,
-    split_records,
-    train_cost,
-    wear_skill,
-    with_level,
-    write_bundle,
 )
-from physics.loop.attribution import lowest_fits
-from physics.loop.fit import recalibrated
+from physics.loop.model.simulation import model_signals, responses
+from physics.loop.search import fit
+from physics.loop.search.attribution import (
+    candidates_for,
+    free_directions,
+    lowest_fits,
+    separable_share,
+)
+from physics.loop.search.fit import (
+    Candidate,
+    calibrate,
+    identifiable,
+    recalibrated,
+    search,
+    train_cost,
+    with_level,
+)
+from physics.loop.search.wear_reading import wear_skill
+from physics.loop.table_loop import parse_columns
 from physics.params import scenario_from_config
 from physics.signals.order_analysis import (
     line_amplitudes,

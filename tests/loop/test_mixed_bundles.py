@@ -14,54 +14,42 @@ from hypothesis import strategies as st
 from physics.dynamics.model import build_model, simulate
 from physics.dynamics.model_form import revolution_tables, with_model_form, with_modulation
 from physics.gear.stiffness import MeshStiffness
-from physics.loop import (
+from physics.loop import EFFECTS, LoopSettings, read_bundle, run_loop, write_bundle, write_report
+from physics.loop.judge.adoption import first_passing, holds, null_test
+from physics.loop.judge.verdict import unexplained_entries
+from physics.loop.measured.records import Group, prepare, split_records
+from physics.loop.measured.worn_states import worn_models
+from physics.loop.model.comparison import group_errors, noise_only, residuals, residuals_db, rms
+from physics.loop.model.declared import (
     BOUNDS,
     CHAIN,
-    EFFECTS,
     MODEL_FORM,
     NUISANCE,
     TORQUE,
-    Group,
-    LoopSettings,
-    Reader,
-    WearScore,
-    calibrate,
     declared_model_form,
     declared_nuisance,
+    with_nuisance,
+)
+from physics.loop.model.discrepancy import (
     discrepancy_allowance,
     discrepancy_sd,
     entry_family,
-    first_passing,
-    form_reference,
-    group_errors,
-    holds,
-    model_signals,
-    noise_only,
-    null_test,
-    prepare,
-    read_bundle,
+    with_discrepancy,
+)
+from physics.loop.model.simulation import model_signals
+from physics.loop.report import verdict_line
+from physics.loop.search.attribution import second_candidates, signature_gain, stacked, whole_cut
+from physics.loop.search.fit import calibrate
+from physics.loop.search.form_error import form_reference
+from physics.loop.search.wear_reading import (
+    Reader,
+    WearScore,
     reads_wear,
-    residuals,
-    residuals_db,
-    rms,
-    run_loop,
-    second_candidates,
-    signature_gain,
-    split_records,
-    stacked,
-    unexplained_entries,
-    verdict_line,
     wear_check,
     wear_estimates,
     wear_reference,
     wear_score,
     wear_skill,
-    whole_cut,
-    with_discrepancy,
-    with_nuisance,
-    worn_models,
-    write_bundle,
-    write_report,
 )
 from physics.params import scenario_from_config
 from physics.signals.measurement import add_noise, declared_chain, sensed

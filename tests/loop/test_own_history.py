@@ -12,18 +12,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from physics.loop import (
-    Bundle,
-    LoopSettings,
-    own_reference,
-    parse_history,
-    read_bundle,
-    run_loop,
-    split_history,
-)
-from physics.loop.fit import held, with_level
-from physics.loop.form_error import _spread
-from physics.loop.records import Group, prepare
+from physics.loop import Bundle, LoopSettings, read_bundle, run_loop
+from physics.loop.measured.records import Group, prepare
+from physics.loop.search.fit import held, with_level
+from physics.loop.search.form_error import _spread
+from physics.loop.search.own_history import own_reference, parse_history, split_history
 from physics.params import scenario_from_config
 from physics.testbeds import make_bundle
 

@@ -15,13 +15,13 @@ from threadpoolctl import threadpool_info
 
 from physics.dynamics.model import build_model, settle_time, simulate
 from physics.loop import threads
-from physics.loop.bundle import read_bundle
 from physics.loop.config import LoopSettings
-from physics.loop.declared import completed
 from physics.loop.effects import EFFECTS
-from physics.loop.fit import Candidate, explore, screen_effect, search, train_cost
-from physics.loop.records import prepare
-from physics.loop.simulation import SETTLE_DECAYS
+from physics.loop.measured.bundle import read_bundle
+from physics.loop.measured.records import prepare
+from physics.loop.model.declared import completed
+from physics.loop.model.simulation import SETTLE_DECAYS
+from physics.loop.search.fit import Candidate, explore, screen_effect, search, train_cost
 from physics.loop.threads import TimeLimit, each, one_blas_thread
 from physics.params import scenario_from_config
 from physics.testbeds.synthetic import make_bundle

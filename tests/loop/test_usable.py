@@ -14,18 +14,11 @@ import pandas as pd
 import pytest
 
 import physics.loop.bundle_loop as bundle_loop
-from physics.loop import (
-    EFFECTS,
-    LoopSettings,
-    candidates_for,
-    check_usable,
-    group_label,
-    read_bundle,
-    run_loop,
-    shown_candidates,
-    write_bundle,
-)
+from physics.loop import EFFECTS, LoopSettings, check_usable, read_bundle, run_loop, write_bundle
+from physics.loop.measured.records import group_label
+from physics.loop.measured.usable import shown_candidates
 from physics.loop.report import write_report
+from physics.loop.search.attribution import candidates_for
 from physics.params import scenario_from_config
 from physics.testbeds import make_bundle
 

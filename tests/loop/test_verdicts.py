@@ -8,16 +8,10 @@ import json
 import numpy as np
 import pytest
 
-from physics.loop import (
-    LoopSettings,
-    declared_lines,
-    entry_kind,
-    read_bundle,
-    run_loop,
-    unexplained_lines,
-)
+from physics.loop import LoopSettings, read_bundle, run_loop
+from physics.loop.judge.lines import declared_lines, unexplained_lines
+from physics.loop.judge.verdict import entry_kind, summary_line
 from physics.loop.report import STABLE_KEYS, write_report
-from physics.loop.verdict import summary_line
 from physics.params import scenario_from_config
 from physics.testbeds import make_bundle
 

@@ -12,9 +12,8 @@ import pytest
 
 from physics.dynamics.evolution import root_wear_evolution
 from physics.gear.stiffness import mesh_stiffness
-from physics.loop import worn_states
-from physics.loop.table_loop import beyond_reach
-from physics.loop.worn_states import (
+from physics.loop.measured import worn_states
+from physics.loop.measured.worn_states import (
     GRID_REACH,
     cycles_for_wear,
     records_cycles,
@@ -24,6 +23,7 @@ from physics.loop.worn_states import (
     wear_reach,
     worn_models,
 )
+from physics.loop.table_loop import beyond_reach
 from physics.params import OutOfScope, scenario_from_config
 
 

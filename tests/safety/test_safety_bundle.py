@@ -14,8 +14,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-import physics.loop.bundle as bundle_mod
-from physics.loop.bundle import check_not_own_reference, read_bundle, write_bundle
+import physics.loop.measured.bundle as bundle_mod
+from physics.loop.measured.bundle import check_not_own_reference, read_bundle, write_bundle
 
 FS = 50_000.0
 
@@ -51,7 +51,7 @@ def test_acceptance_billion_laughs_is_refused_at_once(bundle):
     """The user's probe: a 7-line gear.yaml of aliases, through the app's reader, in a child
     process with a timeout (it hung before)."""
     (bundle / "gear.yaml").write_text(LAUGHS)
-    code = ("from physics.loop.bundle import read_bundle\n"
+    code = ("from physics.loop.measured.bundle import read_bundle\n"
             f"try:\n    read_bundle({str(bundle)!r})\n"
             "except ValueError as e:\n    print(e)\n")
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
@@ -137,7 +137,7 @@ def test_written_bundles_are_readable_by_the_group(tmp_path):
 
 
 def test_a_feature_table_with_wear_outside_its_unit_is_refused(tmp_path):
-    from physics.loop.bundle import read_feature_table
+    from physics.loop.measured.bundle import read_feature_table
 
     path = tmp_path / "t.csv"
     pd.DataFrame({"wear_mm": [0.0, 24.0], "rms_m_s2": [1.0, 2.0]}).to_csv(path, index=False)

@@ -4,7 +4,7 @@ Two reasonable gear models of one pair differ by far more than measurement noise
 independent simulator's records the calibrated declared model sits at 5 to 9 times the noise
 in a clean bundle, docs/loop.md). In Kennedy and O'Hagan's terms the residual is
 ``r = delta + eps``: a model discrepancy ``delta`` and the noise (J. R. Stat. Soc. B 63 (2001)
-425). :func:`physics.loop.discrepancy.discrepancy_sd` estimates the discrepancy's variance on
+425). :func:`physics.loop.model.discrepancy.discrepancy_sd` estimates the discrepancy's variance on
 the bundle's own train records; its **mean** cannot be estimated there, since an undeclared
 effect in the records is, on one gearbox, a mean residual as well. It can be estimated on a
 gearbox known to carry none of the effects sought: a sister unit of the same type that passed
@@ -40,14 +40,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from physics.loop.bundle import Bundle
-from physics.loop.comparison import residuals_db, rms
 from physics.loop.config import LoopSettings
-from physics.loop.declared import declared_modes, declared_nuisance
-from physics.loop.discrepancy import discrepancy_sd
-from physics.loop.fit import calibrate
-from physics.loop.records import Records, group_keys, group_label, prepare
-from physics.loop.simulation import model_signals
+from physics.loop.measured.bundle import Bundle
+from physics.loop.measured.records import Records, group_keys, group_label, prepare
+from physics.loop.model.comparison import residuals_db, rms
+from physics.loop.model.declared import declared_modes, declared_nuisance
+from physics.loop.model.discrepancy import discrepancy_sd
+from physics.loop.model.simulation import model_signals
+from physics.loop.search.fit import calibrate
 from physics.loop.threads import one_blas_thread
 from physics.params import Scenario
 
@@ -66,11 +66,11 @@ class FormReference:
     #: which a record referred to the reference mean is judged (:func:`_spread`)
     spread: dict[tuple, np.ndarray]
     # what the reference is: a sister gearbox, or this unit's own earliest records
-    # (:mod:`physics.loop.own_history`), with the records it holds
+    # (:mod:`physics.loop.search.own_history`), with the records it holds
     source: str = "a sister gearbox"
     names: tuple[str, ...] = ()
     #: whether the reference is this unit's own earliest records (then its :attr:`calibration`
-    #: is held for the later ones, :func:`physics.loop.fit.held`)
+    #: is held for the later ones, :func:`physics.loop.search.fit.held`)
     same_unit: bool = False
 
     def check(self, bundle: Bundle) -> None:
@@ -140,7 +140,7 @@ def _spread(rec: Records, res: list[np.ndarray], offsets: dict[tuple, np.ndarray
             ) -> dict[tuple, np.ndarray]:
     """Per group, the discrepancy sd [dB] by which a record referred to the group's mean
     ``offsets`` is judged: the reference records' discrepancy ``d`` about that mean
-    (:func:`physics.loop.discrepancy.discrepancy_sd` of the residuals ``res`` centred, each
+    (:func:`physics.loop.model.discrepancy.discrepancy_sd` of the residuals ``res`` centred, each
     scaled by ``sqrt(n / (n - 1))``, the variance the mean of ``n`` took), plus the error of
     the mean itself, which every record referred to it shares: ``(d^2 + entry_sd^2) / n``.
     A group of one record has no scatter to measure: it enters no estimate and gets none."""

@@ -2,7 +2,7 @@
 wear run (:mod:`physics.dynamics.evolution`) per operating point, every profile update kept
 (:class:`WearHistory`), read at the records' cycle counts (or, where only a record's wear depth
 is known, at the cycle count of that depth), and the grid of wear states the model-based wear
-estimate reads a record by (:mod:`physics.loop.wear_reading`)."""
+estimate reads a record by (:mod:`physics.loop.search.wear_reading`)."""
 
 from __future__ import annotations
 

@@ -1,5 +1,6 @@
 """The bundle's records as model inputs (:func:`prepare`): each record a scenario with its worn
-teeth (:mod:`physics.loop.worn_states`), its measured signature and noise level, and its group.
+teeth (:mod:`physics.loop.measured.worn_states`), its measured signature and noise level, and its
+group.
 
 Records of one (speed, torque, quantity, sampling rate) form a **group** (:class:`Group`) with
 its own signature definition and entry scatter; a bundle may mix operating points, quantities,
@@ -17,15 +18,15 @@ import pandas as pd
 
 from physics.dynamics.model import PairModel
 from physics.gear.stiffness import mesh_stiffness
-from physics.loop.bundle import Bundle, record_scenario
 from physics.loop.config import LoopSettings
-from physics.loop.threads import each
-from physics.loop.worn_states import (
+from physics.loop.measured.bundle import Bundle, record_scenario
+from physics.loop.measured.worn_states import (
     records_cycles,
     records_history,
     wear_grid_cycles,
     worn_models,
 )
+from physics.loop.threads import each
 from physics.params import Scenario
 from physics.signals.order_analysis import signature_names, signature_segments, white_noise_std
 
@@ -35,8 +36,8 @@ class Group:
     """Records of one operating point, quantity and sampling rate: one signature definition.
 
     ``entry_sd`` is each entry's scatter between the measured segments (noise), ``discrepancy_sd``
-    the model-form discrepancy of :func:`~physics.loop.discrepancy.discrepancy_sd` (zero until it
-    is estimated); a residual is standardised by their quadrature sum, :attr:`sd`.
+    the model-form discrepancy of :func:`~physics.loop.model.discrepancy.discrepancy_sd` (zero until
+    it is estimated); a residual is standardised by their quadrature sum, :attr:`sd`.
     """
 
     # n1_rpm, torque_Nm (None: unknown), quantity, fs_hz
@@ -79,9 +80,9 @@ class Records:
     wear_states: list[list[tuple[float, PairModel]]] = field(default_factory=list)
     cache: dict = field(default_factory=dict)  # simulations by dynamic parameters
     # records whose manifest leaves the torque unknown: the configured torque times the
-    # calibrated ``torque_factor`` (:data:`~physics.loop.declared.TORQUE`)
+    # calibrated ``torque_factor`` (:data:`~physics.loop.model.declared.TORQUE`)
     torque_unknown: np.ndarray | None = None
-    # the unit's calibration held at its own first records' (:func:`physics.loop.fit.held`):
+    # the unit's calibration held at its own first records' (:func:`physics.loop.search.fit.held`):
     # ``m_h`` is not levelled again, by the declared model or any candidate
     held: bool = False
 

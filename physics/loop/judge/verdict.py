@@ -6,18 +6,18 @@ What the model cannot explain is looked for in two places:
 
 - **signature entries** (:func:`unexplained_entries`): each group's held-out residual per
   entry against what the model discrepancy allows on clean records. Under the discrepancy model
-  (:func:`~physics.loop.discrepancy.discrepancy_sd`: a Gaussian offset of sd ``d`` per entry,
+  (:func:`~physics.loop.model.discrepancy.discrepancy_sd`: a Gaussian offset of sd ``d`` per entry,
   noise of sd ``sd``) a record's residual over ``sqrt(d^2 + sd^2)`` is standard normal; an
   entry is unexplained where it exceeds the upper ``rate / (2 N)`` quantile of the normal in
   every held-out record of the group with one sign, ``N`` the entries of all groups
   (Bonferroni; a residual in dB of a line near the noise is heavy-tailed, one record alone can
   lie far out, so the entry must persist as the lines must). With a reference (a sister
   unit's clean records or this unit's first ones) the discrepancy is the reference records',
-  about their mean (:meth:`physics.loop.form_error.FormReference.judging`): the declared
+  about their mean (:meth:`physics.loop.search.form_error.FormReference.judging`): the declared
   model's scatter on clean records of the gearbox type. Without one it is the bundle's own
   train records', where an effect present in all of them raises its family's and is not found
   here (it cannot be told from form error on these records).
-- **spectral lines** no declared order explains (:mod:`physics.loop.lines`), in every record.
+- **spectral lines** no declared order explains (:mod:`physics.loop.judge.lines`), in every record.
 
 The candidates that came closest are the first three by held-out error, each with the null
 test's conditions.
@@ -32,9 +32,9 @@ import numpy as np
 from scipy.stats import norm
 
 from physics.files import atomic_write, pyplot
-from physics.loop.comparison import residuals_db
-from physics.loop.lines import record_spectrum, unexplained_lines
-from physics.loop.records import Records, by_group, shaft_rates
+from physics.loop.judge.lines import record_spectrum, unexplained_lines
+from physics.loop.measured.records import Records, by_group, shaft_rates
+from physics.loop.model.comparison import residuals_db
 from physics.signals.order_analysis import band_edges, line_frequencies
 
 VERDICTS = ("effect", "unexplained_residual", "none")
@@ -97,7 +97,7 @@ def unexplained_entries(judged: Records, idx: np.ndarray, signals: list[np.ndarr
 
 def group_lines(rec: Records, rate: float) -> dict[str, list[dict]]:
     """Per group label, the measured records' persistent lines that no declared order explains
-    (:func:`physics.loop.lines.unexplained_lines`; all the group's records, no model)."""
+    (:func:`physics.loop.judge.lines.unexplained_lines`; all the group's records, no model)."""
     out = {}
     for g in rec.groups:
         scn = rec.scenarios[g.records[0]]

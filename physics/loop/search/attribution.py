@@ -18,17 +18,17 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from physics.dynamics.model import PairModel
-from physics.loop.comparison import residuals, residuals_db, rms
 from physics.loop.config import LoopSettings
-from physics.loop.declared import BOUNDS, from_unit, to_unit
-from physics.loop.discrepancy import discrepancy_allowance
 from physics.loop.effects import EFFECTS, Effect
-from physics.loop.fit import Candidate, screen_effect, search
-from physics.loop.records import Records, by_group
-from physics.loop.report import first_passing, holds, null_test
-from physics.loop.simulation import model_signals
+from physics.loop.judge.adoption import first_passing, holds, null_test
+from physics.loop.measured.records import Records, by_group
+from physics.loop.model.comparison import residuals, residuals_db, rms
+from physics.loop.model.declared import BOUNDS, from_unit, to_unit
+from physics.loop.model.discrepancy import discrepancy_allowance
+from physics.loop.model.simulation import model_signals
+from physics.loop.search.fit import Candidate, screen_effect, search
+from physics.loop.search.wear_reading import Reader, WearScore, reads_wear, wear_score
 from physics.loop.threads import each
-from physics.loop.wear_reading import Reader, WearScore, reads_wear, wear_score
 
 log = logging.getLogger(__name__)
 
@@ -153,16 +153,17 @@ class Round:
     effects: dict[str, Effect]  # each candidate's effect, by name
     null_bic: float
     # what the discrepancy allows the judged
-    # (:func:`~physics.loop.discrepancy.discrepancy_allowance`)
+    # (:func:`~physics.loop.model.discrepancy.discrepancy_allowance`)
     allowed: float
     adopted: bool
     base_test: list[np.ndarray]  # the test signals of the model the candidates were added to
-    # the null test's conditions on the judged (:func:`physics.loop.report.null_test`)
+    # the null test's conditions on the judged (:func:`physics.loop.judge.adoption.null_test`)
     checks: dict
-    # the model that reads the wear after this round (:class:`~physics.loop.wear_reading.Reader`)
+    # the model that reads the wear after this round
+    # (:class:`~physics.loop.search.wear_reading.Reader`)
     reader: Reader
     # where the judged was adopted: which model reads the wear, from the leave-one-out scores on
-    # the train records (:func:`~physics.loop.wear_reading.wear_check`, with ``reads_with``),
+    # the train records (:func:`~physics.loop.search.wear_reading.wear_check`, with ``reads_with``),
     # None without them
     wear_reading: dict | None = None
     # held-out wear-estimate scores of the reader before and after this round (adopted only)
@@ -200,13 +201,13 @@ def attribute(rec: Records, judged: Records, declared: Effect | None, declared_v
     """Screen, refine and judge ``candidates`` against the model ``declared`` (None: the calibrated
     declared model; else it with an adopted effect at ``declared_values``) at ``nuisance``; the
     null test on each, the best that passes adopted (see the module text); if one is, which model
-    reads the wear after it (:func:`~physics.loop.wear_reading.reads_wear`; ``reader`` reads it
-    before). Fits weigh the residuals of ``rec`` (noise alone); the held-out judgement uses
+    reads the wear after it (:func:`~physics.loop.search.wear_reading.reads_wear`; ``reader`` reads
+    it before). Fits weigh the residuals of ``rec`` (noise alone); the held-out judgement uses
     ``judged`` (the same records with the model discrepancy,
-    :func:`~physics.loop.discrepancy.with_discrepancy`). Past ``deadline``
+    :func:`~physics.loop.model.discrepancy.with_discrepancy`). Past ``deadline``
     (:func:`time.monotonic`) the next candidate raises :class:`TimeLimit`. ``earlier``: the
     candidates of a round judged against another calibration of the same model (a rerun from a
-    refitted calibration, :func:`physics.loop.fit.recalibrated`); each candidate keeps the
+    refitted calibration, :func:`physics.loop.search.fit.recalibrated`); each candidate keeps the
     lower of its two fits on the train records, judged against this round's model."""
     settings = rec.settings
     base_train = model_signals(rec, rec.train, nuisance, declared, declared_values)

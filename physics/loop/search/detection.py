@@ -6,7 +6,7 @@ records can show. Its detection limit is found by injection (the recovery test o
 detection): the effect at size ``s`` is added to the calibrated declared model, and the change
 it makes to each record's signature [dB] is added to the *measured* signature of that record,
 so the records keep their own noise and the declared model's own discrepancy. The null test
-(:func:`physics.loop.report.null_test`, with the bundle's discrepancy, its allowance for the
+(:func:`physics.loop.judge.adoption.null_test`, with the bundle's discrepancy, its allowance for the
 round's number of candidates and the same BIC and gain bounds) then judges the candidate at
 the injected values against the calibrated model. A size is *named* where every condition
 holds.
@@ -32,13 +32,13 @@ import dataclasses
 
 import numpy as np
 
-from physics.loop.attribution import bic, signature_gain
-from physics.loop.comparison import residuals, residuals_db
-from physics.loop.discrepancy import discrepancy_allowance
 from physics.loop.effects import Effect
-from physics.loop.records import Records
-from physics.loop.report import holds, null_test
-from physics.loop.simulation import model_signals
+from physics.loop.judge.adoption import holds, null_test
+from physics.loop.measured.records import Records
+from physics.loop.model.comparison import residuals, residuals_db
+from physics.loop.model.discrepancy import discrepancy_allowance
+from physics.loop.model.simulation import model_signals
+from physics.loop.search.attribution import bic, signature_gain
 from physics.loop.threads import each
 
 #: the parameter that sizes each effect, where it is not its first

@@ -1,7 +1,7 @@
 """The calibration and every candidate's fit: the search (:func:`search`) of the model's
 parameters on the train records.
 
-The declared nuisance (:mod:`physics.loop.declared`) is calibrated on the train records of all
+The declared nuisance (:mod:`physics.loop.model.declared`) is calibrated on the train records of all
 groups at once, before any effect is considered (:func:`calibrate`): the physical parameters
 are one value for the whole bundle, the measurement chain's belong to the acceleration records
 only, and the groups' standardised residuals are concatenated into one cost. A parameter that
@@ -11,7 +11,7 @@ does not move the residuals is held at its declared value and reported as not id
 bounded least squares on the standardised signature residuals (:func:`least_squares`). A
 candidate effect is screened at a grid of sizes (:func:`screen_effect`) and then gets the same
 search, its parameters jointly with the identifiable nuisance. Fits weigh the residuals by the
-noise alone (the discrepancy is for the judgement, :mod:`physics.loop.discrepancy`).
+noise alone (the discrepancy is for the judgement, :mod:`physics.loop.model.discrepancy`).
 """
 
 from __future__ import annotations
@@ -26,9 +26,11 @@ import numpy as np
 from scipy import optimize
 from scipy.stats import qmc
 
-from physics.loop.comparison import residuals, residuals_db, rms
 from physics.loop.config import LoopSettings
-from physics.loop.declared import (
+from physics.loop.effects import Effect
+from physics.loop.measured.records import Records
+from physics.loop.model.comparison import residuals, residuals_db, rms
+from physics.loop.model.declared import (
     BOUNDS,
     DYNAMIC_NUISANCE,
     EXPLORED,
@@ -44,9 +46,7 @@ from physics.loop.declared import (
     from_unit,
     to_unit,
 )
-from physics.loop.effects import Effect
-from physics.loop.records import Records
-from physics.loop.simulation import accel_in, is_accel, model_signals
+from physics.loop.model.simulation import accel_in, is_accel, model_signals
 from physics.loop.threads import each
 
 #: signature entries that do not scale with the record's gain
@@ -86,8 +86,8 @@ def with_level(rec: Records, nuisance: dict, eff: Effect | None, values: dict) -
 
     ``m_h`` divides every amplitude, so in dB it is an offset of the entries that scale with the
     record (all but kurtosis and crest factors): one step of their mean residual, weighted by the
-    inverse variance of each entry (:attr:`~physics.loop.records.Group.sd`). The noise does not
-    scale with it, so this is a starting value, not the fit. DTE records do not see ``m_h``, nor
+    inverse variance of each entry (:attr:`~physics.loop.measured.records.Group.sd`). The noise does
+    not scale with it, so this is a starting value, not the fit. DTE records do not see ``m_h``, nor
     do records of a unit whose calibration is held (:func:`held`).
     """
     acc = is_accel(rec, rec.train)
@@ -172,7 +172,7 @@ class Candidate:
     refined: bool = False
     heldout: float = math.nan
     bic: float = 0.0
-    # per group: see :func:`~physics.loop.attribution.signature_gain`
+    # per group: see :func:`~physics.loop.search.attribution.signature_gain`
     explained: dict = field(default_factory=dict)
     own_before: float = math.nan  # held-out error in its own entries, declared model ...
     own_after: float = math.nan  # ... and with the candidate
@@ -288,8 +288,8 @@ def search(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[s
 
 def screened(settings: LoopSettings) -> tuple[str, ...]:
     """The dynamic parameters the calibration may free: the scenario's nuisance and the mesh
-    modulation of the pinion's run-out (:data:`~physics.loop.declared.RUNOUT_MODULATION`); the rest
-    of the model form with ``loop.model_form`` only."""
+    modulation of the pinion's run-out (:data:`~physics.loop.model.declared.RUNOUT_MODULATION`); the
+    rest of the model form with ``loop.model_form`` only."""
     return DYNAMIC_NUISANCE if settings.model_form else (*SCENARIO_DYNAMIC, *RUNOUT_MODULATION)
 
 
@@ -299,7 +299,7 @@ def calibrate(rec: Records, start: dict) -> tuple[dict, list[str]]:
     declared support mode) scales and shapes every acceleration amplitude and is always free
     for acceleration records; a dynamic parameter that is not identifiable stays at its
     declared value. Records of unknown torque add its factor
-    (:data:`~physics.loop.declared.TORQUE`, from 1)."""
+    (:data:`~physics.loop.model.declared.TORQUE`, from 1)."""
     names = screened(rec.settings)
     if rec.torque_unknown is not None and rec.torque_unknown.any():
         start, names = {"torque_factor": 1.0} | start, (*names, *TORQUE)

@@ -13,9 +13,9 @@ import numpy as np
 
 from physics.dynamics.model import PairModel, simulate
 from physics.dynamics.model_form import with_modulation
-from physics.loop.declared import DYNAMIC_NUISANCE, TORQUE, modes_of, with_nuisance
 from physics.loop.effects import Effect
-from physics.loop.records import Records
+from physics.loop.measured.records import Records
+from physics.loop.model.declared import DYNAMIC_NUISANCE, TORQUE, modes_of, with_nuisance
 from physics.signals.measurement import declared_chain, sensed
 
 #: simulations kept by :func:`responses` (candidates fitted on parallel threads share them)

@@ -12,10 +12,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from physics.loop.comparison import residuals_db, rms
 from physics.loop.effects import Effect
-from physics.loop.records import Group, Records, by_group
-from physics.loop.simulation import model_signals
+from physics.loop.measured.records import Group, Records, by_group
+from physics.loop.model.comparison import residuals_db, rms
+from physics.loop.model.simulation import model_signals
 
 
 def train_wear_residuals(rec: Records, nuisance: dict, eff: Effect | None, values: dict

@@ -18,9 +18,9 @@ import re
 import numpy as np
 from scipy.stats import chi2
 
-from physics.loop.comparison import residuals_db
-from physics.loop.records import Group, Records, by_group
-from physics.loop.simulation import model_signals
+from physics.loop.measured.records import Group, Records, by_group
+from physics.loop.model.comparison import residuals_db
+from physics.loop.model.simulation import model_signals
 
 
 def entry_family(name: str) -> str:

@@ -1,15 +1,15 @@
 """Residuals of the model's records against the measured ones: the signature of
 :mod:`physics.signals.order_analysis` (mesh harmonics with pinion and gear sidebands up to
 0.45 fs, half-octave bands, statistics, synchronous-average kurtosis, all in dB) of measurement
-minus model, per entry, standardised by the group's scatter (:attr:`physics.loop.records.Group.sd`:
-noise and model discrepancy, or the noise alone); their RMS per group, and the Table 13
-features' relative error."""
+minus model, per entry, standardised by the group's scatter
+(:attr:`physics.loop.measured.records.Group.sd`: noise and model discrepancy, or the noise alone);
+their RMS per group, and the Table 13 features' relative error."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from physics.loop.records import Records, by_group, shaft_rates
+from physics.loop.measured.records import Records, by_group, shaft_rates
 from physics.signals.features import FEATURES, features
 from physics.signals.order_analysis import mean_signatures
 
@@ -36,7 +36,8 @@ def residuals_db(rec: Records, idx: np.ndarray, signals: list[np.ndarray]
 def standardised(rec: Records, idx: np.ndarray, signals: list[np.ndarray],
                  discrepancy: bool = True) -> list[np.ndarray]:
     """Each record's dB residual over its group's noise and discrepancy
-    (:attr:`~physics.loop.records.Group.sd`), or over the noise alone (``Group.entry_sd``)."""
+    (:attr:`~physics.loop.measured.records.Group.sd`), or over the noise alone
+    (``Group.entry_sd``)."""
     return [r / (rec.group(i).sd if discrepancy else rec.group(i).entry_sd)
             for r, i in zip(residuals_db(rec, idx, signals), idx, strict=True)]
 

@@ -7,8 +7,8 @@ mounting, its sensor's place), so the declared model's form error measured on th
 same unit's, not the twin-unit floor (docs/loop.md). :func:`parse_history` reads the two
 forms; :func:`split_history` cuts a bundle into the reference records and the records the loop
 analyses (the reference records are left out of the analysis); the reference is then
-calibrated as a sister unit's is (:func:`physics.loop.form_error.form_reference`), and that
-calibration is held for the analysed records (:func:`physics.loop.fit.held`).
+calibrated as a sister unit's is (:func:`physics.loop.search.form_error.form_reference`), and that
+calibration is held for the analysed records (:func:`physics.loop.search.fit.held`).
 
 - ``first:N``: the first ``N`` records of each group (operating point, quantity, sampling
   rate), in the order of their load cycles, else of a ``time`` column (ISO 8601);
@@ -25,10 +25,10 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from physics.loop.bundle import Bundle
 from physics.loop.config import LoopSettings
-from physics.loop.form_error import FormReference, form_reference
-from physics.loop.records import group_keys, group_label
+from physics.loop.measured.bundle import Bundle
+from physics.loop.measured.records import group_keys, group_label
+from physics.loop.search.form_error import FormReference, form_reference
 from physics.params import Scenario
 
 #: the optional manifest column that dates each record (ISO 8601)
@@ -175,7 +175,7 @@ def own_reference(bundle: Bundle, spec: str | History, base: Scenario,
                   settings: LoopSettings) -> tuple[FormReference, Bundle]:
     """The form reference of ``bundle``'s own earliest records (``spec``: ``first:N`` or
     ``before:X``), calibrated as a sister unit's is (its calibration then held for the later
-    records, :func:`physics.loop.fit.held`), and the bundle of the records left for the
+    records, :func:`physics.loop.search.fit.held`), and the bundle of the records left for the
     analysis."""
     history = spec if isinstance(spec, History) else parse_history(spec)
     if history is None:

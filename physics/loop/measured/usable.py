@@ -3,7 +3,8 @@ use breaks (:func:`check_usable`, each refusal one line naming the record, the v
 and the fix), and each candidate effect's parameter range clipped to what the records can show
 (:func:`shown_candidates`).
 
-A bundle that passes the format's rules (:mod:`physics.loop.bundle`) and these runs to the end.
+A bundle that passes the format's rules (:mod:`physics.loop.measured.bundle`) and these runs to the
+end.
 """
 
 from __future__ import annotations
@@ -11,10 +12,10 @@ from __future__ import annotations
 import dataclasses
 import math
 
-from physics.loop.bundle import Bundle
 from physics.loop.config import LoopSettings
 from physics.loop.effects import Effect, Param
-from physics.loop.records import split_records
+from physics.loop.measured.bundle import Bundle
+from physics.loop.measured.records import split_records
 from physics.params import Scenario
 
 #: the highest line the signature reads, as a share of the sampling rate
