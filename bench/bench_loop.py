@@ -38,8 +38,9 @@ timed apart.
 ``--own-history N``: every effect appears during the bundle's life (in the records from
 :data:`ONSET` of the cycles on, with the independent generator of its largest wear, its records
 dated in order of wear; the earlier ones are clean) and every bundle is read against its own
-first ``N`` records of each group (``reference=first:N``, :func:`physics.loop.search.own_history.own_reference`),
-the reference a user with records from commissioning has.
+first ``N`` records of each group (``reference=first:N``,
+:func:`physics.loop.search.own_history.own_reference`), the reference a user with records from
+commissioning has.
 Also times one bundle alone (:func:`solo_timing`; ``--timing-only``: that alone), printed
 beside the serial design's time (:data:`REFERENCE_S`); the per-bundle seconds of
 the table are those of ``--jobs`` bundles sharing the machine, each on its share of numba's

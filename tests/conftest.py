@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import os
 import subprocess
+import sys
 from collections.abc import Callable
 from pathlib import Path
 
@@ -18,13 +19,15 @@ from physics.gear.geometry import mesh_geometry
 from physics.params import GearPair, Scenario
 
 #: a parallel run's workers (pytest-xdist) each take one core: one thread for numba's kernels,
-#: BLAS and torch in the worker (numba and torch are not loaded yet; BLAS is, and is limited
-#: where it stands) and in the apps it starts. A two-thread BLAS product on a core the other
+#: BLAS and torch in the worker (numba and torch are normally not loaded yet; BLAS is, and is
+#: limited where it stands) and in the apps it starts. A two-thread BLAS product on a core the other
 #: worker keeps busy waits for it: a line projection of the loop took 40 times longer
 THREADS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS")
 if os.environ.get("PYTEST_XDIST_WORKER"):
     os.environ.update(dict.fromkeys(THREADS, "1"))
     threadpool_limits(1)
+    if "numba" in sys.modules:  # a plugin loaded it first: read the thread count again now,
+        sys.modules["numba"].config.reload_config()  # before its pool starts
 
 
 @pytest.fixture(autouse=True)

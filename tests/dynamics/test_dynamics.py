@@ -9,9 +9,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from physics.dynamics.kernels import _entry_shift
 from physics.dynamics.model import (
     EXACT_PHASES,
-    _entry_shift,
     anti_aliased,
     anti_aliasing_filter,
     build_model,
