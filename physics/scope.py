@@ -11,7 +11,7 @@ periods to give features at all.
   ISO 6336-5:2016, Fig. 9) gives 2.4 GPa for the largest Hertz pressure of the single-tooth
   zone at the pitch point. Above it the case yields and neither Hertz nor Archard applies.
 - Sampling: the sample rate must be at least 4 times the third mesh harmonic (the measured-data
-  rule of ``shared/specs/measured-bundle.md``), i.e. ``f_s >= 12 f_mesh``.
+  rule of ``docs/own-data.md``), i.e. ``f_s >= 12 f_mesh``.
 - Record length (:func:`check_record`, for the apps that take features of the records): at
   least 10 mesh periods.
 - Worn flanks (:func:`shakedown_pressure`, checked at every profile update of the wear

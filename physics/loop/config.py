@@ -90,7 +90,7 @@ class LoopSettings:
 class LoopConfig(PhysicsConfig):
     """Schema of ``python -m physics.loop``."""
 
-    data: str = MISSING  # a bundle folder (shared/specs/measured-bundle.md) or a feature table
+    data: str = MISSING  # a bundle folder (docs/own-data.md) or a feature table
     # a bundle of a sister gearbox without the effects sought, at the same operating points,
     # quantities and sampling rates: the declared model's mean form error is measured on it
     # and removed (physics.loop.search.form_error); or this bundle's own earliest records, first:N

@@ -48,6 +48,7 @@ from scipy import stats
 from physics.dynamics.model import EXACT_PHASES, build_model, simulate
 from physics.files import check_writable, pyplot, save_figure, write_csv
 from physics.params import Scenario
+from physics.reference import RIG_RECORDS
 from physics.tribology.contact_wear import simulate_contact_wear
 
 #: the rig's stated geometry and speed
@@ -161,9 +162,8 @@ def plot_rig_comparison(means: pd.DataFrame, path: Path) -> None:
 
 
 def default_table() -> Path:
-    """The rig's table beside a checkout (``../shared/real/institute_rig/``)."""
-    return Path(__file__).resolve().parents[3] / "shared" / "real" / "institute_rig" / (
-        "rig_15rps_records.csv")
+    """The rig's table shipped with the package (:data:`physics.reference.RIG_RECORDS`)."""
+    return RIG_RECORDS
 
 
 def main(argv: Sequence[str] | None = None) -> int:

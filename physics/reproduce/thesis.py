@@ -1,7 +1,7 @@
 """Reproduce the thesis's tables from the physics: ``python -m physics.reproduce``.
 
 A Hydra app (config ``conf/reproduce.yaml``). It writes, into ``out_dir`` (default: the Hydra run
-folder), CSV files named and shaped like ``shared/reference/thesis_tables``:
+folder), CSV files named and shaped like the thesis's own (:data:`physics.reference.THESIS_TABLES`):
 
 - ``table02_speed.csv`` ... ``table06_center_distance.csv`` (thesis 2.7.2-2.7.6, 1e6 cycles),
 - ``table07_tvms_energy_vs_fem.csv``, ``fem_convergence.csv``, ``table08_wear_vs_stiffness.csv``,
@@ -63,6 +63,7 @@ from physics.params import (
     config_file,
     scenario_from_config,
 )
+from physics.reference import THESIS_TABLES
 from physics.reproduce import plots
 from physics.reproduce.localised import table15_model
 from physics.scope import check_record, check_scope
@@ -334,7 +335,7 @@ def table_estimator_accuracy(table14: pd.DataFrame, thesis_data: Path | None) ->
                      **accuracy(est.predict(d["peak_to_peak_1e-5_m"] * 1e-5, d["kurtosis"]),
                                 d["wear_mm"])})
     else:
-        log.info("thesis_tables not given: the check of the thesis's own estimator on its own "
+        log.info("thesis_tables=null: the check of the thesis's own estimator on its own "
                  "Table 14 is skipped")
     return pd.DataFrame(rows)
 
@@ -411,7 +412,7 @@ def _thesis_table14(folder: str | None) -> Path | None:
     path = Path(folder) / "table14_dte_features_case3.csv"
     if not path.is_file():
         raise ValueError(f"thesis_tables = {folder!r} holds no table14_dte_features_case3.csv; "
-                         "give the folder of the thesis's tables (shared/reference/thesis_tables) "
+                         f"give the folder of the thesis's tables (default {THESIS_TABLES}) "
                          "or null to skip the check of the thesis's own estimator")
     return path
 
@@ -443,9 +444,10 @@ class EvolutionStudy:
 class ReproduceConfig(PhysicsConfig):
     """Schema of ``python -m physics.reproduce`` (``conf/reproduce/reproduce.yaml``)."""
 
-    #: folder of the thesis's tables, for the check of its estimator (4.4) on its own data
-    #: (e.g. ../shared/reference/thesis_tables); null: that check is skipped
-    thesis_tables: str | None = None
+    #: folder of the thesis's tables, for the check of its estimator (4.4) on its own data and
+    #: the measured rises beside Table 15's model; default: those shipped with the package
+    #: (:data:`physics.reference.THESIS_TABLES`); null: both are left out
+    thesis_tables: str | None = str(THESIS_TABLES)
     case: int | None = None  # 1-5: operating point and lubricant of thesis Table 11
     out_dir: str = "${hydra:runtime.output_dir}"
     cycles: float = 1e6  # pinion cycles of the parametric studies (thesis 2.7)
@@ -508,10 +510,11 @@ def _entry(key: str, value: float):
 #: the record of the default run's tables, in the repository checkout this package is run from
 #: (beside its pyproject.toml)
 HASH_RECORD = Path(__file__).resolve().parents[2] / "tests" / "reproduce" / "table_hashes.sha256"
-#: tables left out of the record: they follow thesis_tables=, not the physics
+#: tables left out of the record: they follow the thesis's own data, not the physics
 UNRECORDED = frozenset({"estimator_accuracy.csv"})
 #: the keys that may be given with record_hashes=true: they change no recorded table
-RECORD_KEYS = frozenset({"record_hashes", "out_dir", "thesis_tables"})
+#: (thesis_tables does: Table 15's model holds the measured rises beside its own)
+RECORD_KEYS = frozenset({"record_hashes", "out_dir"})
 
 
 def table_hashes(folder: Path, names: list[str]) -> dict[str, str]:

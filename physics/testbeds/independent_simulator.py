@@ -806,7 +806,7 @@ def make_independent_bundle(
         effect_size: float = 1.0, pair: IndependentPair | None = None,
         values: dict | None = None, onset: float | None = None,
         dated: bool = False) -> tuple[Path, dict]:
-    """Write a bundle (``shared/specs/measured-bundle.md``) of the independent model: one record
+    """Write a bundle (``docs/own-data.md``) of the independent model: one record
     per operating point x wear depth x quantity, all from one gear set (its error phases drawn
     once from ``seed``), each record at its own random start angle and with its own noise.
 

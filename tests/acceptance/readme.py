@@ -193,8 +193,9 @@ class Case:
     start: str | None = None  # a command or snippet (by key) whose folder this one starts from
     only: tuple[str, ...] = ()  # of that folder, only these entries (all where empty)
     check: Callable[[Path], None] | None = None
+    #: a long run whose app and code path the README's commands or the unit tests already run
+    #: (pytest -m slow runs it)
     slow: bool = False
-    needs_shared: bool = False  # reads ../shared beside the repository
     replace: dict[str, str] = field(default_factory=dict)  # size changes of a snippet
     code: str | None = None  # a snippet's code where it is not the README's
     timeout: float = 900  # [s] a hang's guard; a bench's own solo timing alone takes minutes
@@ -207,7 +208,7 @@ COMMANDS: dict[str, Case] = {
         "outputs/*/*/table02_speed.csv", "outputs/*/*/wear_profile.png",
         "outputs/*/*/table14_dte_features_case3.csv", "outputs/*/*/table15_model.csv")),
     # the rig's contact-driven wear to 0.93 mm at four torques: about 8 minutes
-    "python -m physics.reproduce.rig": Case(slow=True, needs_shared=True, timeout=2700, check=files(
+    "python -m physics.reproduce.rig": Case(slow=True, timeout=2700, check=files(
         "outputs/rig/rig_comparison.csv", "outputs/rig/rig_summary.csv",
         "outputs/rig/rig_comparison.png")),
     "python -m physics.dataset": Case(SMALL_DATASET, check=files(
@@ -234,12 +235,12 @@ SNIPPETS: dict[str, Case] = {
 DOCS: dict[str, Case] = {
     "python -m physics.reproduce out_dir=results gear.module_mm=3 gear.bore_radius1_mm=12 "
     "gear.bore_radius2_mm=20 operating.torque_Nm=250 lubricant=pao":
-        Case(FAST_REPRO, check=files("results/table05_lubricant.csv")),
-    "python -m physics.reproduce case=4": Case(FAST_REPRO,
+        Case(FAST_REPRO, check=files("results/table05_lubricant.csv"), slow=True),
+    "python -m physics.reproduce case=4": Case(FAST_REPRO, slow=True,
                                                check=files("outputs/*/*/table03_torque.csv")),
     "python -m physics.reproduce --help": Case(),
     "python train.py hparams_search=optuna": Case(
-        (*TINY_DATA, "hydra.sweeper.n_trials=2", *FAST_TRAIN), start=TRAIN_CASE3,
+        (*TINY_DATA, "hydra.sweeper.n_trials=1", *FAST_TRAIN), start=TRAIN_CASE3,
         only=("data",), check=files("optuna_case3.db")),
     "python train.py experiment=all_cases": Case(
         ("+data.generate.replicates=3", "+data.generate.wear_states=2", *TINY_DATA[2:],
@@ -257,16 +258,15 @@ DOCS: dict[str, Case] = {
     "python train.py --help": Case(),
     "python -m physics.dataset out_dir=noisy data.replicates=4 data.nuisance.snr_db=[15,25] "
     "store_signals=true": Case(("data.cases=[3]", "data.wear_states=2", "data.chunks=2"),
-                               check=files(
+                               slow=True, check=files(
         "noisy/dataset_signals.npy")),
     "python -m physics.dataset -m chunk=0,1,2,3,4 hydra/launcher=joblib": Case(
         ("data.cases=[3]", "data.replicates=5", "data.wear_states=2"),
         check=files("data/dataset_chunks/chunk_004.parquet")),
     "python -m physics.loop data=independent_bundle reference=sister_bundle": Case(
-        SMALL_LOOP, start=DEMO, check=referenced),
-    "python -m physics.loop data=../shared/reference/thesis_tables/"
-    "table15_measured_acceleration_features.csv": Case(SMALL_LOOP,
-                                                        needs_shared=True, check=report),
+        SMALL_LOOP, start=DEMO, check=referenced, slow=True),
+    "python -m physics.loop data=physics/reference/thesis_tables/"
+    "table15_measured_acceleration_features.csv": Case(SMALL_LOOP, check=report),
     "python -m physics.loop --help": Case(),
     "python -m surrogate.benchmark": Case(("--max-epochs", "3"), slow=True),
     "python bench/bench_stiffness.py": Case(slow=True),
@@ -342,8 +342,6 @@ def run_step(key: str, folder: Path) -> subprocess.CompletedProcess:
     argv[0] = sys.executable
     if argv[1].startswith("bench/") or argv[1] == "train.py":  # scripts of the checkout
         argv[1] = str(ROOT / argv[1])
-    if case.needs_shared:
-        argv = [a.replace("../shared", str(ROOT.parent / "shared")) for a in argv]
     return run(argv + list(case.size), folder, case.timeout)
 
 

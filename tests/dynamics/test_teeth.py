@@ -4,11 +4,11 @@ one-period model, one worn tooth repeats once per revolution, and Table 15 by th
 from __future__ import annotations
 
 import dataclasses
-from pathlib import Path
 
 import numpy as np
 import pytest
 
+from physics import reference
 from physics.dynamics.model import build_model, simulate
 from physics.dynamics.teeth import per_tooth_model
 from physics.gear.stiffness import mesh_stiffness
@@ -16,7 +16,7 @@ from physics.params import Scenario
 from physics.reproduce.localised import FEATURES, INDICATOR_ROWS, table15_model
 from physics.tribology.wear import simulate_wear
 
-THESIS_TABLES = Path(__file__).resolve().parents[3] / "shared" / "reference" / "thesis_tables"
+THESIS_TABLES = reference.THESIS_TABLES
 
 
 def _scn(contact: str, revolutions: float = 2.0, eccentricity_um: float = 7.5) -> Scenario:
@@ -78,8 +78,7 @@ def test_table15_by_the_model(worn_state):
     measured rises come from the thesis's table when it is given, NaN otherwise."""
     scn = Scenario()
     base = simulate_wear(scn, 1e6)
-    given = THESIS_TABLES if THESIS_TABLES.is_dir() else None
-    table = table15_model(scn, base, given)
+    table = table15_model(scn, base, THESIS_TABLES)
     assert list(table.columns) == ["wear_mm", "feature", "rise_measured", "rise_one_tooth",
                                    "rise_all_teeth"]
     assert len(table) == 3 * (len(FEATURES) + len(INDICATOR_ROWS))
@@ -90,8 +89,5 @@ def test_table15_by_the_model(worn_state):
     assert np.all(rms["rise_one_tooth"] < rms["rise_all_teeth"])
     assert np.all(table["rise_one_tooth"] > 1.0)
     assert table.loc[table["feature"].isin(INDICATOR_ROWS), "rise_measured"].isna().all()
-    if given is None:
-        assert table["rise_measured"].isna().all()
-    else:
-        assert rms["rise_measured"].iloc[-1] == pytest.approx(2.278 / 1.066)
+    assert rms["rise_measured"].iloc[-1] == pytest.approx(2.278 / 1.066)
     assert table15_model(scn, base, None)["rise_measured"].isna().all()

@@ -10,8 +10,9 @@ import pytest
 import yaml
 
 from physics.estimators.empirical_inverse import EmpiricalInverse, accuracy
+from physics.reference import THESIS_TABLES
 
-REF = Path(__file__).resolve().parents[3] / "shared" / "reference" / "thesis_tables"
+REF = THESIS_TABLES
 
 
 def _forward(est, cycles):
@@ -75,8 +76,6 @@ def test_bad_input():
 
 
 def test_config_matches_the_published_coefficients():
-    if not REF.is_dir():
-        pytest.skip("shared/reference is not beside this checkout")
     conf = yaml.safe_load((Path(__file__).resolve().parents[2] / "conf" / "physics" / "estimator"
                            / "thesis.yaml").read_text())
     table = pd.read_csv(REF / "table13_empirical_models_case3.csv")
@@ -88,8 +87,6 @@ def test_config_matches_the_published_coefficients():
 
 
 def test_thesis_accuracy_is_computed_from_its_data():
-    if not REF.is_dir():
-        pytest.skip("shared/reference is not beside this checkout")
     d = pd.read_csv(REF / "table14_dte_features_case3.csv")
     est = EmpiricalInverse.from_config("thesis")
     m = accuracy(est.predict(d["peak_to_peak_1e-5_m"] * 1e-5, d["kurtosis"]), d["wear_mm"])

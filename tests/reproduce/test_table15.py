@@ -7,12 +7,13 @@ from pathlib import Path
 
 import pytest
 
+from physics import reference
 from physics.params import Scenario
 from physics.reproduce.localised import FEATURES, table15_model
 from physics.tribology.wear import simulate_wear
 
 ROOT = Path(__file__).resolve().parents[2]
-THESIS_TABLES = ROOT.parent / "shared" / "reference" / "thesis_tables"
+THESIS_TABLES = reference.THESIS_TABLES
 
 
 def test_the_docs_table15_is_the_models():
@@ -22,8 +23,8 @@ def test_the_docs_table15_is_the_models():
     rows = [[c.strip() for c in line.strip("|").split("|")]
             for line in section.splitlines() if re.match(r"\| \d+ \| ", line)]
     scn = Scenario()
-    given = THESIS_TABLES if THESIS_TABLES.is_dir() else None
-    table = table15_model(scn, simulate_wear(scn, 1e6), given)  # the reproduction's base run
+    # the reproduction's base run
+    table = table15_model(scn, simulate_wear(scn, 1e6), THESIS_TABLES)
     features = table[table.feature.isin(list(FEATURES))]
     shown = table[~table.feature.isin(list(FEATURES)) & (table.wear_mm == 0.015)]
     quoted = " ".join(section.split())
@@ -35,12 +36,9 @@ def test_the_docs_table15_is_the_models():
     for cells, (_, r) in zip(rows, features.iterrows(), strict=True):
         assert cells[:2] == [f"{r.wear_mm * 1e3:g}", r.feature.replace("_", "-")]
         assert cells[3:] == [f"{r.rise_one_tooth:.2f}", f"{r.rise_all_teeth:.2f}"]
-        if given is not None:
-            assert cells[2] == f"{r.rise_measured:.2f}"
+        assert cells[2] == f"{r.rise_measured:.2f}"
     kurtosis = table[table.feature == "kurtosis"]
     assert f"at most {kurtosis.rise_one_tooth.max():.2f}" in section
-    if given is None:
-        pytest.skip("the thesis's tables are not beside the checkout: measured column unchecked")
     # the prose's claims
     rms = table[table.feature == "rms"].set_index("wear_mm")
     for depth in (0.005, 0.015):

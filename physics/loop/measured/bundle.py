@@ -1,4 +1,4 @@
-"""Measured-data bundles (``shared/specs/measured-bundle.md``): read, validate, write.
+"""Measured-data bundles (``docs/own-data.md``): read, validate, write.
 
 A bundle is a folder with ``manifest.csv`` (one row per record), ``signals/<record>.npy`` and
 optionally ``gear.yaml`` (overrides of ``conf/physics/gear``). :func:`read_bundle` refuses a
