@@ -1,0 +1,86 @@
+"""The figures README.md's "How good is it" quotes against the files the commands wrote, stored
+in ``docs/figures/``: the default reproduction (``python -m physics.reproduce
+out_dir=docs/figures/reproduce``, whose tables must be byte-identical to the recorded hashes, so
+a change of the physics that is recorded again leaves these figures stale until they are
+regenerated) and the surrogate benchmark's rig tables (``python -m surrogate.benchmark
+--real-rig-only|--one-rig-only --figures docs/figures``). Each quote is rebuilt from its file at
+the digits shown; changing the file or the README alone fails."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from physics.reference import THESIS_TABLES
+from physics.reproduce.thesis import HASH_RECORD, table_hashes
+
+ROOT = Path(__file__).resolve().parents[1]
+FIGURES = ROOT / "docs" / "figures"
+REPRODUCED = FIGURES / "reproduce"
+
+
+def readme_row(what: str) -> str:
+    """The figure cell of the "How good is it" row whose first cell starts with ``what``."""
+    text = (ROOT / "README.md").read_text()
+    section = text[text.index("## How good is it"):text.index("## Layout")]
+    for line in section.splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if line.startswith("|") and cells[0].startswith(what):
+            return " ".join(cells[1].split())
+    raise AssertionError(f"README.md: no 'How good is it' row starting {what!r}")
+
+
+def test_the_stored_reproduction_is_the_recorded_default_run():
+    recorded = dict(line.split()[::-1] for line in HASH_RECORD.read_text().splitlines())
+    assert recorded, f"{HASH_RECORD} is empty"
+    stored = table_hashes(REPRODUCED, sorted(p.name for p in REPRODUCED.glob("*.csv")))
+    assert stored == recorded, (
+        "docs/figures/reproduce is not the recorded default run: regenerate it with "
+        "python -m physics.reproduce out_dir=docs/figures/reproduce")
+
+
+def test_table8_quote():
+    ours = pd.read_csv(REPRODUCED / "table08_wear_vs_stiffness.csv").set_index("wear_cycles")
+    thesis = pd.read_csv(THESIS_TABLES / "table08_wear_vs_stiffness.csv").set_index(
+        "wear_cycles")
+    above = [ours.pinion_root_wear_mm[n] / thesis.pinion_root_wear_mm[n] - 1 for n in (5e6, 1e7)]
+    quote = f"{above[0]:+.0%} and {above[1]:+.0%} of the thesis at 5e6 and 1e7 cycles"
+    assert quote.replace("%", " %") in readme_row("Quasi-static pinion root wear")
+    doc = " ".join((ROOT / "docs" / "reproduction.md").read_text().split())
+    assert f"is {above[0]:.0%} and {above[1]:.0%} above the thesis".replace("%", " %") in doc
+
+
+def test_table15_quote():
+    table = pd.read_csv(REPRODUCED / "table15_model.csv")
+    rms = table[table.feature == "rms"].set_index("wear_mm")
+    off = [abs(rms.rise_all_teeth[d] / rms.rise_measured[d] - 1) for d in (0.005, 0.015)]
+    bound = int(np.ceil(max(off) * 100))
+    assert f"RMS on every tooth within {bound} % of the measured at 5 and 15 um" in readme_row(
+        "Thesis Table 15")
+    kurtosis = table[table.feature == "kurtosis"]
+    assert (kurtosis.rise_all_teeth < 0.5 * kurtosis.rise_measured).all()  # "not reached"
+    assert "kurtosis not reached" in readme_row("Thesis Table 15")
+
+
+def test_one_rig_quote():
+    row = pd.read_csv(FIGURES / "one_rig.csv").set_index("scenario").loc["one_rig/stage_cv"]
+    quote = (f"kept by grouped CV {row.kept_mre_pct:.1f} % (the network {row.network_mre_pct:.1f}"
+             f" %, linear {row.linear_mre_pct:.1f} %, monotone {row.monotone_mre_pct:.1f} %, "
+             f"the refitted estimator {row.estimator_mre_pct:.1f} %); 95 % interval covers "
+             f"{row.interval_coverage:.2f}")
+    assert quote in readme_row("A user's one-rig table")
+
+
+@pytest.mark.parametrize("model", ["kept", "linear", "monotone", "network"])
+def test_real_rig_quote(model):
+    table = pd.read_csv(FIGURES / "real_rig.csv").set_index("model")
+    cell = readme_row("The public rig's table")
+    word = "kept" if model == "kept" else model
+    assert f"{word} {table.mean_relative_error_pct[model]:.1f} %" in cell
+    if model == "kept":
+        kept = table.loc["kept"]
+        assert (f"95 % interval covers {kept.interval_coverage_stages:.2f} of stages, "
+                f"{kept.interval_coverage_rows:.2f} of records") in cell
