@@ -21,15 +21,12 @@ TABLES = ["table02_speed", "table03_torque", "table04_roughness", "table05_lubri
           "table12_evolution_fits_case3", "table14_dte_features_case3"]
 
 
-@pytest.fixture(scope="module")
-def out(tmp_path_factory):
-    out = tmp_path_factory.mktemp("repro")
-    subprocess.run(
-        [sys.executable, "-m", "physics.reproduce", f"out_dir={out}", *FAST,
-         f"hydra.run.dir={out / 'hydra'}"],
-        check=True, cwd=Path(__file__).resolve().parents[2],
-    )
-    return out
+@pytest.fixture
+def out(readme_folder):
+    """The tables and figures of the README's ``python -m physics.reproduce``, run once per
+    session at the acceptance tests' size (``tests/acceptance/readme.py``, ``FAST_REPRO``)."""
+    folder, _ = readme_folder("python -m physics.reproduce")
+    return next(folder.glob("outputs/*/*"))
 
 
 @pytest.mark.parametrize("name", TABLES)
@@ -38,7 +35,9 @@ def test_table_shape_matches_reference(out, name):
     ref = pd.read_csv(REF / f"{name}.csv")
     assert list(ours.columns) == list(ref.columns)
     a, b = ours.iloc[:, 0], ref.iloc[:, 0]
-    if pd.api.types.is_numeric_dtype(b):
+    if name == "table14_dte_features_case3":  # its rows: evolution.table14_cycles, a subset here
+        assert np.isin(a.astype(float), b.astype(float)).all() and len(a) >= 2
+    elif pd.api.types.is_numeric_dtype(b):
         assert np.allclose(a.astype(float), b.astype(float))
     else:
         assert a.str.lower().tolist() == b.str.lower().tolist()
