@@ -406,7 +406,47 @@ class Dynamics:
 
 @dataclass(frozen=True)
 class Scenario:
-    """Everything one wear simulation needs."""
+    """Everything one wear simulation needs.
+
+    The defaults are the thesis's: the gear pair of Table 0 and the baseline of Table 1, which
+    is operating case 3 of Table 11, with the constants the thesis does not state chosen in each
+    group (module docstring).
+
+    Parameters
+    ----------
+    gear : GearPair
+        Geometry of the pair (thesis 2.1).
+    material : Material
+        Steel of both wheels.
+    lubricant : Lubricant
+        Lubricant at the bulk temperature (thesis Table 1, 2.4-2.6).
+    tribology : Tribology
+        Surface and wear constants (thesis Table 1, 2.5-2.7).
+    operating : Operating
+        Pinion speed, gear torque and bulk temperature (thesis Tables 1 and 11).
+    solver : WearSolver
+        Numerics of the wear integration (thesis 2.6).
+    dynamics : Dynamics
+        The torsional gear-pair model and the measurement chain (thesis 3.3).
+
+    Examples
+    --------
+    >>> scn = Scenario()
+    >>> g = scn.gear  # the thesis pair, Table 0
+    >>> g.module_mm, g.z1, g.z2, g.pressure_angle_deg, g.face_width_mm
+    (2.0, 18, 27, 20.0, 30.0)
+    >>> g.standard_center_distance_mm  # m (z1 + z2) / 2
+    45.0
+    >>> op = scn.operating  # the baseline, Table 1
+    >>> op.n1_rpm, op.torque_Nm, op.bulk_temperature_K
+    (2000.0, 300.0, 315.0)
+    >>> scn.lubricant.eta0_Pa_s, scn.lubricant.alpha_m2_per_N, scn.tribology.sigma_um
+    (0.35, 2.5e-08, 0.5)
+    >>> scn == scenario_from_config({"case": 3})  # the baseline is case 3 of Table 11
+    True
+    >>> scenario_from_config({"case": 5}).operating.n1_rpm
+    2200.0
+    """
 
     gear: GearPair = GearPair()
     material: Material = Material()

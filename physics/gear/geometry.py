@@ -126,11 +126,50 @@ def working_pressure_angle(gear: GearPair) -> float:
 def mesh_geometry(gear: GearPair) -> MeshGeometry:
     """Geometry of the pair, validated against the scope of the wear model.
 
+    Parameters
+    ----------
+    gear : GearPair
+        The pair (frozen, so the result is cached per pair).
+
+    Returns
+    -------
+    MeshGeometry
+        Radii, working pressure angle, base pitch ``p_b = pi m cos(alpha)`` and the roll
+        coordinates of the start (B1) and end (B2) of contact (thesis 2.1; ISO 21771:2007 with
+        the working pressure angle, module docstring).
+
     Raises
     ------
     ValueError
         For an undercut pinion (z1 below the rack-generation limit ``2 ha* / sin^2 alpha``), a
         centre distance that leaves no contact or interference, or a contact ratio outside (1, 2).
+
+    Examples
+    --------
+    The thesis pair (Table 0: m = 2 mm, z = 18/27, 20 deg, standard centre distance 45 mm):
+
+    >>> from physics.params import GearPair
+    >>> g = mesh_geometry(GearPair())
+    >>> round(g.base_pitch * 1e3, 3)  # p_b [mm]
+    5.904
+    >>> round(math.pi * 2.0 * math.cos(math.radians(20.0)), 3)  # pi m cos(alpha), by hand
+    5.904
+    >>> round(g.contact_ratio, 3)
+    1.58
+
+    The contact ratio by hand, ``(sqrt(ra1^2 - rb1^2) + sqrt(ra2^2 - rb2^2) - a sin(alpha)) /
+    p_b`` with tip radii ``r + ha* m`` = 20 and 29 mm and base radii ``r cos(alpha)``:
+
+    >>> c = math.cos(math.radians(20.0))
+    >>> g_alpha = (math.sqrt(20.0**2 - (18 * c) ** 2) + math.sqrt(29.0**2 - (27 * c) ** 2)
+    ...            - 45.0 * math.sin(math.radians(20.0)))
+    >>> round(g_alpha / (math.pi * 2.0 * c), 3)
+    1.58
+
+    Contact starts before the pitch point (pinion root) and ends after it (pinion tip):
+
+    >>> round(g.s_start * 1e3, 3), round(g.s_end * 1e3, 3)  # [mm]
+    (-4.811, 4.516)
     """
     m, z1, z2, alpha = gear.m, gear.z1, gear.z2, gear.alpha
     z_min = 2 * gear.ha_star / math.sin(alpha) ** 2

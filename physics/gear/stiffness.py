@@ -139,28 +139,62 @@ class ToothCompliances:
 class MeshStiffness:
     """Potential-energy mesh stiffness of a gear pair, healthy or worn.
 
+    One pair's stiffness ``1/k = 1/k_h + sum (1/k_b + 1/k_s + 1/k_a + 1/k_f)`` over pinion and
+    gear (module docstring: Yang & Lin 1987; Chen & Shao 2011; Sainsot et al. 2004; thesis
+    3.1-3.2), for the drive flanks worn by given profiles.
+
     Parameters
     ----------
-    gear, material : the pair (both wheels of the same material).
-    plane : ``"strain"`` (default for face width > 5 modules) or ``"stress"``.
-    n_fillet, n_involute : profile points of each tooth (quadrature nodes).
+    gear : GearPair
+        The pair.
+    material : Material
+        Both wheels' material.
+    plane : {"strain", "stress"} or None
+        Plane strain (``E / (1 - nu^2)`` in place of ``E``) or plane stress; ``None`` takes
+        strain for a face width above 5 modules, stress otherwise.
+    n_fillet, n_involute : int
+        Profile points of each tooth on its fillet and involute (the quadrature nodes).
 
-    Limits
+    Raises
     ------
-    The gear-body (foundation) compliance extrapolates the Sainsot et al. (2004) polynomials,
-    fitted for theta_f in (0.01, 0.12) rad, to the thesis pinion's theta_f = 0.167 rad (z = 18;
-    with the thesis's tooth proportions every wheel of 25 teeth or fewer lies beyond the fitted
-    range); the 2-D FE check of thesis Table 7 (:func:`physics.gear.tooth_fem.fe_pair_stiffness`)
-    covers that pinion. The extrapolation follows from the tooth count, not from a choice the
-    user can change: it is logged at debug level, not warned. An r_f/r_bore outside (1.4, 7.0)
-    (a bore radius far from the thesis's proportions) issues a :class:`SainsotRangeWarning`.
+    ValueError
+        For a ``plane`` other than ``"strain"`` or ``"stress"``, or a pair outside the model's
+        scope (:func:`physics.gear.geometry.mesh_geometry`).
+
+    Warns
+    -----
+    SainsotRangeWarning
+        For an r_f/r_bore outside the range the gear-body polynomials were fitted on (Notes).
+
+    Notes
+    -----
+    Limits: the gear-body (foundation) compliance extrapolates the Sainsot et al. (2004)
+    polynomials, fitted for theta_f in (0.01, 0.12) rad, to the thesis pinion's theta_f = 0.167
+    rad (z = 18; with the thesis's tooth proportions every wheel of 25 teeth or fewer lies beyond
+    the fitted range); the 2-D FE check of thesis Table 7
+    (:func:`physics.gear.tooth_fem.fe_pair_stiffness`) covers that pinion. The extrapolation
+    follows from the tooth count, not from a choice the user can change: it is logged at debug
+    level, not warned. An r_f/r_bore outside (1.4, 7.0) (a bore radius far from the thesis's
+    proportions) issues a :class:`SainsotRangeWarning`.
 
     Examples
     --------
     >>> from physics.params import GearPair, Material
     >>> ms = MeshStiffness(GearPair(), Material())
+    >>> ms.plane  # face width 30 mm > 5 modules of 2 mm
+    'strain'
     >>> k = ms.pair(np.array([0.0]))  # one pair at the pitch point [N/m]
     >>> 3e8 < float(k[0]) < 6e8
+    True
+
+    Over one mesh period two pairs share the load for the share ``epsilon - 1`` of it (thesis
+    2.2), and the mesh is stiffer there than anywhere in the single-tooth zone:
+
+    >>> c = ms.mesh_cycle(200)
+    >>> two = c["k_pair2"] > 0
+    >>> round(float(two.mean()), 2), round(ms.geometry.contact_ratio - 1, 2)
+    (0.58, 0.58)
+    >>> bool(c["k_total"][two].min() > c["k_total"][~two].max())
     True
     """
 

@@ -58,11 +58,46 @@ def _validate(x: np.ndarray) -> np.ndarray:
 def features(x: np.ndarray) -> dict[str, np.ndarray]:
     """The features of each signal in ``x`` (shape ``(..., n_samples)``); see the module table.
 
+    Parameters
+    ----------
+    x : array_like
+        Signals along the last axis, at least 2 samples each; any leading axes are a batch.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        Each feature of :data:`FEATURES` (thesis Table 13), shape ``x.shape[:-1]``; units
+        from :func:`feature_units`.
+
     Raises
     ------
     ValueError
         For an empty or one-sample signal, NaN or infinite samples, or a constant signal, naming
         the first offending signal's index.
+
+    Examples
+    --------
+    A pure sine of amplitude ``A`` over whole periods: RMS ``A / sqrt(2)``, peak-to-peak ``2 A``,
+    kurtosis ``mean(sin^4) / mean(sin^2)^2 = (3/8) / (1/2)^2 = 1.5``, crest ``sqrt(2)``, and,
+    with ``mean|sin| = 2 / pi``, impulse ``pi / 2`` and shape ``pi / (2 sqrt(2))``:
+
+    >>> t = np.arange(1000) / 1000.0  # 1 s at 1 kHz
+    >>> x = 3.0 * np.sin(2 * np.pi * 5.0 * t)  # A = 3, five whole periods
+    >>> f = features(x)
+    >>> {k: round(float(f[k]), 3) for k in ("rms", "peak_to_peak", "kurtosis", "crest")}
+    {'rms': 2.121, 'peak_to_peak': 6.0, 'kurtosis': 1.5, 'crest': 1.414}
+    >>> round(3.0 / 2**0.5, 3), round(2**0.5, 3)  # by hand
+    (2.121, 1.414)
+    >>> round(float(f["impulse"]), 3), round(float(f["shape"]), 3)
+    (1.571, 1.111)
+    >>> round(np.pi / 2, 3), round(np.pi / (2 * 2**0.5), 3)  # by hand
+    (1.571, 1.111)
+
+    A batch: one feature value per signal; the dimensionless features ignore the gain.
+
+    >>> f = features(np.stack([x, 10 * x]))
+    >>> f["rms"].shape, [round(float(c), 3) for c in f["crest"]]
+    ((2,), [1.414, 1.414])
     """
     x = _validate(x)
     absx = np.abs(x)

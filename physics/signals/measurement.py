@@ -25,7 +25,42 @@ if TYPE_CHECKING:
 
 
 def housing_acceleration(force: np.ndarray, housing_mass_kg: float) -> np.ndarray:
-    """Rigid-housing acceleration [m/s^2] of a dynamic mesh force record ``(..., n)`` [N]."""
+    """Rigid-housing acceleration [m/s^2] of a dynamic mesh force record ``(..., n)`` [N].
+
+    Newton's second law for a rigid housing of effective mass ``m_h`` driven by the fluctuating
+    part of the mesh force: ``a(t) = (F_d(t) - mean F_d) / m_h`` (module docstring; the mean
+    force is a static load on the mounting).
+
+    Parameters
+    ----------
+    force : numpy.ndarray
+        Dynamic mesh force records along the last axis (..., n) [N].
+    housing_mass_kg : float
+        Effective housing mass ``m_h`` [kg], > 0 (``dynamics.housing_mass_kg``).
+
+    Returns
+    -------
+    numpy.ndarray
+        Housing acceleration (..., n) [m/s^2], zero mean along the last axis.
+
+    Raises
+    ------
+    ValueError
+        For a housing mass that is not positive.
+
+    Examples
+    --------
+    A mesh force of 1000 N fluctuating by +-10 N on a housing of 20 kg: ``a = F / m = 10 / 20
+    = 0.5 m/s^2`` about zero.
+
+    >>> force = np.array([990.0, 1010.0, 990.0, 1010.0])  # [N]
+    >>> housing_acceleration(force, 20.0).tolist()  # [m/s^2]
+    [-0.5, 0.5, -0.5, 0.5]
+    >>> housing_acceleration(force, 0.0)
+    Traceback (most recent call last):
+        ...
+    ValueError: housing_mass_kg = 0.0 must be > 0 (kg)
+    """
     if not housing_mass_kg > 0:
         raise ValueError(f"housing_mass_kg = {housing_mass_kg!r} must be > 0 (kg)")
     return (force - force.mean(axis=-1, keepdims=True)) / housing_mass_kg
