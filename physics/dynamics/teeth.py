@@ -9,6 +9,11 @@ kernel's off-path pairs, :func:`physics.gear.tooth_contact.pair_slots`). A tooth
 those of a model of the whole gear worn as that tooth is, so a uniform set of teeth is the
 one-period model tiled, table for table.
 
+Each pinion tooth may also stand off its theoretical place (:func:`with_tooth_positions`: the
+single pitch deviations of ISO 1328-1, drawn per gear by
+:func:`physics.gear.accuracy.tooth_positions_um`): a tooth ahead meets its mate earlier and
+carries more of the load, the pattern that repeats once per pinion revolution.
+
 The gear's teeth are alike here (a gear tooth's own wear would need the hunting period,
 ``lcm(z1, z2)`` mesh periods).
 """
@@ -21,6 +26,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from physics.dynamics.model import PairModel
+from physics.gear.tooth_contact import NO_CONTACT
 
 
 def per_tooth_model(teeth: Sequence[PairModel]) -> PairModel:
@@ -49,3 +55,23 @@ def per_tooth_model(teeth: Sequence[PairModel]) -> PairModel:
         first, periods=z1, k_a=seq("k_a", 0), g_a=seq("g_a", 0), lam_a=seq("lam_a", 0),
         k_b=seq("k_b", -1), g_b=seq("g_b", -1), lam_b=seq("lam_b", -1),
         k_off=None if off is None else off["k_off"], g_off=None if off is None else off["g_off"])
+
+
+def with_tooth_positions(teeth: Sequence[PairModel], positions_m: Sequence[float]
+                         ) -> list[PairModel]:
+    """The one-period tooth models of :func:`per_tooth_model` with pinion tooth ``i`` standing
+    ``positions_m[i]`` [m] ahead of its theoretical place along the line of action (behind
+    where negative): its drive flank meets the mate earlier, so every gap of its pair (on the
+    path and off it, wherever the tooth stands in the mesh sequence) is smaller by that much,
+    as worn material makes it larger. Gaps of pairs out of reach stay so."""
+    if len(positions_m) != len(teeth):
+        raise ValueError(f"{len(positions_m)} tooth positions for {len(teeth)} tooth models; "
+                         "give one per pinion tooth")
+
+    def moved(g: np.ndarray | None, d: float) -> np.ndarray | None:
+        return None if g is None else np.where(g < NO_CONTACT, g - d, g)
+
+    return [dataclasses.replace(m, g_a=moved(m.g_a, d), g_b=moved(m.g_b, d),
+                                g_off=moved(m.g_off, d))
+            for m, d in zip(teeth, (float(x) for x in positions_m), strict=True)]
+

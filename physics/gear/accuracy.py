@@ -11,7 +11,7 @@ Sources (the formulas; no tabulated values are copied):
   each grade multiplies the grade-5 value by ``sqrt(2)`` (grade ``Q``: ``2^((Q - 5)/2)``); values
   rounded to 1 um above 10 um, to 0.5 um from 5 to 10 um and to 0.1 um below 5 um.
   Profile form ``f_f_alpha = 2.5 sqrt(m) + 0.17 sqrt(d) + 0.5``; total cumulative pitch
-  ``F_p = 0.3 m + 1.25 sqrt(d) + 7``.
+  ``F_p = 0.3 m + 1.25 sqrt(d) + 7``; single pitch ``f_pt = 0.3 (m + 0.4 sqrt(d)) + 4``.
 - ISO 1328-2:1997, annex B: radial run-out ``F_r = 0.8 F_p``.
 - ISO/TR 10064-2:1996: minimum normal backlash ``j_bn,min = (2/3)(0.06 + 0.0005 a + 0.03 m)``
   mm (ferrous gears in a ferrous housing, pitch-line speed below 15 m/s); the tooth thickness
@@ -103,6 +103,35 @@ def profile_form_tolerance_um(grade: int, module_mm: float, d_mm: float,
     d = band_mean(d_mm, DIAMETER_BANDS, "reference diameter")
     v = (2.5 * math.sqrt(m) + 0.17 * math.sqrt(d) + 0.5) * _grade_factor(grade)
     return iso_round(v) if rounded else v
+
+
+def single_pitch_tolerance_um(grade: int, module_mm: float, d_mm: float,
+                              rounded: bool = True) -> float:
+    """Single pitch tolerance ``f_pt`` [um] (ISO 1328-1:1995): the largest difference between
+    a pitch of the gear and its theoretical pitch."""
+    m = band_mean(module_mm, MODULE_BANDS, "module")
+    d = band_mean(d_mm, DIAMETER_BANDS, "reference diameter")
+    v = (0.3 * (m + 0.4 * math.sqrt(d)) + 4.0) * _grade_factor(grade)
+    return iso_round(v) if rounded else v
+
+
+def tooth_positions_um(z: int, grade: int, module_mm: float, d_mm: float,
+                       seed: int) -> np.ndarray:
+    """Each tooth's position deviation along the line of action [um] (``z`` values, positive:
+    the drive flank stands ahead of its theoretical place, towards the mating flank), drawn for
+    a gear of accuracy ``grade`` with ``seed``: the same gear always gets the same teeth.
+
+    ISO 1328-1 states limits, not a distribution: here the positions are independent normal
+    deviations whose single pitch deviations (the differences of neighbours, ``z`` of them
+    around the gear, summing to zero) reach the tolerance ``f_pt`` at three standard deviations
+    (``sigma = f_pt / (3 sqrt 2)``); the positions are taken about their mean (a common offset
+    is a tooth thickness, the backlash's). Their total spread stays below the cumulative pitch
+    tolerance ``F_p`` of the grade for the usual tooth counts."""
+    if z < 2:
+        raise ValueError(f"z = {z} teeth: give at least two")
+    sigma = single_pitch_tolerance_um(grade, module_mm, d_mm, rounded=False) / (3 * math.sqrt(2))
+    x = np.random.default_rng(seed).normal(0.0, sigma, z)
+    return x - x.mean()
 
 
 def it_tolerance_um(it_grade: int, size_mm: float) -> float:

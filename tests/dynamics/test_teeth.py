@@ -10,7 +10,8 @@ import pytest
 
 from physics import reference
 from physics.dynamics.model import build_model, simulate
-from physics.dynamics.teeth import per_tooth_model
+from physics.dynamics.teeth import per_tooth_model, with_tooth_positions
+from physics.gear.accuracy import tooth_positions_um
 from physics.gear.stiffness import mesh_stiffness
 from physics.params import Scenario
 from physics.reproduce.localised import FEATURES, INDICATOR_ROWS, table15_model
@@ -91,3 +92,40 @@ def test_table15_by_the_model(worn_state):
     assert table.loc[table["feature"].isin(INDICATOR_ROWS), "rise_measured"].isna().all()
     assert rms["rise_measured"].iloc[-1] == pytest.approx(2.278 / 1.066)
     assert table15_model(scn, base, None)["rise_measured"].isna().all()
+
+
+def test_every_tooth_ahead_alike_shifts_the_transmission_error_and_nothing_else():
+    """All pinion teeth ahead by the same ``d``: the flanks meet ``d`` earlier, so the DTE is
+    the one of the theoretical teeth less ``d`` at every instant, and the mesh force the same."""
+    scn = _scn("path")
+    ms = mesh_stiffness(scn.gear, scn.material)
+    one = build_model(scn, ms)
+    z1, d = scn.gear.z1, 3e-6
+    models = [per_tooth_model([one] * z1),
+              per_tooth_model(with_tooth_positions([one] * z1, [d] * z1))]
+    a, b = simulate(models, scn.dynamics).dte, simulate(models, scn.dynamics).force
+    np.testing.assert_allclose(a[1], a[0] - d, rtol=0, atol=1e-6 * np.ptp(a[0]))
+    np.testing.assert_allclose(b[1], b[0], rtol=1e-6, atol=1e-6 * one.static_force)
+    with pytest.raises(ValueError, match="17 tooth positions for 18 tooth models"):
+        with_tooth_positions([one] * z1, [0.0] * 17)
+
+
+def test_pitch_deviations_of_a_grade_make_shaft_orders_that_grow_with_the_grade():
+    """Teeth off their places by the single pitch deviations ISO 1328 allows: the synchronous
+    average sees shaft orders between the mesh orders, more for a coarser grade (the same seed,
+    so the same pattern scaled by sqrt(2) per grade)."""
+    scn = _scn("exact", revolutions=5, eccentricity_um=0.0)
+    ms = mesh_stiffness(scn.gear, scn.material)
+    one = build_model(scn, ms)
+    z1, g = scn.gear.z1, scn.gear
+    d1 = g.module_mm * g.z1
+    models = [per_tooth_model(with_tooth_positions(
+        [one] * z1, 1e-6 * tooth_positions_um(z1, grade, g.module_mm, d1, seed=4)))
+        for grade in (4, 6, 8)]
+    force = simulate(models, scn.dynamics, every_phase=False).force
+    force -= force.mean(axis=1, keepdims=True)
+    spectrum = np.abs(np.fft.rfft(force, axis=1))
+    shaft = spectrum[:, 5 * np.arange(1, 3 * z1)]
+    between = np.arange(1, 3 * z1) % z1 != 0
+    level = np.sqrt((shaft[:, between] ** 2).sum(axis=1))
+    assert np.all(np.diff(level) > 0)

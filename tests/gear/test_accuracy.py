@@ -20,6 +20,8 @@ from physics.gear.accuracy import (
     minimum_backlash_um,
     profile_form_tolerance_um,
     runout_tolerance_um,
+    single_pitch_tolerance_um,
+    tooth_positions_um,
     tooth_thickness_tolerance_um,
 )
 
@@ -31,11 +33,14 @@ def test_grade_5_by_hand_for_the_thesis_pinion():
         0.3 * 1 + 1.25 * math.sqrt(d) + 7)
     assert profile_form_tolerance_um(5, 2.0, 36.0, rounded=False) == pytest.approx(
         2.5 * 1 + 0.17 * math.sqrt(d) + 0.5)
+    assert single_pitch_tolerance_um(5, 2.0, 36.0, rounded=False) == pytest.approx(
+        0.3 * (1 + 0.4 * math.sqrt(d)) + 4)
 
 
 @pytest.mark.parametrize("grade", range(1, 12))
 def test_each_grade_is_sqrt2_the_one_before_and_runout_is_four_fifths_of_pitch(grade):
-    for f in (runout_tolerance_um, profile_form_tolerance_um, cumulative_pitch_tolerance_um):
+    for f in (runout_tolerance_um, profile_form_tolerance_um, cumulative_pitch_tolerance_um,
+              single_pitch_tolerance_um):
         assert f(grade + 1, 2.0, 36.0, rounded=False) == pytest.approx(
             math.sqrt(2) * f(grade, 2.0, 36.0, rounded=False))
     assert runout_tolerance_um(grade, 3.0, 120.0, rounded=False) == pytest.approx(
@@ -90,3 +95,27 @@ def test_form_deviation_stays_within_its_tolerance_band(amp, waves, phase):
     d = form_deviation(s, 0.0, 1.0, amp, waves, phase)
     assert np.ptp(d) <= 2 * amp * 1e-6 * (1 + 1e-12)
     assert np.allclose(form_deviation(s, 0.0, 1.0, -amp, waves, phase), -d)
+
+
+@given(z=st.integers(10, 120), grade=st.integers(3, 10), seed=st.integers(0, 2**31))
+@settings(max_examples=40, deadline=None)
+def test_tooth_positions_are_the_gears_own_and_within_its_tolerances(z, grade, seed):
+    """The same seed gives the same teeth; the positions sum to zero about their mean, as the
+    single pitch deviations (neighbours' differences, around the gear) do; the total spread
+    stays within the cumulative pitch tolerance F_p."""
+    x = tooth_positions_um(z, grade, 2.0, 36.0, seed)
+    np.testing.assert_array_equal(x, tooth_positions_um(z, grade, 2.0, 36.0, seed))
+    assert len(x) == z and abs(x.sum()) < 1e-9
+    pitch = np.diff(np.append(x, x[0]))
+    assert abs(pitch.sum()) < 1e-9
+    assert np.ptp(x) < cumulative_pitch_tolerance_um(grade, 2.0, 36.0, rounded=False)
+
+
+def test_single_pitch_deviations_reach_their_tolerance_at_three_sigma():
+    """Over many gears, the share of single pitch deviations beyond f_pt is that of a normal
+    beyond three standard deviations (0.27 %)."""
+    x = np.concatenate([tooth_positions_um(50, 6, 2.0, 36.0, seed) for seed in range(400)])
+    pitch = np.diff(x.reshape(400, 50), axis=1)
+    outside = np.mean(np.abs(pitch) > single_pitch_tolerance_um(6, 2.0, 36.0, rounded=False))
+    assert outside == pytest.approx(0.0027, abs=0.0015)
+
