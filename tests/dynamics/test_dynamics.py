@@ -403,3 +403,47 @@ def test_exact_contact_converges_in_the_tables_phases(ms):
     spread = [simulate([build_model(scn, ms, n_phase=n)], scn.dynamics,
                        every_phase=False).force.std() for n in (EXACT_PHASES, 4 * EXACT_PHASES)]
     assert spread[0] == pytest.approx(spread[1], rel=0.02)
+
+
+
+def _energy_residual(ms, step_factor: float) -> tuple[float, int]:
+    """Largest drift of ``m v^2 / 2 + U(x) - int W v dt`` over a record of the compiled
+    integrator, relative to the largest mechanical energy ``m v^2 / 2 + U``, and the number of
+    coast-flank strikes: one undamped pair of constant stiffness driven through its backlash by
+    a force ripple 1.6 times the static force (``U = k dz(x)^2 / 2``, ``dz`` the dead zone's
+    deflection on either flank). ``v`` by the five-point central difference of the DTE at every
+    step, the work by the trapezoid rule (together 0.2 % of drift without separation)."""
+    scn = _scn(duration_s=0.02, transient_s=0.0, step_factor=step_factor)
+    m = build_model(scn, ms)
+    k0 = float(np.mean(m.k_a))
+    m = dataclasses.replace(
+        m, k_a=np.full_like(m.k_a, k0), k_b=np.zeros_like(m.k_b), g_a=np.zeros_like(m.g_a),
+        g_b=np.zeros_like(m.g_b), lam_a=None, lam_b=None, damping=0.0, long_error=0.0,
+        short_error=0.0, ripple_force=1.6 * m.static_force,
+        omega_ripple=0.27 * np.sqrt(k0 / m.mass), k_off=None, g_off=None)
+    resp = simulate(m, scn.dynamics)
+    dt, n_sub = resp.time_step, resp.steps_per_sample
+    half = (len(anti_aliasing_filter(n_sub)) - 1) // (2 * n_sub)
+    x = resp.dte_steps[0]
+    t = resp.time[0] + (np.arange(len(x)) - half * n_sub) * dt  # the steps' instants
+    v = (x[:-4] - 8 * x[1:-3] + 8 * x[3:-1] - x[4:]) / (12 * dt)
+    x, t = x[2:-2], t[2:-2]
+    dz = np.where(x > m.half_backlash, x - m.half_backlash,
+                  np.where(x < -m.half_backlash, x + m.half_backlash, 0.0))
+    w = m.static_force + m.ripple_force * np.sin(m.omega_ripple * t)
+    work = np.concatenate([[0.0], np.cumsum(0.5 * (w[1:] * v[1:] + w[:-1] * v[:-1]) * dt)])
+    mechanical = 0.5 * m.mass * v**2 + 0.5 * k0 * dz**2
+    strikes = int(np.sum(np.diff((x < -m.half_backlash).astype(int)) == 1))
+    return np.ptp(mechanical - work) / mechanical.max(), strikes
+
+
+def test_energy_is_conserved_through_separations_and_coast_flank_strikes(ms):
+    """The undamped mesh driven through its backlash: the flanks part, the coast flanks strike
+    (dozens of times in 20 ms) and the drive flanks re-engage; the energy balance holds within
+    a few per cent of the mechanical energy at the default step and converges at second order
+    as the step halves (the dead zone's kinks are where the fixed-step RK4 loses its fourth)."""
+    coarse, strikes = _energy_residual(ms, Dynamics().step_factor)
+    fine, _ = _energy_residual(ms, Dynamics().step_factor / 2)
+    assert strikes >= 10
+    assert coarse < 0.03
+    assert fine < coarse / 3
