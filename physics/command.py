@@ -10,7 +10,8 @@
   (only what this run made, by the record :class:`RunRecord` took before it started), and the
   exit code is 2. ``execute(plan)`` then does the work; a run that leaves the model's scope
   there (:class:`~physics.params.OutOfScope`: the physics has stopped, not the code) ends with
-  one line on stderr and exit code 1, its folder and log kept; any other error there is a bug
+  one line on stderr and exit code 1, its folder and log kept, as does a file that cannot be
+  written (:class:`~physics.files.WriteFailed`: the disk full); any other error there is a bug
   and keeps its traceback.
 - :func:`entry` is an app's console entry around its ``@hydra.main`` function: Ctrl-C (SIGINT)
   or SIGTERM, in any phase (start-up, checks, numba kernels, joblib workers, Lightning's fit
@@ -40,6 +41,7 @@ from hydra.experimental.callback import Callback
 from omegaconf import DictConfig, OmegaConf, open_dict, read_write
 
 from physics import interrupt
+from physics.files import WriteFailed
 from physics.params import OutOfScope
 
 Plan = TypeVar("Plan")
@@ -112,6 +114,10 @@ class RunRecord(Callback):
 
     def on_multirun_start(self, config: DictConfig, **kwargs: Any) -> None:
         _record_before(Path(str(config.hydra.sweep.dir)))
+        try:
+            check_launcher(config)
+        except ValueError as err:
+            refuse(err, Path(str(config.hydra.sweep.dir)))
         if "joblib" in str(config.hydra.launcher.get("_target_", "")):
             interrupt.quiet_workers()
         check_sweep(config)  # every job's config, before the first starts
@@ -239,6 +245,11 @@ def run_command(cfg: DictConfig, prepare: Callable[[DictConfig], Plan],
             logging.getLogger(__name__).error("out of the model's scope: %s", err)
             print(f"error: out of the model's scope: {err}", file=sys.stderr)
             raise SystemExit(1) from None
+        elif isinstance(err, WriteFailed):
+            logging.getLogger(__name__).error("%s", err.strerror)
+            print(f"error: {err.strerror}; that file is left as it was: make room (or "
+                  "choose another folder) and run the command again", file=sys.stderr)
+            raise SystemExit(1) from None
         raise
     if job is None:
         interrupt.note(lambda: "the run had finished; its results are kept")
@@ -256,10 +267,42 @@ def entry(task: Callable[[], Any], check: Callable[[DictConfig], Any] | str | No
     def main() -> Any:
         global _CHECK
         _CHECK = check
+        try:
+            check_spelling(sys.argv[1:])
+        except ValueError as err:
+            print(f"error: {err}", file=sys.stderr)
+            raise SystemExit(2) from None
         return interrupt.guard(task, undo=_undo_unstarted)
 
     main.__doc__ = task.__doc__
     return main
+
+
+def check_spelling(argv: list[str]) -> None:
+    """Refuse (ValueError, one line) a command-line override that Hydra's grammar cannot read
+    because it holds a character beyond ASCII unquoted (a path ``data.table=/tmp/mé.csv``), with
+    the way to write it: Hydra's own error names its lexer and no fix. Other overrides, and
+    other errors, are left to Hydra."""
+    from hydra.core.override_parser.overrides_parser import OverridesParser
+    from hydra.errors import OverrideParseException
+
+    parser = OverridesParser.create()
+    for arg in argv:
+        if arg.startswith("-") or "=" not in arg or arg.isascii():
+            continue
+        try:
+            parser.parse_overrides([arg])
+        except OverrideParseException:
+            key, _, value = arg.partition("=")
+            if not key.isascii():
+                key = key.lstrip("+~")
+                raise ValueError(f"{arg}: the key {key!r} holds a character beyond ASCII, which "
+                                 "no key given on the command line may hold (letters a-z, "
+                                 "digits, '_', '-', '.'); rename that column in your table"
+                                 ) from None
+            raise ValueError(f"{arg}: a value holding a character beyond ASCII must be quoted "
+                             f"for Hydra: {key}='{value}' (in the shell: \"{key}='{value}'\"; "
+                             "in a list, each such item: [a,'é'])") from None
 
 
 #: the folder of this single run (RunRecord.on_run_start), and whether its work has started
@@ -340,6 +383,19 @@ def _sweep_jobs(config: DictConfig) -> list[SweepJob] | None:
     batches = BasicSweeper.split_arguments(parsed, None)
     return [SweepJob(num, tuple(overrides), Path())
             for num, overrides in enumerate(o for batch in batches for o in batch)]
+
+
+def check_launcher(config: DictConfig) -> None:
+    """Refuse (ValueError, one line) a sweep's launcher that this machine cannot run, before any
+    job: the SLURM launcher (``hydra/launcher=cluster``, hydra-submitit-launcher) where no SLURM
+    client (``srun``) is on the PATH; submitit raised its RuntimeError after the sweep's
+    folder was made."""
+    target = str(config.hydra.launcher.get("_target_", ""))
+    if "submitit" in target and "Slurm" in target and shutil.which("srun") is None:
+        raise ValueError(f"hydra.launcher = {target}: the sweep's jobs go to SLURM, and this "
+                         "machine has no SLURM client (no srun on the PATH); run the sweep "
+                         "here with the default launcher (drop hydra/launcher=cluster) or on "
+                         "a SLURM login node")
 
 
 def check_sweep(config: DictConfig) -> None:

@@ -9,12 +9,21 @@ import os
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import pandas as pd
+if TYPE_CHECKING:  # (not imported: an app's start, physics.command, imports this module)
+    import pandas as pd
+
+
+class WriteFailed(OSError):
+    """A file could not be written (the disk full, a quota reached, the folder made read-only
+    meanwhile): raised by :func:`atomic_write` naming the file, which is left as it was (no
+    half-written file); an app ends with its one line (:func:`physics.command.run_command`)."""
 
 
 def atomic_write(path: str | os.PathLike, write: Callable[[Path], None]) -> Path:
-    """Call ``write(tmp_path)`` and move the result to ``path`` in one rename."""
+    """Call ``write(tmp_path)`` and move the result to ``path`` in one rename; an OSError on
+    the way is raised as :class:`WriteFailed`, the temporary file removed."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
@@ -25,8 +34,11 @@ def atomic_write(path: str | os.PathLike, write: Callable[[Path], None]) -> Path
     try:
         write(Path(tmp))
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as err:
         Path(tmp).unlink(missing_ok=True)
+        if isinstance(err, OSError) and not isinstance(err, WriteFailed):
+            raise WriteFailed(err.errno, f"{path} could not be written "
+                                         f"({err.strerror or err})") from err
         raise
     return path
 
@@ -192,3 +204,23 @@ def check_inside(path: str | os.PathLike, root: str | os.PathLike, key: str) -> 
     if p != r and r not in p.parents:
         raise ValueError(f"{key} puts {str(path)!r} at {p}, outside {r}; use a plain name "
                          "(letters, digits, '_', '-', '.'; no '..' or '/')")
+
+
+def existing_file(value: object, key: str, fix: str) -> Path:
+    """``value`` as the path of an existing regular file, else a refusal (ValueError, one line
+    naming ``key``, the value and what is wrong; ``fix`` says what to give instead): not a
+    path at all (None, a number, a mapping: from the Python API or a config), a path that does
+    not exist, a folder, or a file of another kind (a FIFO, or a device such as /dev/zero:
+    reading it waits or never ends)."""
+    if isinstance(value, bool) or not isinstance(value, str | os.PathLike) or value == "":
+        raise ValueError(f"{key} = {value!r} is not a file name; {fix}")
+    path = Path(value)
+    if not path.exists():
+        what = "does not exist"
+    elif path.is_dir():
+        what = "is a folder, not a file"
+    elif not path.is_file():
+        what = "is not a regular file (a FIFO, a device or a socket)"
+    else:
+        return path
+    raise ValueError(f"{key} = {str(path)!r} {what}; {fix}")

@@ -20,7 +20,7 @@ import contextlib
 import os
 import signal
 import sys
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
 
@@ -68,14 +68,24 @@ def deferred() -> Iterator[None]:
     writer thread waiting for ever, and the shutdown that joins it hangs; one raised inside a
     compiled module's import prints that import's traceback. A signal already noted is raised
     on entry."""
-    global _DEFERRED
     check()
+    with shielded():
+        yield
+    check()
+
+
+@contextlib.contextmanager
+def shielded() -> Iterator[None]:
+    """Within it a signal is noted and not raised, also at its end: the cleanup of a run
+    already interrupted (stopping its worker processes, removing its temporary files) runs
+    whole when Ctrl-C comes again; :func:`guard` reports the interruption once."""
+    global _DEFERRED
+    before = _DEFERRED
     _DEFERRED = True
     try:
         yield
     finally:
-        _DEFERRED = False
-    check()
+        _DEFERRED = before
 
 
 def check() -> None:
@@ -102,27 +112,98 @@ def _unraisable(args: Any) -> None:
     sys.__unraisablehook__(args)
 
 
+@contextlib.contextmanager
+def _sigint_blocked() -> Iterator[None]:
+    """SIGINT blocked in this thread within it, and in the processes it starts (a blocked
+    signal stays blocked across fork and exec); one that came meanwhile is delivered at its
+    end."""
+    before = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, before)
+
+
 def quiet_workers() -> None:
-    """Start joblib's (loky's) worker processes with SIGINT blocked, from their first
-    instruction on: Ctrl-C reaches the whole process group, and a worker still importing
-    would print a traceback of its own. The app's process alone answers: its joblib call
-    stops the workers, and it reports once. (Loky starts a worker by fork and exec; a blocked
-    signal stays blocked across both.)"""
+    """Make joblib's (loky's) worker processes deaf to Ctrl-C, which reaches the whole process
+    group; the app's process alone answers: its joblib call stops the workers, and it reports
+    once.
+
+    - A worker starts with SIGINT blocked, from its first instruction on (loky starts it by
+      fork and exec): one still importing would print a traceback of its own.
+    - Loky stops its workers from a thread of its own through ``pgrep`` (without psutil),
+      which now starts with SIGINT blocked too: a second Ctrl-C ended ``pgrep``, the thread
+      died with a traceback, and the workers ran on: they wrote chunks after the app's line
+      had said none was kept, and kept the app from exiting until they were killed."""
+    from joblib.externals.loky import process_executor
     from joblib.externals.loky.backend import fork_exec as module
 
-    launch = module.fork_exec
-    if getattr(launch, "_sigint_blocked", False):
-        return
+    for owner, name in ((module, "fork_exec"), (process_executor, "kill_process_tree")):
+        original = getattr(owner, name)
+        if not getattr(original, "_sigint_blocked", False):
+            setattr(owner, name, _deaf(original))
 
-    def fork_exec(*args: Any, **kwargs: Any) -> Any:
-        before = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-        try:
-            return launch(*args, **kwargs)
-        finally:
-            signal.pthread_sigmask(signal.SIG_SETMASK, before)
 
-    fork_exec._sigint_blocked = True  # type: ignore[attr-defined]
-    module.fork_exec = fork_exec
+def _deaf(call: Callable[..., Any]) -> Callable[..., Any]:
+    """``call`` run with SIGINT blocked (:func:`_sigint_blocked`)."""
+    def deaf(*args: Any, **kwargs: Any) -> Any:
+        with _sigint_blocked():
+            return call(*args, **kwargs)
+
+    deaf._sigint_blocked = True  # type: ignore[attr-defined]
+    return deaf
+
+
+@contextlib.contextmanager
+def worker_results(tasks: Iterable[Any], jobs: int) -> Iterator[Iterator[Any]]:
+    """The results of joblib's ``delayed`` ``tasks`` run in ``jobs`` worker processes, each as
+    it finishes (``return_as="generator_unordered"``), such that an interruption ends them
+    whole and what the run then reports as kept is final (no worker writes after it):
+
+    - the workers are deaf to Ctrl-C, loky's stopping of them too (:func:`quiet_workers`);
+    - a signal while joblib starts them is raised once they run (:func:`deferred`): raised
+      between a worker's start and joblib's record of it, it left that worker unknown to
+      joblib, not stopped: it printed a traceback after the app's line;
+    - when the block is left before every result was taken (Ctrl-C, SIGTERM, a task's error)
+      the workers are stopped and reaped before the exception goes on, a further signal
+      meanwhile noted, not raised (:func:`shielded`, :func:`_stop_workers`).
+    """
+    from joblib import Parallel
+
+    quiet_workers()
+    runs = None
+    try:
+        with deferred():
+            runs = Parallel(n_jobs=jobs, return_as="generator_unordered")(tasks)
+        yield runs
+    except BaseException:
+        with shielded():
+            _stop_workers(runs)
+        raise
+
+
+def _stop_workers(runs: Iterator[Any] | None) -> None:
+    """Stop joblib's call ``runs`` (None: not made) and every worker process this process
+    started, and reap them, so that none is left behind, nor waited for when the interpreter
+    exits. The workers are killed first, then joblib's generator is closed (a no-op where an
+    exception inside it stopped it already): loky stopping them itself with tasks still
+    queued, as right after the start, dropped the tasks and then read one, and its thread
+    died with a traceback; a broken pool it gives up quietly."""
+    import multiprocessing
+    import warnings
+
+    from joblib.externals.loky.backend.process import LokyProcess
+
+    children = [c for c in multiprocessing.active_children() if isinstance(c, LokyProcess)]
+    for child in children:
+        with contextlib.suppress(ProcessLookupError):  # (loky's process has no kill())
+            os.kill(child.pid, signal.SIGKILL)
+    if runs is not None:
+        with warnings.catch_warnings():  # joblib's note that it cancelled the other tasks
+            warnings.simplefilter("ignore")
+            runs.close()  # type: ignore[attr-defined]
+    for child in children:
+        child.join()
 
 
 def install_at_start(name: str) -> None:

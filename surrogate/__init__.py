@@ -33,8 +33,9 @@ _SOURCES = {
     "surrogate.model": ("WearRegressor",),
     "surrogate.training": ("TrainJob", "train", "fit", "kept"),
     "surrogate.inference": (
-        "Surrogate", "ScaledEnsemble", "export", "conformal_scale", "torch_predict"),
-    "surrogate.predict": ("predict_file", "gearbox_columns"),
+        "Surrogate", "ScaledEnsemble", "export", "conformal_scale", "torch_predict",
+        "gearbox_columns"),
+    "surrogate.predict": ("predict_file",),
     "surrogate.novelty": ("Novelty", "difficulty", "envelope_report"),
     "surrogate.conformal": ("exchangeable_quantile",),
     "surrogate.benchmark": (

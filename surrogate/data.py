@@ -37,6 +37,7 @@ from physics.dataset.generation import (
     spec_from_config,
 )
 from physics.dataset.generation import units as dataset_units
+from physics.files import existing_file
 from physics.params import Scenario, operating_cases
 from physics.signals.order_analysis import LINE_ORDERS, MESH_ORDERS
 from surrogate.schema import (
@@ -165,8 +166,9 @@ def dataset_job(path: str | Path, spec: dict | None = None, jobs: int = 2) -> Da
     path = Path(path)
     if path.suffix != ".parquet":
         raise ValueError(f"data.dataset = {str(path)!r} must name a .parquet file")
-    return plan_dataset(Scenario(), spec_from_config(spec or {}),
-                        path.parent, path.stem, jobs=jobs)
+    return plan_dataset(Scenario(), spec_from_config(spec or {}), path.parent, path.stem,
+                        jobs=jobs, out_key="the folder of data.dataset (paths.data_dir unless "
+                                           "data.dataset is set)")
 
 
 def load_dataset(path: str | Path, spec: dict | None = None, jobs: int = 2) -> pd.DataFrame:
@@ -337,8 +339,8 @@ def with_vector_units(units: dict[str, str], vectors) -> dict[str, str]:
 def read_user_table(path: str | Path, columns: dict[str, str]) -> pd.DataFrame:
     """A user's table as read from ``path`` (CSV or parquet), its columns renamed by
     ``columns`` (the table's name -> ours)."""
-    path = Path(path)
-    if path.suffix not in (".csv", ".parquet") or not path.is_file():
+    path = existing_file(path, "data.table", "give your .csv or .parquet table")
+    if path.suffix not in (".csv", ".parquet"):
         raise ValueError(f"data.table = {str(path)!r} must be an existing .csv or .parquet file")
     twice = repeated_header(path)
     if twice:
@@ -609,7 +611,11 @@ class WearDataModule(L.LightningDataModule):
         # the main job reads against each gearbox's first record; a user's table absolutely
         # unless it says its first rows are baselines
         baseline = table is None if baseline is None else bool(baseline)
-        self.inputs = (list(inputs) if inputs else
+        if inputs is not None and not len(inputs):
+            raise ValueError("data.inputs = [] names no input; give the feature columns "
+                             "(data.inputs=[fme15,acc_rms]) or leave data.inputs unset (null) "
+                             "for the default inputs of data.sensors")
+        self.inputs = (list(inputs) if inputs is not None else
                        input_columns(list(sensors), operating_point, baseline))
         self.target = target or ("mean_wear_mm" if baseline else "root_wear_mm")
         if self.target in self.inputs:

@@ -19,6 +19,7 @@ import copy
 import io
 import math
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
@@ -30,7 +31,7 @@ import pandas as pd
 import torch
 from omegaconf import OmegaConf
 
-from physics.files import atomic_write
+from physics.files import atomic_write, existing_file
 from surrogate.candidates import Candidate
 from surrogate.conformal import cv_plus, exchangeable_quantile
 from surrogate.network import Network, mixture
@@ -235,6 +236,18 @@ def check_gearboxes(df: pd.DataFrame, gearbox: list[str], target: str | None = N
                              "record first")
 
 
+def gearbox_columns(value) -> tuple[str, ...]:
+    """``gearbox`` of the config or of :meth:`Surrogate.predict`: none, one column name or a
+    list of them."""
+    if value is None:
+        return ()
+    names = [value] if isinstance(value, str) else value
+    if not isinstance(names, Sequence) or not names or not all(
+            isinstance(n, str) and n for n in names):
+        raise ValueError(f"gearbox = {value!r} must be a column name or a list of them")
+    return tuple(names)
+
+
 class Surrogate:
     """A loaded ensemble: ``predict(df)`` returns wear with its interval and flags."""
 
@@ -253,32 +266,34 @@ class Surrogate:
         self.novelty = novelty
 
     @classmethod
-    def load(cls, path: str | Path) -> Surrogate:
-        path = Path(path)
-        if not path.is_file():
-            raise ValueError(f"checkpoint {path} does not exist; train one with "
-                             "`python train.py` (it writes wear_surrogate.pt in its run folder)")
+    def load(cls, path: str | Path, key: str = "checkpoint") -> Surrogate:
+        """The model exported to ``path`` (checked whole; a refusal names it as ``key``: the
+        option or argument that gave it)."""
+        path = existing_file(path, key, "pass the wear_surrogate.pt of a training run "
+                                        "(`python train.py` writes it in its run folder)")
+        named, fix = f"{key} = {str(path)!r}", "pass the wear_surrogate.pt a training run exported"
         try:
             payload = torch.load(path, map_location="cpu", weights_only=True)
         except Exception as err:
-            raise ValueError(f"{path} is not a safe wear-surrogate file ({err}); pass the "
-                             "wear_surrogate.pt a training run exported") from None
+            raise ValueError(f"{named} is not a safe wear-surrogate file ({err}); {fix}") from None
         if isinstance(payload, dict) and payload.get("format") == CHOSEN_FORMAT:
             try:
                 chosen = Chosen.from_payload(payload)
                 novelty = Novelty.from_payload(payload["novelty"])
             except (KeyError, TypeError, AttributeError, RuntimeError, ValueError) as err:
-                raise ValueError(f"{path} is incomplete or from another model ({err}); pass "
-                                 "the wear_surrogate.pt a training run exported") from None
+                raise ValueError(f"{named} is incomplete or from another model ({err}); "
+                                 f"{fix}") from None
             return cls(None, 1.0, novelty, chosen)
         if not isinstance(payload, dict) or payload.get("format") != FORMAT:
-            raise ValueError(f"{path} is not a {FORMAT} file; pass the wear_surrogate.pt a "
-                             "training run exported")
+            raise ValueError(f"{named} is not a {FORMAT} file; {fix}")
         try:
             schema = FeatureSchema.from_dict(payload["hparams"]["schema"])  # version first
             model = Network(payload["hparams"])
             model.load_state_dict(payload["state_dict"])
             scale = float(payload["interval_scale"])
+            if not (math.isfinite(scale) and scale > 0):
+                raise ValueError(f"its interval scale {scale!r} is not a finite number above "
+                                 "zero")
             if len(schema.inputs) != int(payload["hparams"]["n_inputs"]):
                 raise ValueError(f"its schema names {len(schema.inputs)} inputs, its network "
                                  f"takes {payload['hparams']['n_inputs']}")
@@ -286,11 +301,11 @@ class Surrogate:
             if novelty.reference.shape[1] != len(model.hparams["schema"]["inputs"]):
                 raise ValueError("its novelty reference has another number of inputs")
         except (KeyError, TypeError, RuntimeError, ValueError) as err:
-            raise ValueError(f"{path} is incomplete or from another model ({err}); pass the "
-                             "wear_surrogate.pt a training run exported") from None
+            raise ValueError(f"{named} is incomplete or from another model ({err}); "
+                             f"{fix}") from None
         bad = [k for k, v in payload["state_dict"].items() if not torch.isfinite(v).all()]
         if bad:
-            raise ValueError(f"{path} has non-finite weights ({bad[0]}, ...): the training "
+            raise ValueError(f"{named} has non-finite weights ({bad[0]}, ...): the training "
                              "diverged; retrain (e.g. with a smaller model.lr)")
         return cls(model, scale, novelty)
 
@@ -351,8 +366,12 @@ class Surrogate:
         input outside the training range widened by 5 % (:meth:`FeatureSchema.in_envelope`):
         the reading is an extrapolation.
         """
+        if not isinstance(df, pd.DataFrame):
+            raise TypeError(f"df = {type(df).__name__}: predict reads a pandas DataFrame with "
+                            f"the columns {self.schema.columns} (pd.read_csv of your table)")
+        gearbox = list(gearbox_columns(gearbox or None))
         if self.schema.baseline:
-            check_gearboxes(df, list(gearbox or []), self.schema.target)
+            check_gearboxes(df, gearbox, self.schema.target)
         x = self.schema.check(self.schema.network_rows(df, gearbox))
         mean, std = self.predict_array(x)
         bad = ~(np.isfinite(mean) & np.isfinite(std))

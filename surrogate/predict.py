@@ -39,8 +39,8 @@ import pandas as pd
 from omegaconf import DictConfig
 
 from physics.command import entry, run_command
-from physics.files import atomic_write, check_writable
-from surrogate.inference import Surrogate, check_gearboxes
+from physics.files import atomic_write, check_writable, existing_file
+from surrogate.inference import Surrogate, check_gearboxes, gearbox_columns
 from surrogate.novelty import envelope_report
 from surrogate.schema import repeated_header
 
@@ -48,9 +48,7 @@ log = logging.getLogger(__name__)
 
 
 def read_table(path: str | Path) -> pd.DataFrame:
-    path = Path(path)
-    if not path.is_file():
-        raise ValueError(f"input = {path} does not exist; pass a CSV or parquet feature table")
+    path = existing_file(path, "input", "pass a CSV or parquet feature table")
     if path.suffix not in (".parquet", ".csv"):
         raise ValueError(f"input = {path}: use a .csv or .parquet file")
     twice = repeated_header(path)
@@ -71,26 +69,22 @@ class PredictJob:
     gearbox: tuple[str, ...] = ()  # the columns that tell the gearboxes apart (baseline models)
 
 
-def gearbox_columns(value) -> tuple[str, ...]:
-    """``gearbox`` of the config: none, one column name or a list of them."""
-    if value is None:
-        return ()
-    names = [value] if isinstance(value, str) else value
-    if not isinstance(names, Sequence) or not names or not all(
-            isinstance(n, str) and n for n in names):
-        raise ValueError(f"gearbox = {value!r} must be a column name or a list of them")
-    return tuple(names)
-
-
-def check_output(output: Path, source: Path, overwrite: object) -> None:
-    """Refuse (ValueError, one line) an ``output`` that would replace a file: the input table
-    ``source`` (an existing file) itself, also through a link, always; another existing file
-    unless ``overwrite`` is true; a folder; a folder that cannot be written."""
+def check_output(value: object, source: Path, overwrite: object) -> Path:
+    """The output file ``value``; refused (ValueError, one line) where it is no file name, or
+    would replace a file: the input table ``source`` (an existing file) itself, also through a
+    link, always; another existing file unless ``overwrite`` is true; a folder; a device or a
+    FIFO (/dev/full); a folder that cannot be written."""
+    if isinstance(value, bool) or not isinstance(value, str | os.PathLike) or value == "":
+        raise ValueError(f"output = {value!r} is not a file name; give a .csv file name")
+    output = Path(value)
     if not isinstance(overwrite, bool):
         raise ValueError(f"overwrite = {overwrite!r} is not a switch; give overwrite=true or "
                          "overwrite=false")
     if output.is_dir():
         raise ValueError(f"output = {str(output)!r} is a folder; give a .csv file name")
+    if output.exists() and not output.is_file():
+        raise ValueError(f"output = {str(output)!r} is not a regular file (a FIFO, a device or "
+                         "a socket); give a .csv file name")
     if output.exists():
         if os.path.samefile(output, source):
             raise ValueError(f"output = {str(output)!r} is the input table itself (input = "
@@ -101,29 +95,37 @@ def check_output(output: Path, source: Path, overwrite: object) -> None:
                              "not write is replaced only when asked; give another output file "
                              "name, or pass overwrite=true to replace it")
     check_writable(output.parent, "output")
+    return output
 
 
 def prepare(cfg: DictConfig) -> PredictJob:
     """Load and check the checkpoint and the table, and the output (:func:`check_output`),
     before any work."""
-    surrogate = Surrogate.load(cfg.ckpt)
-    table = read_table(cfg.input)
-    gearbox = gearbox_columns(cfg.get("gearbox"))
+    return checked_job(cfg.ckpt, cfg.input, cfg.output, cfg.get("gearbox"), cfg.overwrite)
+
+
+def checked_job(ckpt: object, source: object, target: object, gearbox: object,
+                overwrite: object) -> PredictJob:
+    """The model, the table and the output checked (:func:`check_output`) before any work,
+    each refusal naming the option (``ckpt``, ``input``, ``output``, ``gearbox``)."""
+    surrogate = Surrogate.load(ckpt, key="ckpt")
+    table = read_table(source)
+    columns = gearbox_columns(gearbox)
     if surrogate.schema.baseline:
-        check_gearboxes(table, list(gearbox), surrogate.schema.target, f"input = {cfg.input}")
-    surrogate.schema.check(surrogate.schema.network_rows(table, list(gearbox)))
-    output = Path(cfg.output)
-    check_output(output, Path(cfg.input), cfg.overwrite)
-    return PredictJob(surrogate, table, output, gearbox)
+        check_gearboxes(table, list(columns), surrogate.schema.target, f"input = {source}")
+    surrogate.schema.check(surrogate.schema.network_rows(table, list(columns)))
+    output = check_output(target, Path(source), overwrite)
+    return PredictJob(surrogate, table, output, columns)
 
 
 def predict_file(ckpt: str | Path, source: str | Path, target: str | Path,
-                 gearbox: tuple[str, ...] = ()) -> pd.DataFrame:
-    """Predict wear for every row of ``source`` with ``ckpt`` (``gearbox``: the columns that
-    tell the gearboxes apart, for a model read against each one's first record); write
-    ``target``; return it."""
-    return execute(PredictJob(Surrogate.load(ckpt), read_table(source), Path(target),
-                              tuple(gearbox)))
+                 gearbox: str | Sequence[str] | None = (), overwrite: bool = False
+                 ) -> pd.DataFrame:
+    """Predict wear for every row of ``source`` with ``ckpt`` (``gearbox``: the column or
+    columns that tell the gearboxes apart, for a model read against each one's first record);
+    write ``target`` (never ``source`` itself; an existing file only with ``overwrite``);
+    return it. Every argument is checked before any work, as the command checks it."""
+    return execute(checked_job(ckpt, source, target, gearbox or None, overwrite))
 
 
 def execute(job: PredictJob) -> pd.DataFrame:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import math
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -66,7 +67,30 @@ class FeatureSchema:
         if d.get("version") != SCHEMA_VERSION:
             raise ValueError(f"checkpoint schema version {d.get('version')!r} is not "
                              f"{SCHEMA_VERSION}: retrain the model with this package version")
-        return cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in d.items()})
+        schema = cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in d.items()})
+        schema.check_scaling()
+        return schema
+
+    def check_scaling(self) -> None:
+        """Refuse (ValueError) a stored schema that cannot scale rows: one entry of each of
+        the units, mean, std, low and high per input, finite, every deviation above zero (a
+        training run stores 1 for an input that did not vary: :meth:`fit`) and the target's
+        scale too. Dividing by a zero deviation gave every row an infinite input, and a zero
+        target scale every row a wear of zero and an interval of width zero."""
+        n = len(self.inputs)
+        for name in ("units", "mean", "std", "low", "high"):
+            if len(getattr(self, name)) != n:
+                raise ValueError(f"its schema has {len(getattr(self, name))} values of {name} "
+                                 f"for {n} inputs")
+        values = np.array([self.mean, self.std, self.low, self.high], float)
+        bad = [c for c, ok in zip(self.inputs, np.isfinite(values).all(axis=0) & (values[1] > 0),
+                                  strict=True) if not ok]
+        if bad:
+            raise ValueError(f"its input scaling of {bad} is not finite or has a deviation of "
+                             "zero (std)")
+        if not (math.isfinite(self.target_scale) and self.target_scale > 0):
+            raise ValueError(f"its target scale {self.target_scale!r} is not a finite number "
+                             "above zero")
 
     def network_rows(self, df: pd.DataFrame, gearbox: list[str] | None = None) -> pd.DataFrame:
         """``df`` as the network reads it: its :attr:`vectors` as magnitudes and, for a

@@ -40,7 +40,7 @@ import numpy as np
 import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
-from joblib import Parallel, delayed
+from joblib import delayed
 from tqdm import tqdm
 
 from physics.dataset.chunks import (
@@ -59,7 +59,7 @@ from physics.dynamics.model import build_model, simulate
 from physics.dynamics.model_form import FACTORS
 from physics.files import atomic_write, check_writable, read_lock, release_lock, sha256_file
 from physics.gear.stiffness import MeshStiffness, SainsotRangeWarning, mesh_stiffness
-from physics.interrupt import quiet_workers
+from physics.interrupt import shielded, worker_results
 from physics.params import (
     OutOfScope,
     PhysicsConfig,
@@ -502,9 +502,10 @@ def dataset_digest(base: Scenario, spec: DatasetSpec) -> str:
 
 def plan_dataset(base: Scenario, spec: DatasetSpec, out_dir: str | Path, name: str = "dataset",
                  chunk: int | None = None, jobs: int = 2, store_signals: bool = False,
-                 progress: bool = True) -> DatasetJob:
-    """Check a dataset build before any work: the name, the chunk, the jobs and every unit's
-    scenario against the model's scope; finished chunks (same hash) are left out."""
+                 progress: bool = True, out_key: str = "out_dir") -> DatasetJob:
+    """Check a dataset build before any work: the name, the chunk, the jobs, every unit's
+    scenario against the model's scope and the output folder (named ``out_key`` in a
+    refusal: the setting that gave it); finished chunks (same hash) are left out."""
     if not isinstance(name, str) or not NAME.match(name):
         raise ValueError(f"name = {name!r} must be a plain file name (letters, digits, '_', "
                          "'-', '.'; no folders): the dataset is written to <out_dir>/<name>"
@@ -521,8 +522,8 @@ def plan_dataset(base: Scenario, spec: DatasetSpec, out_dir: str | Path, name: s
             check_scenario(check_record(unit_scenario(base, spec, case, rep)))
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
-        raise ValueError(f"out_dir = {str(out_dir)!r} is a file; give a folder")
-    check_writable(out, "out_dir")
+        raise ValueError(f"{out_key} = {str(out_dir)!r} is a file; give a folder")
+    check_writable(out, out_key)
     digest = dataset_digest(base, spec)
     folder = chunk_folder(out, name)
     manifest = read_manifest(folder) if folder.is_dir() else {}
@@ -561,8 +562,10 @@ def build_dataset(job: DatasetJob) -> Path | None:
         return _build(job)
     except BaseException:
         # Ctrl-C, SIGTERM or a failure: a worker that was ended mid-write leaves its
-        # temporary file, which this build removes while it still holds the lock
-        remove_temporaries(job)
+        # temporary file, which this build removes while it still holds the lock (whole,
+        # also when Ctrl-C comes again)
+        with shielded():
+            remove_temporaries(job)
         raise
     finally:
         release_lock(own)
@@ -596,12 +599,11 @@ def _compute(job: DatasetJob, todo: tuple[int, ...]) -> None:
                 run_chunk(*args, c, job.folder, job.digest, job.store_signals)
                 bar.update(1)
         else:  # loky processes: they also start inside a joblib-launched multirun job
-            quiet_workers()
-            runs = Parallel(n_jobs=jobs, return_as="generator_unordered")(
-                delayed(run_chunk)(*args, c, job.folder, job.digest, job.store_signals)
-                for c in todo)
-            for _ in runs:
-                bar.update(1)
+            tasks = (delayed(run_chunk)(*args, c, job.folder, job.digest, job.store_signals)
+                     for c in todo)
+            with worker_results(tasks, jobs) as runs:
+                for _ in runs:
+                    bar.update(1)
 
 
 def _build(job: DatasetJob) -> Path | None:
@@ -628,8 +630,15 @@ def chunks_kept(job: DatasetJob) -> str:
     if not done:
         return (f"no chunk of the {job.spec.chunks} was finished, nothing is kept; run the "
                 "same command again")
-    return (f"{len(done)} of {job.spec.chunks} chunks are kept in {job.folder}; the same command "
-            "resumes from them")
+    runs = [[done[0], done[0]]]  # the kept chunks' numbers as ranges: 0-15, 18
+    for c in done[1:]:
+        if c == runs[-1][1] + 1:
+            runs[-1][1] = c
+        else:
+            runs.append([c, c])
+    numbers = ", ".join(f"{a}" if a == b else f"{a}-{b}" for a, b in runs)
+    return (f"{len(done)} of {job.spec.chunks} chunks are kept in {job.folder} (chunk "
+            f"{numbers}); the same command resumes from them")
 
 
 def base_scenario(cfg: dict[str, Any]) -> Scenario:

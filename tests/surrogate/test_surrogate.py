@@ -797,10 +797,14 @@ def test_a_baseline_network_reads_changes_and_needs_the_gearbox(dataset, tmp_pat
         train(train_cfg(tmp_path / "b", dataset, "case=3", init,
                         f"data.inputs=[{','.join(s.schema.inputs)}]", "data.baseline=false",
                         "data.target=mean_wear_mm", "data.test_replicates=1"))
-    job = prepare(train_cfg(tmp_path / "c", dataset, "case=3", init, "data.test_replicates=1",
-                            "data.sensors=[acc]"))
+    job = prepare(train_cfg(tmp_path / "c", dataset, "case=3", init, "data.test_replicates=1"))
     assert job.data.inputs == list(s.schema.inputs) and job.data.target == s.schema.target
     assert job.data.baseline == tuple(s.schema.baseline)
+    # a setting that would choose other inputs is refused, not silently dropped
+    with pytest.raises(ValueError, match=r"a fine-tune reads that network's inputs .*, and "
+                                         r"data\.sensors = \['acc'\] asks for others"):
+        prepare(train_cfg(tmp_path / "c", dataset, "case=3", init, "data.test_replicates=1",
+                          "data.sensors=[acc]"))
     with pytest.raises(ValueError, match=r"reads mean_wear_mm, this run's data.target is "
                                          r"root_wear_mm; leave data.target unset"):
         prepare(train_cfg(tmp_path / "d", dataset, "case=3", init, "data.test_replicates=1",
