@@ -2,7 +2,7 @@
 
 Field names carry their unit where it is not SI (``module_mm``, ``torque_Nm``); each class offers
 the SI values the physics uses as properties. Defaults are the thesis's values (Tables 0, 1 and 11
-of ``shared/reference/thesis_tables``); constants the thesis does not state are chosen once here,
+of ``physics/reference/thesis_tables``); constants the thesis does not state are chosen once here,
 from standard gear-steel and lubricant data, with their source beside them. The Hydra YAML groups
 under ``conf/`` hold the same values (``tests/test_params.py`` keeps the two in step).
 

@@ -14,14 +14,18 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import hydra
-import pandas as pd
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, OmegaConf
 
 from physics.command import entry, register_schema, run_command
 from physics.loop.bundle_loop import run_loop
 from physics.loop.config import LoopConfig, LoopSettings
-from physics.loop.measured.bundle import Bundle, check_not_own_reference, read_measurements
+from physics.loop.measured.bundle import (
+    Bundle,
+    FeatureTable,
+    check_not_own_reference,
+    read_measurements,
+)
 from physics.loop.measured.records import group_keys
 from physics.loop.measured.usable import check_usable, shown_candidates
 from physics.loop.report import write_report
@@ -29,7 +33,7 @@ from physics.loop.search.attribution import candidates_for
 from physics.loop.search.form_error import check_reference, form_reference
 from physics.loop.search.own_history import parse_history, split_history
 from physics.loop.search.own_history import source as history_source
-from physics.loop.table_loop import run_feature_table
+from physics.loop.table_loop import check_table, run_feature_table
 from physics.params import (
     Scenario,
     scenario_from_config,
@@ -43,7 +47,7 @@ register_schema("loop_schema", LoopConfig)
 
 @dataclass(frozen=True)
 class LoopJob:
-    data: Bundle | pd.DataFrame
+    data: Bundle | FeatureTable
     scenario: Scenario
     settings: LoopSettings
     progress: bool
@@ -56,11 +60,14 @@ def prepare(cfg: DictConfig) -> LoopJob:
     opts = OmegaConf.to_container(cfg.loop, resolve=True)
     settings = LoopSettings(**opts)
     base = scenario_from_config(cfg)
-    if base.dynamics.flank_contact != "path":
+    if base.dynamics.flank_contact != "path" and Path(cfg.data).suffix != ".csv":
         raise ValueError(f"dynamics.flank_contact = {base.dynamics.flank_contact!r}: the loop's "
-                         "effects modify the contact on the path (the off-path pairs of the "
-                         "exact contact are not in them yet); leave it at 'path'")
+                         "effects modify the contact on the path of a bundle's records (the "
+                         "off-path pairs of the exact contact are not in them yet); leave it at "
+                         "'path' (a feature table takes either: docs/loop.md)")
     data, scn = read_measurements(cfg.data, base)
+    if isinstance(data, FeatureTable):  # what the loop cannot follow: refused before work
+        check_table(data, scn)
     history = parse_history(cfg.reference)
     reference = None
     if history is not None:  # the unit's own earliest records: left out of the analysis
@@ -85,7 +92,7 @@ def prepare(cfg: DictConfig) -> LoopJob:
         reference, _ = read_measurements(cfg.reference, base)
         if not isinstance(reference, Bundle):
             raise ValueError(f"reference={cfg.reference}: must be a bundle folder "
-                             "(shared/specs/measured-bundle.md), not a feature table")
+                             "(docs/own-data.md), not a feature table")
         check_usable(reference, scn, settings)
         check_reference(data, reference.gear, group_keys(reference.manifest)[0])
     return LoopJob(data, scn, settings, bool(cfg.progress),

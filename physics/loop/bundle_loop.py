@@ -138,7 +138,13 @@ from physics.loop.model.comparison import (
     residuals_db,
     rms,
 )
-from physics.loop.model.declared import TORQUE, declared_modes, declared_nuisance
+from physics.loop.model.declared import (
+    BOUNDS,
+    TORQUE,
+    at_bounds,
+    declared_modes,
+    declared_nuisance,
+)
 from physics.loop.model.discrepancy import entry_family, with_discrepancy
 from physics.loop.model.simulation import model_signals
 from physics.loop.report import LoopReport
@@ -313,6 +319,7 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
             (d for d in limits or () if (d["effect"], d["option"]) == (row["effect"],
                                                                       row["option"])), None)
     rec.cache.clear()  # the report keeps the records, not the simulations
+    ranges = {n: BOUNDS[n] for n in nuisance if n in BOUNDS}  # the calibration's search ranges
     return LoopReport(
         verdict=said, unexplained=unexplained, partial=partial,
         mode="bundle",
@@ -347,6 +354,9 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
                 n for n in (*screened(settings), *TORQUE)
                 if n in nuisance and n not in free_nuisance],
             "not_searched": left_out,
+            "nuisance_ranges": ranges,
+            "at_bound": {"calibration": at_bounds(nuisance, ranges),
+                         "after": at_bounds(after_nui, ranges)},
             "detection_limits": limits,
             "assumed": assumed(bundle, base, nuisance),
             "form_reference": reference.summary() if reference is not None else None,

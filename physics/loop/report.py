@@ -118,11 +118,6 @@ def markdown(r: dict) -> str:
                   f"{p['after_round']}; {p['missing']}.", ""]
     if r.get("verdict"):
         lines += [summary_line(r), ""]
-    b = r.get("beyond_reach")
-    if b:
-        lines += [f"**Rows left out:** {len(b['rows'])} rows of {min(b['wear_mm']):.4g}-"
-                  f"{max(b['wear_mm']):.4g} mm root wear lie beyond the {b['reach_mm']:.4g} mm "
-                  f"the declared model follows at this operating point: {b['reason']}.", ""]
     chosen = r["chosen_effect"]
     lines.append(f"**Chosen effect:** {chosen or 'none (no candidate passes the null test)'}")
     if chosen:
@@ -130,12 +125,15 @@ def markdown(r: dict) -> str:
                            if isinstance(v, float))
         lines.append(f"  fitted: {params}")
     table = r.get("mode") == "feature_table"
-    lead = ("features [RMS log ratio, leave-one-row-out]" if table
+    lead = ("features [RMS log ratio, cross-validated over the rows]" if table
             else "signature [RMS standardised residual]")
     lines += ["", "| held-out error | before | after |", "|---|---|---|",
               f"| {lead} | {r['error_before']:.3f} | {r['error_after']:.3f} |",
               f"| Table 13 features [% mean rel.] | {r['feature_error_before_pct']:.2f} | "
               f"{r['feature_error_after_pct']:.2f} |"]
+    for name, e in (r.get("feature_errors") or {}).get("before", {}).items():
+        lines.append(f"| {name} [RMS log ratio, held out] | {e:.3f} | "
+                     f"{r['feature_errors']['after'][name]:.3f} |")
     if not table:
         lines.append(f"| signature with model discrepancy [RMS standardised residual] | "
                      f"{r['error_before_with_discrepancy']:.3f} | "
@@ -154,6 +152,11 @@ def markdown(r: dict) -> str:
                   "check on it, rest on noise."]
     cal = ", ".join(f"{k} = {v:.4g}" for k, v in r["calibration"].items())
     lines += ["", f"Calibrated nuisance parameters ({r['calibrated_on']}): {cal}."]
+    for fit, where in (r.get("at_bound") or {}).items():
+        if where:
+            lines.append(f"At a bound of its search range ({fit}): " + ", ".join(
+                f"{k} at its {b} bound {v:.4g}" for k, (b, v) in where.items())
+                + ": the range, not the data, set the value.")
     ref = r.get("form_reference")
     if ref:
         per = ", ".join(f"{g}: {ref['records'][g]} records, {v:.2f} dB"
@@ -164,11 +167,13 @@ def markdown(r: dict) -> str:
                                               if ref.get("calibration_held") else
                                               " before the calibration."))
     for name, why in (r.get("not_searched") or {}).items():
-        lines.append(f"Not searched, the records cannot show it: {name} ({why}).")
+        lines.append(f"Not searched: {name} ({why}).")
     known = r.get("assumed") or {}
     if "torque_Nm" in known:
         t = known["torque_Nm"]
-        lines.append(f"Torque unknown for {len(t['records'])} records: calibrated as a nuisance "
+        who = (t["records"] if isinstance(t["records"], str) else
+               f"{len(t['records'])} records")
+        lines.append(f"Torque unknown for {who}: calibrated as a nuisance "
                      f"within {t['prior'][0]:.3g}-{t['prior'][1]:.3g} N m around the configured "
                      f"{t['configured']:.3g} N m, at {t['calibrated']:.3g} N m (worn teeth of "
                      f"{t['worn_teeth_at']:.3g} N m).")
@@ -344,13 +349,13 @@ def _feature_trends(report: dict, out: Path) -> None:
     plt = pyplot()
     wear = np.array(report["wear_mm"])
     names = list(report["features_measured"])
-    fig, axes = plt.subplots(1, len(names), figsize=(2.6 * len(names), 3.2))
+    fig, axes = plt.subplots(1, len(names), figsize=(max(2.6 * len(names), 6.0), 3.6))
     for ax, n in zip(np.atleast_1d(axes), names, strict=True):
         for key, style, label in (("features_measured", "ko-", "measured"),
                                   ("features_before", "C0s--", "calibrated model"),
                                   ("features_after", "C1^-", "extended model")):
-            ax.plot(wear * 1e3, report[key][n], style, label=label, ms=4, lw=1)
-        ax.set(title=n, xlabel="root wear [um]")
+            ax.plot(wear, report[key][n], style, label=label, ms=4, lw=1)
+        ax.set(title=n, xlabel="wear depth [mm]")
         ax.set_yscale("log")
     np.atleast_1d(axes)[0].legend(fontsize=7)
     fig.suptitle(f"features against wear; chosen effect: {report['chosen_effect']}")

@@ -1,28 +1,34 @@
-"""The measured-data loop on a feature table (thesis Table 15): features against wear only.
+"""The measured-data loop on a feature table (thesis Table 15, a rig's stage means): features
+against wear only.
 
 A feature table carries no signal, so the comparison is in the features themselves: for each
-row (a wear depth) the declared model is run at the worn state of that depth (the dynamically
-coupled wear evolution of the configured operating point, :mod:`physics.dynamics.evolution`),
-its housing acceleration (or DTE) goes through the measurement chain with white noise, and the
-Table 13 features of model and measurement are compared as log ratios. Rows deeper than the
-model follows (its wear run leaves the model's scope first: a worn flank past the shakedown
-limit, worn flanks that no longer meet as one line contact) are left out and listed
-(``beyond_reach`` of the report); three rows must remain.
+row (a wear depth) the declared model is run at the worn state of that depth, its housing
+acceleration (or DTE) goes through the measurement chain with white noise, and the Table 13
+features of model and measurement are compared as log ratios. The worn state of a depth is the
+pair worn from new by the contact its worn flanks make to that depth of the deepest point of
+either active profile (:func:`physics.loop.measured.worn_states.table_models`), which follows
+the flanks to the tooth's tip thickness; a deeper table is refused before any work
+(:func:`~physics.loop.measured.worn_states.check_table_depths`). The dynamics take the
+scenario's contact (``dynamics.flank_contact``): with ``exact`` the effects that act on the
+path's pairs alone (:data:`PATH_ONLY`) are not searched.
 
 1. **Calibration**: damping ratio, pinion run-out, profile error, ``m_h`` (acceleration) and the
-   noise level, by bounded least squares on the least-worn row: the declared model describes
-   the healthy machine, and the change with wear is what the model must then explain.
+   noise level, by bounded least squares on the least-worn row, each within the range its
+   source gives (:func:`physics.loop.model.declared.physical_nuisance`): the declared model
+   describes the healthy machine, and the change with wear is what the model must then explain.
 2. **Attribution**: every effect of :mod:`physics.loop.effects` that can show in the quantity is
    added; effects marked ``grows_with_wear`` (a local defect, backlash growth) take their size
    in proportion to the row's wear depth (zero on the unworn row; a shape parameter such as a
    pit's length is kept), the others a constant size.
-   Each is judged by leave-one-row-out error (its parameters, ``m_h`` and noise refitted on the
-   other rows with the structural nuisance kept, the left-out row predicted; the calibrated
-   model alone gets the same refit) and by BIC (Gaussian, unknown variance) on all rows;
-   the null rule of :mod:`physics.loop` applies.
+   Each is judged by ``K``-fold cross-validation over the rows (:func:`folds`; leave one row
+   out up to ``TABLE_FOLDS`` rows): its parameters, ``m_h``, the noise and an unknown torque's
+   factor refitted on the other rows with the structural nuisance kept, the left-out rows
+   predicted; the calibrated model alone gets the same refit; and by BIC (Gaussian, unknown
+   variance) on all rows; the null rule of :mod:`physics.loop` applies.
 3. **Report**: the same keys as the bundle loop; the error is the RMS log ratio of the
-   features (natural log, so 0.1 is about 10 %), with the mean relative error in percent and
-   the rise of each feature from the first to the last row, measured and modelled.
+   features (natural log, so 0.1 is about 10 %), overall and per feature, with the mean
+   relative error in percent, the rise of each feature from the first to the last row,
+   measured and modelled, and the nuisance values at a bound of their ranges.
 """
 
 from __future__ import annotations
@@ -37,52 +43,78 @@ import pandas as pd
 from scipy import optimize
 
 from physics.dynamics.model import PairModel, simulate
-from physics.gear.stiffness import mesh_stiffness
 from physics.loop.config import LoopSettings
 from physics.loop.effects import EFFECTS, Effect
 from physics.loop.judge.adoption import holds, null_test
-from physics.loop.measured.worn_states import cycles_for_wear, wear_reach, worn_models
+from physics.loop.measured.bundle import FeatureTable
+from physics.loop.measured.worn_states import check_table_depths, table_models
 from physics.loop.model.declared import (
-    NUISANCE,
+    SCENARIO_DYNAMIC,
+    TORQUE,
+    at_bounds,
     declared_nuisance,
     from_unit,
+    physical_nuisance,
     to_unit,
     with_nuisance,
+    with_torque,
 )
-from physics.loop.model.simulation import SETTLE_DECAYS
+from physics.loop.model.simulation import CACHE_SIZE, SETTLE_DECAYS
 from physics.loop.report import LoopReport
 from physics.loop.search.attribution import candidates_for
 from physics.loop.threads import one_blas_thread
-from physics.params import OutOfScope, Scenario
+from physics.params import Scenario
 from physics.signals.features import FEATURES, features
 from physics.signals.measurement import declared_chain, sensed
 
 log = logging.getLogger(__name__)
 
-_COLUMN = re.compile(r"^(?P<feat>[a-z_]+?)(?:_(?P<scale>1e-?\d+)?_?(?P<unit>m_per_s2|m))?$")
+_COLUMN = re.compile(r"^(?P<feat>[a-z_]+?)(?:_(?P<scale>1e-?\d+)?_?(?P<unit>m_per_s2|m|g))?$")
+#: the quantity and the factor to SI of each unit suffix; ``g``: standard gravity (3rd CGPM,
+#: 1901; ISO 80000-3), the unit accelerometers are read in
+UNITS = {"m_per_s2": ("accel_m_s2", 1.0), "g": ("accel_m_s2", 9.80665), "m": ("dte_m", 1.0)}
+#: folds of the cross-validation over a table's rows: one row each (leave one out) up to this
+#: many rows, this many interleaved folds beyond (each spans the table's wear): K = 5 or 10 has
+#: less variance than leave-one-out at a K-th of the fits (Hastie, Tibshirani & Friedman, The
+#: Elements of Statistical Learning, 2nd ed., 2009, 7.10.1)
+TABLE_FOLDS = 5
+#: effects that act on the contact of the path's pairs A and B alone
+#: (:mod:`physics.loop.effects`), not searched with the exact contact
+#: (``dynamics.flank_contact=exact``), whose tip corners touch off the path: what each would
+#: leave out there
+PATH_ONLY = {
+    "gear_runout": "its moving start of contact is the path's; the exact contact's early "
+                   "contact enters with the pair already",
+    "friction": "its force factors act on the path's pairs, not on the tip corners that touch "
+                "off the path, where sliding is fastest",
+    "tip_relief": "it relieves the path's pairs, not the tip corners that touch off the path, "
+                  "which a relief removes first",
+}
 
 
 def parse_columns(df: pd.DataFrame) -> tuple[str, dict[str, tuple[str, float]]]:
     """Quantity (``accel_m_s2`` or ``dte_m``) and column -> (feature, scale to SI) of a table.
 
     Columns are ``<feature>`` (dimensionless) or ``<feature>_[<scale>_]<unit>`` with unit
-    ``m_per_s2`` or ``m`` (e.g. ``rms_m_per_s2``, ``peak_to_peak_1e-5_m``).
+    ``m_per_s2``, ``g`` or ``m`` (e.g. ``rms_m_per_s2``, ``rms_g``, ``peak_to_peak_1e-5_m``).
     """
-    cols, units = {}, set()
+    cols, quantities = {}, set()
     for c in df.columns:
         if c in ("wear_mm", "cycles", "cycles_1e6"):
             continue
         m = _COLUMN.match(c)
         if not m or m["feat"] not in FEATURES:
             raise ValueError(f"feature table column {c!r} is not a Table 13 feature "
-                             f"{FEATURES} with an optional unit suffix (_m_per_s2, _m)")
-        cols[c] = (m["feat"], float(m["scale"] or 1.0))
-        if m["unit"]:
-            units.add(m["unit"])
-    if len(units) != 1:
-        raise ValueError(f"feature table: the dimensional features need one unit suffix, "
-                         f"_m_per_s2 (housing acceleration) or _m (DTE); found {sorted(units)}")
-    return ("accel_m_s2" if units == {"m_per_s2"} else "dte_m"), cols
+                             f"{FEATURES} with an optional unit suffix (_m_per_s2, _g, _m)")
+        quantity, si = UNITS[m["unit"]] if m["unit"] else (None, 1.0)
+        cols[c] = (m["feat"], float(m["scale"] or 1.0) * si)
+        if quantity:
+            quantities.add(quantity)
+    if len(quantities) != 1:
+        raise ValueError(f"feature table: the dimensional features need units of one quantity, "
+                         f"_m_per_s2 or _g (housing acceleration) or _m (DTE); found "
+                         f"{sorted(quantities)}")
+    return quantities.pop(), cols
 
 
 @dataclasses.dataclass
@@ -94,65 +126,72 @@ class TableData:
     models: list[PairModel]
     base: Scenario
     settings: LoopSettings
-    #: rows deeper than the model follows (:func:`beyond_reach`), left out; None: none
-    beyond: dict | None = None
+    #: the nuisance's search ranges (:func:`~physics.loop.model.declared.physical_nuisance`)
+    bounds: dict
+    #: the torque is unknown: ``torque_factor`` is refitted with ``m_h`` and the noise
+    torque_unknown: bool = False
+    #: simulated responses by the parameters the dynamics see (:func:`responses`)
+    cache: dict = dataclasses.field(default_factory=dict)
 
 
-def beyond_reach(wear: np.ndarray, reach_mm: float, why: str | None) -> dict | None:
-    """The rows of a table deeper than the root wear ``reach_mm`` the declared model follows
-    (it leaves its scope there, ``why``): their wear, the reach and the reason; None if all
-    lie within it. Three rows at least must remain, else :class:`OutOfScope`."""
-    inside = wear <= reach_mm
-    if inside.all():
-        return None
-    if inside.sum() < 3:
-        raise OutOfScope(f"feature table: {int(inside.sum())} of {len(wear)} rows lie within "
-                         f"the {reach_mm:.4g} mm of root wear the declared model follows at this "
-                         f"operating point, and the leave-one-out judgement needs 3; {why}")
-    return {"reach_mm": reach_mm, "reason": why, "rows": np.flatnonzero(~inside).tolist(),
-            "wear_mm": wear[~inside].tolist()}
-
-
-def prepare_table(df: pd.DataFrame, base: Scenario, settings: LoopSettings) -> TableData:
-    quantity, cols = parse_columns(df)
-    wear = df.wear_mm.to_numpy(float)
-    if np.any(wear < 0):
-        raise ValueError("feature table: wear_mm must be >= 0")
-    if len(df) < 3:
-        raise ValueError(f"feature table: {len(df)} rows; the leave-one-out judgement needs "
+def check_table(table: FeatureTable, base: Scenario) -> None:
+    """Refuse, before any work, a table the loop cannot judge or follow: its columns, fewer
+    than three rows, a depth the worn states cannot reach
+    (:func:`~physics.loop.measured.worn_states.check_table_depths`)."""
+    parse_columns(table.frame)
+    if len(table.frame) < 3:
+        raise ValueError(f"feature table: {len(table.frame)} rows; the cross-validation needs "
                          "at least 3 wear states")
-    beyond = beyond_reach(wear, *wear_reach(base, wear))
-    if beyond is not None:
-        log.warning("feature table: %d rows deeper than %.4g mm of root wear are left out: "
-                    "the declared model leaves its scope there (%s)", len(beyond["rows"]),
-                    beyond["reach_mm"], beyond["reason"])
-        df = df.drop(index=df.index[beyond["rows"]])
-        wear = df.wear_mm.to_numpy(float)
-    cycles = cycles_for_wear(base, wear)
-    ms = mesh_stiffness(base.gear, base.material)
-    by_cycles, _ = worn_models(base, ms, list(cycles))
+    check_table_depths(base, table.frame.wear_mm.to_numpy(float))
+
+
+def prepare_table(table: FeatureTable, base: Scenario, settings: LoopSettings) -> TableData:
+    check_table(table, base)
+    quantity, cols = parse_columns(table.frame)
+    df = table.frame
+    wear = df.wear_mm.to_numpy(float)
     measured = np.column_stack([df[c].to_numpy(float) * s for c, (_, s) in cols.items()])
     return TableData(quantity, wear, measured, [f for f, _ in cols.values()],
-                     [by_cycles[float(c)] for c in cycles], base, settings, beyond)
+                     table_models(base, wear), base, settings, physical_nuisance(base),
+                     table.torque_unknown)
+
+
+def responses(td: TableData, rows: np.ndarray, nuisance: dict, eff: Effect | None,
+              values: dict) -> np.ndarray:
+    """Simulated mesh force (or DTE) of ``rows``, one analysis segment each, memoised on the
+    parameters the dynamics see: a change of ``m_h``, the noise or a measurement-chain effect
+    reuses the simulation."""
+    dynamic = eff is not None and eff.model is not None
+    key = (tuple(int(i) for i in rows),
+           tuple(nuisance.get(n) for n in (*SCENARIO_DYNAMIC, *TORQUE)),
+           (eff.name, tuple(sorted(values.items()))) if dynamic else None)
+    if key in td.cache:
+        return td.cache[key]
+    dyn = td.base.dynamics
+    ms = [with_torque(with_nuisance(td.models[i], nuisance, dyn.damping_ratio), nuisance)
+          for i in rows]  # the torque before an effect: a ripple's share is of this torque
+    if dynamic:
+        top = max(float(td.wear.max()), 1e-12)
+        ms = [eff.model(m, _sized(eff, values, td.wear[i] / top))
+              for m, i in zip(ms, rows, strict=True)]
+    run = dataclasses.replace(dyn, duration_s=td.settings.segment_s,
+                              transient_s=td.settings.transient_s, phase_bins=16,
+                              step_factor=td.settings.step_factor)
+    x = sensed(simulate(ms, run, settle=SETTLE_DECAYS), td.quantity)
+    if len(td.cache) >= CACHE_SIZE:
+        td.cache.pop(next(iter(td.cache)))  # the oldest entry
+    td.cache[key] = x
+    return x
 
 
 def model_features(td: TableData, rows: np.ndarray, nuisance: dict, eff: Effect | None,
                    values: dict) -> np.ndarray:
     """Features of the model at ``rows``, (rows, features), through chain and noise."""
     dyn = td.base.dynamics
-    ms = [with_nuisance(td.models[i], nuisance, dyn.damping_ratio) for i in rows]
-    if eff is not None and eff.model is not None:
-        top = max(float(td.wear.max()), 1e-12)
-        ms = [eff.model(m, _sized(eff, values, td.wear[i] / top)) for m, i in zip(ms, rows,
-                                                                                 strict=True)]
-    run = dataclasses.replace(dyn, duration_s=td.settings.segment_s,
-                              transient_s=td.settings.transient_s, phase_bins=16,
-                              step_factor=td.settings.step_factor)
-    resp = simulate(ms, run, settle=SETTLE_DECAYS)
-    x = declared_chain(sensed(resp, td.quantity), td.quantity, nuisance["housing_mass_kg"],
-                       fs=dyn.sample_rate_hz, support_hz=dyn.support_hz,
-                       support_damping=dyn.support_damping, mount_hz=dyn.mount_hz,
-                       mount_damping=dyn.mount_damping)
+    x = declared_chain(responses(td, rows, nuisance, eff, values), td.quantity,
+                       nuisance["housing_mass_kg"], fs=dyn.sample_rate_hz,
+                       support_hz=dyn.support_hz, support_damping=dyn.support_damping,
+                       mount_hz=dyn.mount_hz, mount_damping=dyn.mount_damping)
     if eff is not None and eff.record is not None:
         x = eff.record(x, dyn.sample_rate_hz, values)
     rng = np.random.default_rng(td.settings.seed)
@@ -169,10 +208,17 @@ def _log_ratio(td: TableData, rows: np.ndarray, model: np.ndarray) -> np.ndarray
     return np.log(np.abs(model) / np.abs(td.measured[rows])).ravel()
 
 
+def folds(wear: np.ndarray, k: int = TABLE_FOLDS) -> list[np.ndarray]:
+    """The held-out rows of each fold of the cross-validation (:data:`TABLE_FOLDS`): one row
+    each up to ``k`` rows, else ``k`` folds of every ``k``-th row in order of wear."""
+    order = np.argsort(wear, kind="stable")
+    return [order[j::k] for j in range(min(k, len(wear)))]
+
+
 def _fit(td: TableData, rows: np.ndarray, free: list[tuple], fixed: dict, eff: Effect | None,
          option: dict) -> tuple[dict, dict, float]:
     """Fit the ``free`` (name, low, high, log) parameters on ``rows``; nuisance, values, rss."""
-    nuisance_names = set(NUISANCE) | {"noise"}
+    nuisance_names = set(td.bounds) | set(TORQUE) | {"noise"}
 
     def split(u):
         v = {n: from_unit(float(x), lo, hi, lg) for (n, lo, hi, lg), x in zip(free, u,
@@ -201,39 +247,52 @@ def _noise_bounds(td: TableData) -> tuple[str, float, float, bool]:
 
 
 @one_blas_thread
-def run_feature_table(df: pd.DataFrame, base: Scenario,
+def run_feature_table(table: FeatureTable | pd.DataFrame, base: Scenario,
                       settings: LoopSettings | None = None) -> LoopReport:
-    """The loop on a feature table; returns its report."""
+    """The loop on a feature table (a data frame: no ``gear.yaml`` or ``operating.yaml`` beside
+    it, the torque the configured one); returns its report."""
     settings = settings or LoopSettings()
+    if isinstance(table, pd.DataFrame):
+        table = FeatureTable(None, table, {})
     candidates_for(set(), settings)  # refuses unknown names before any work
-    td = prepare_table(df, base, settings)
+    td = prepare_table(table, base, settings)
     rows = np.arange(len(td.wear))
+    exact = base.dynamics.flank_contact == "exact"
     start = declared_nuisance(base) | {"noise": _noise_bounds(td)[2] * 0.2}
-    gain = [("housing_mass_kg", *NUISANCE["housing_mass_kg"])] if td.quantity != "dte_m" else []
-    names = [n for n in NUISANCE if n != "housing_mass_kg"]
-    cal_free = [(n, *NUISANCE[n]) for n in names] + gain + [_noise_bounds(td)]
+    gain = ([("housing_mass_kg", *td.bounds["housing_mass_kg"])] if td.quantity != "dte_m"
+            else [])
+    names = [n for n in td.bounds if n != "housing_mass_kg"]
+    cal_free = [(n, *td.bounds[n]) for n in names] + gain + [_noise_bounds(td)]
     ref = rows[[int(np.argmin(td.wear))]]  # the healthy (least worn) state
     nuisance, _, _ = _fit(td, ref, cal_free, start, None, {})
-    refit = [*gain, _noise_bounds(td)]  # refitted with every candidate and every fold
+    # refitted with every candidate and every fold; an unknown torque's factor over its whole
+    # prior (the bundle loop's rule: physics.loop.model.declared.TORQUE)
+    torque = [("torque_factor", *TORQUE["torque_factor"])] if td.torque_unknown else []
+    refit = [*gain, _noise_bounds(td), *torque]
+    ranges = {n: b for n, *b in cal_free + torque}
 
     def judge(eff: Effect | None, option: dict) -> dict:
         free = (eff.bounds() if eff else []) + refit
         nui, vals, rss = _fit(td, rows, free, nuisance, eff, option)
-        held = []
-        for r in rows:  # leave one row out: the same fit, blind to the row
-            keep = rows[rows != r]
-            n_k, v_k, _ = _fit(td, keep, free, nuisance, eff, option)
-            held.append(_log_ratio(td, np.array([r]), model_features(td, np.array([r]), n_k,
-                                                                     eff, v_k)))
-        held = np.concatenate(held)
-        n = len(rows) * len(td.names)
+        held = np.empty_like(td.measured)
+        for out in folds(td.wear):  # the same fit, blind to the fold's rows
+            n_k, v_k, _ = _fit(td, np.setdiff1d(rows, out), free, nuisance, eff, option)
+            held[out] = _log_ratio(td, out, model_features(td, out, n_k, eff, v_k)).reshape(
+                len(out), -1)
+        n = held.size
         return {"effect": eff.name if eff else None, "option": option, "nuisance": nui,
                 "parameters": vals, "n_params": len(eff.params) if eff else 0, "rss": rss,
                 "bic": n * math.log(rss / n) + len(free) * math.log(n),
-                "heldout": float(np.sqrt(np.mean(held**2)))}
+                "heldout": float(np.sqrt(np.mean(held**2))),
+                "heldout_by_feature": np.sqrt(np.mean(held**2, axis=0))}
 
     null = judge(None, {})
-    ranking = [judge(e, o) for e, o in candidates_for({td.quantity}, settings)]
+    searched = [(e, o) for e, o in candidates_for({td.quantity}, settings)
+                if not (exact and e.name in PATH_ONLY)]
+    not_searched = ({n: f"with dynamics.flank_contact=exact {why}" for n, why in
+                     PATH_ONLY.items() if td.quantity in EFFECTS[n].quantities}
+                    if exact else {})
+    ranking = [judge(e, o) for e, o in searched]
     ranking.sort(key=lambda c: c["heldout"])
     best = ranking[0]
     checks = null_test(best["heldout"], null["heldout"], best["bic"] - null["bic"],
@@ -247,7 +306,7 @@ def run_feature_table(df: pd.DataFrame, base: Scenario,
     def effect_values(c: dict) -> dict:  # the fitted parameters, without the option
         return {k: v for k, v in c["parameters"].items() if k not in c["option"]}
 
-    def table(m: np.ndarray) -> dict:
+    def table_of(m: np.ndarray) -> dict:
         return {n: m[:, j].tolist() for j, n in enumerate(td.names)}
 
     def rise(m: np.ndarray) -> dict:
@@ -256,6 +315,9 @@ def run_feature_table(df: pd.DataFrame, base: Scenario,
     def mre(m: np.ndarray) -> float:
         return float(np.mean(np.abs(m / td.measured - 1)) * 100)
 
+    def by_feature(c: dict) -> dict:
+        return dict(zip(td.names, c["heldout_by_feature"].tolist(), strict=True))
+
     return LoopReport(
         mode="feature_table",
         chosen_effect=chosen["effect"],
@@ -263,7 +325,8 @@ def run_feature_table(df: pd.DataFrame, base: Scenario,
         chosen_parameters=effect_values(chosen) if adopt else None,
         error_before=null["heldout"],
         error_after=chosen["heldout"],
-        error_unit="RMS natural-log ratio of the features, leave-one-row-out",
+        error_unit=f"RMS natural-log ratio of the features, {len(folds(td.wear))}-fold "
+                   "cross-validation over the rows",
         feature_error_before_pct=mre(before),
         feature_error_after_pct=mre(after),
         wear_error_before_pct=None,
@@ -281,12 +344,39 @@ def run_feature_table(df: pd.DataFrame, base: Scenario,
             "verdicts": [{"effect": best["effect"], "adopted": adopt, "checks": checks}],
             "wear_mm": td.wear.tolist(),
             "quantity": td.quantity,
-            "features_measured": table(td.measured),
-            "features_before": table(before),
-            "features_after": table(after),
+            "flank_contact": base.dynamics.flank_contact,
+            "feature_errors": {"before": by_feature(null), "after": by_feature(chosen)},
+            "features_measured": table_of(td.measured),
+            "features_before": table_of(before),
+            "features_after": table_of(after),
             "rise_measured": rise(td.measured),
             "rise_before": rise(before),
             "rise_after": rise(after),
-            "beyond_reach": td.beyond,
+            "nuisance_ranges": ranges,
+            "at_bound": {"calibration": at_bounds(nuisance, ranges),
+                         "before": at_bounds(null["nuisance"], ranges),
+                         "after": at_bounds(chosen["nuisance"], ranges),
+                         "chosen effect": at_bounds(chosen["parameters"], {
+                             n: b for n, *b in eff.bounds()}) if eff else {}},
+            "not_searched": not_searched,
+            "stated_beside": table.stated,  # by the gear.yaml and operating.yaml beside it
+            "assumed": _assumed(table, base, null["nuisance"], chosen["nuisance"]),
         },
     )
+
+
+def _assumed(table: FeatureTable, base: Scenario, before: dict, after: dict) -> dict:
+    """What the table's sidecars left unknown and what stood in: an unknown torque (the
+    configured one times the factor calibrated before and after the chosen effect, its prior),
+    gear data stated unknown (the configured pair's values)."""
+    out = {}
+    t0 = base.operating.torque_Nm
+    if table.torque_unknown:
+        lo, hi, _ = TORQUE["torque_factor"]
+        out["torque_Nm"] = {"records": "all rows", "configured": t0, "prior": [lo * t0, hi * t0],
+                            "calibrated": t0 * before["torque_factor"],
+                            "after": t0 * after["torque_factor"], "worn_teeth_at": t0}
+    gear = [k for k in table.unknown if k != "torque_Nm"]
+    if gear:
+        out["gear"] = {k: getattr(base.gear, k) for k in gear}
+    return out

@@ -45,7 +45,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from physics.dynamics.model import EXACT_PHASES, build_model, simulate
+from physics.dynamics.model import EXACT_PHASES, PairModel, build_model, simulate
 from physics.files import check_writable, pyplot, save_figure, write_csv
 from physics.params import Scenario
 from physics.reference import RIG_RECORDS
@@ -95,19 +95,38 @@ def rig_scenario(torque_Nm: float) -> Scenario:
         dynamics=dataclasses.replace(base.dynamics, duration_s=DURATION_S))
 
 
+def worn_states(scn: Scenario, depths_mm: np.ndarray
+                ) -> tuple[np.ndarray | None, list[tuple[np.ndarray, np.ndarray]]]:
+    """The pair of ``scn`` worn from new by the contact its worn flanks make
+    (:func:`physics.tribology.contact_wear.simulate_contact_wear`) to each depth [mm] of the
+    deepest point of either active profile: the roll grid and the pinion and gear wear [m] of
+    each state (unworn flanks where no depth is above 0)."""
+    top = float(np.max(depths_mm))
+    if top <= 0:
+        return None, [(None, None)] * len(depths_mm)
+    run = simulate_contact_wear(scn, top * 1e-3)
+    return run.s, [run.at_depth(d * 1e-3)[:2] for d in depths_mm]
+
+
+def worn_models(scn: Scenario, contact: str, s: np.ndarray | None,
+                states: list[tuple[np.ndarray, np.ndarray]]) -> list[PairModel]:
+    """The dynamic models of the worn states of :func:`worn_states` with the contact
+    ``contact`` (``dynamics.flank_contact``: ``exact`` or ``path``), at ``EXACT_PHASES``."""
+    sc = dataclasses.replace(scn, dynamics=dataclasses.replace(scn.dynamics,
+                                                               flank_contact=contact))
+    return [build_model(sc, s_grid=s, wear1=w1, wear2=w2, n_phase=EXACT_PHASES)
+            for w1, w2 in states]
+
+
 def model_rms(torque_Nm: float, depths_mm: np.ndarray) -> dict[str, np.ndarray]:
     """Housing-acceleration RMS of the rig's pair worn to each depth, over the new pair's, with
     the exact and the path contact (keys ``exact``, ``path``)."""
     scn = rig_scenario(torque_Nm)
-    run = simulate_contact_wear(scn, float(depths_mm.max()) * 1e-3)
-    states = [run.at_depth(d * 1e-3)[:2] for d in depths_mm]
+    s, states = worn_states(scn, depths_mm)
     out = {}
     for contact in ("exact", "path"):
-        sc = dataclasses.replace(scn, dynamics=dataclasses.replace(scn.dynamics,
-                                                                   flank_contact=contact))
-        models = [build_model(sc, s_grid=run.s, wear1=w1, wear2=w2, n_phase=EXACT_PHASES)
-                  for w1, w2 in states]
-        spread = simulate(models, sc.dynamics, every_phase=False).force.std(axis=1)
+        spread = simulate(worn_models(scn, contact, s, states), scn.dynamics,
+                          every_phase=False).force.std(axis=1)
         out[contact] = spread / spread[np.flatnonzero(depths_mm == 0)[0]]
     return out
 

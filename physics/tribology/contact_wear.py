@@ -134,10 +134,13 @@ def wear_per_cycle(scn: Scenario, ms: MeshStiffness, grid: np.ndarray, wear1: np
     ds = geom.base_pitch / POSITIONS
     dt = ds / (geom.rb1 * omega1)
     R = contact.equivalent_radius(R1, R2)
-    state = solve_contact_state(scn, np.where(on, load, 0.0), R, v1, v2)
-    psi = (np.ones_like(load) if scn.tribology.regime == "dry"
+    # the contact state of the loaded positions only: an unloaded one has no contact, and its
+    # clamped radii lie outside the lubrication model's range
+    state = solve_contact_state(scn, load[on], R[on], v1[on], v2[on])
+    psi = (np.ones(on.sum()) if scn.tribology.regime == "dry"
            else film_deficiency(state.v_s, state.temperature, scn.lubricant))
-    k_eff = wear_coefficient(scn.tribology, state.asperity_ratio, psi)
+    k_eff = np.zeros_like(load)
+    k_eff[on] = wear_coefficient(scn.tribology, state.asperity_ratio, psi)
     w = load / g.face_width
     volume = (k_eff * w * kinematics.sliding_velocity(v1, v2) * dt
               / scn.material.hardness)  # per unit width

@@ -342,6 +342,8 @@ def run_step(key: str, folder: Path) -> subprocess.CompletedProcess:
     argv[0] = sys.executable
     if argv[1].startswith("bench/") or argv[1] == "train.py":  # scripts of the checkout
         argv[1] = str(ROOT / argv[1])
+    # the reference data of the checkout (the command runs in a folder of its own)
+    argv = [a.replace("=physics/reference/", f"={ROOT}/physics/reference/") for a in argv]
     return run(argv + list(case.size), folder, case.timeout)
 
 

@@ -719,31 +719,6 @@ def test_loop_app_refuses_bad_data_before_work(tmp_path):
 
 
 @pytest.mark.slow
-def test_a_table_of_wear_beyond_the_models_reach_runs_on_the_rows_within_it(tmp_path):
-    """A rig's stages from new to 0.93 mm of root wear (as public rigs wear): the case-3 model
-    follows the wear to about 0.2 mm, where its worn flanks leave the model's scope; the rows
-    beyond are left out and listed with the reason, the others judged to the end. With two
-    rows within the reach the run ends in one line naming it."""
-    wear = np.array([0.0, 0.05, 0.1, 0.15, 0.5, 0.93])
-    rows = pd.DataFrame({"wear_mm": wear, "rms_m_per_s2": 2 + 8 * wear,
-                         "kurtosis": 3.1 + 2 * wear})
-    rows.to_csv(tmp_path / "rig.csv", index=False)
-    run = run_app(tmp_path, tmp_path / "rig.csv", "case=3", "loop.max_nfev=4",
-                  "loop.candidates=[friction]")
-    assert run.returncode == 0, run.stderr[-2000:]
-    report = json.loads((tmp_path / "run" / "report.json").read_text())
-    beyond = report["beyond_reach"]
-    assert beyond["rows"] == [4, 5] and 0.15 < beyond["reach_mm"] < 0.5
-    assert report["wear_mm"] == wear[:4].tolist()
-    assert "2 rows deeper than" in (tmp_path / "run" / "__main__.log").read_text()
-    assert "**Rows left out:** 2 rows" in (tmp_path / "run" / "report.md").read_text()
-    rows.drop(index=[2, 3]).to_csv(tmp_path / "rig.csv", index=False)
-    run = run_app(tmp_path, tmp_path / "rig.csv", "case=3")
-    assert run.returncode == 1 and "Traceback" not in run.stderr
-    assert "error: out of the model's scope: feature table: 2 of 4 rows lie within" in run.stderr
-
-
-@pytest.mark.slow
 def test_loop_adds_nothing_to_a_clean_bundle(tmp_path, scn):
     # the default fit: cut short (max_nfev=10), the calibration leaves a misfit that the
     # smallest pit of the library (0.5 um over 0.05 of the face) takes up in a few entries

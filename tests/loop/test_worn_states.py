@@ -15,15 +15,12 @@ from physics.gear.stiffness import mesh_stiffness
 from physics.loop.measured import worn_states
 from physics.loop.measured.worn_states import (
     GRID_REACH,
-    cycles_for_wear,
     records_cycles,
     records_history,
     wear_grid_cycles,
     wear_history,
-    wear_reach,
     worn_models,
 )
-from physics.loop.table_loop import beyond_reach
 from physics.params import OutOfScope, scenario_from_config
 
 
@@ -94,11 +91,6 @@ def test_a_run_that_leaves_the_scope_ends_there_and_serves_every_deeper_need(scn
     h = wear_history(scn, lambda c, root: root[-1] >= 1.0)
     assert h.left_scope == "the worn flanks no longer meet as one line contact"
     np.testing.assert_array_equal(h.root_mm, [0.0, 1e-3, 3e-3])
-    assert wear_reach(scn, np.array([0.0, 0.002, 0.9])) == (3e-3, h.left_scope)
-    assert wear_reach(scn, np.array([0.0, 0.002])) == (np.inf, None)
-    with pytest.raises(OutOfScope, match=r"reaches only 0.003 mm .* below 0.9 mm .* leaves its "
-                                         r"scope: the worn flanks no longer meet"):
-        cycles_for_wear(scn, np.array([0.0, 0.9]))
     # records: those within the reach are read, the grid of wear states ends at the reach
     within = pd.DataFrame({"cycles": [np.nan, 1.9e6], "wear_mm": [2.8e-3, np.nan]})
     assert records_history(scn, within) is h
@@ -109,14 +101,3 @@ def test_a_run_that_leaves_the_scope_ends_there_and_serves_every_deeper_need(scn
         with pytest.raises(OutOfScope, match=what):
             records_history(scn, pd.DataFrame(deep))
     assert len(runs) == 1
-
-
-def test_a_tables_rows_beyond_the_models_reach_are_left_out_and_three_must_remain():
-    wear = np.array([0.0, 0.1, 0.2, 0.3, 0.9])
-    assert beyond_reach(wear, np.inf, None) is None
-    out = beyond_reach(wear, 0.25, "past the shakedown limit")
-    assert out == {"reach_mm": 0.25, "reason": "past the shakedown limit", "rows": [3, 4],
-                   "wear_mm": [0.3, 0.9]}
-    with pytest.raises(OutOfScope, match=r"2 of 5 rows lie within the 0.15 mm .* needs 3; "
-                                         r"past the shakedown limit"):
-        beyond_reach(wear, 0.15, "past the shakedown limit")

@@ -9,10 +9,11 @@ from physics.exports import lazy_exports
 
 _SOURCES = {
     "physics.loop.measured.bundle": (
-        "Bundle", "read_bundle", "write_bundle", "read_feature_table", "read_measurements",
-        "record_scenario"),
+        "Bundle", "FeatureTable", "read_bundle", "write_bundle", "read_feature_table",
+        "read_measurements", "record_scenario"),
     "physics.loop.measured.records": ("Group", "Records", "prepare", "split_records"),
-    "physics.loop.measured.worn_states": ("WearHistory", "wear_history", "worn_models"),
+    "physics.loop.measured.worn_states": ("WearHistory", "wear_history", "worn_models",
+                                          "table_models", "check_table_depths"),
     "physics.loop.measured.usable": ("check_usable", "shown_candidates"),
 }
 __all__, __getattr__, __dir__ = lazy_exports(__name__, _SOURCES)

@@ -6,7 +6,8 @@ bundle that breaks a rule with one message naming the record and the rule, befor
 computed;
 :func:`write_bundle` writes a complete bundle or nothing (a temporary folder renamed into place).
 A feature table (a CSV with ``wear_mm`` and feature columns, like thesis Table 15) is the other
-accepted form (:func:`read_feature_table`).
+accepted form (:func:`read_feature_table`), with an optional ``gear.yaml`` and ``operating.yaml``
+beside it (:class:`FeatureTable`).
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ import yaml
 from omegaconf import OmegaConf
 from omegaconf.errors import OmegaConfBaseException
 
-from physics.params import GearPair, Scenario
+from physics.params import GearPair, Operating, Scenario
 from physics.scope import check_scope
 from physics.tribology.asperity_table import check_scenario
 
@@ -58,6 +59,23 @@ class Bundle:
         return self.manifest.record.tolist()
 
 
+@dataclass(frozen=True)
+class FeatureTable:
+    """A feature table (:func:`read_feature_table`) and what the ``gear.yaml`` and
+    ``operating.yaml`` beside it state: their overrides of the configured pair and operating
+    point, and the keys they state as unknown (a gear key: the configured value stands in;
+    ``torque_Nm``: calibrated as a nuisance, docs/loop.md)."""
+
+    path: Path | None  # None: a data frame given in Python
+    frame: pd.DataFrame
+    stated: dict
+    unknown: tuple[str, ...] = ()
+
+    @property
+    def torque_unknown(self) -> bool:
+        return "torque_Nm" in self.unknown
+
+
 def _fail(path: Path, record: str | None, rule: str) -> ValueError:
     where = f"record {record!r}" if record is not None else "manifest.csv"
     return ValueError(f"bundle {path}: {where}: {rule}")
@@ -70,9 +88,9 @@ def read_bundle(path: str | Path, gear: GearPair | None = None) -> Bundle:
     path = Path(path)
     gear = gear if gear is not None else GearPair()
     if not path.is_dir():
-        raise ValueError(f"bundle {path}: no such folder (see shared/specs/measured-bundle.md)")
+        raise ValueError(f"bundle {path}: no such folder (see docs/own-data.md)")
     man = _read_manifest(path)
-    overrides, unknown = _read_gear(path, gear)
+    overrides, unknown = _read_gear(path, gear, f"bundle {path}")
     z1 = dataclasses.replace(gear, **overrides).z1
     sizes = {rec: _signal_size(path, rec) for rec in man.record}
     total = sum(sizes.values()) * 8
@@ -101,7 +119,7 @@ def _read_manifest(path: Path) -> pd.DataFrame:
     f = path / "manifest.csv"
     if not f.is_file():
         raise ValueError(f"bundle {path}: manifest.csv is missing (see "
-                         "shared/specs/measured-bundle.md)")
+                         "docs/own-data.md)")
     try:
         man = pd.read_csv(f, dtype=str, keep_default_na=False)
     except (pd.errors.EmptyDataError, pd.errors.ParserError, UnicodeDecodeError) as err:
@@ -152,51 +170,69 @@ def _read_manifest(path: Path) -> pd.DataFrame:
     return man
 
 
-def _read_gear(path: Path, gear: GearPair) -> tuple[dict, tuple[str, ...]]:
-    """The overrides of ``gear.yaml``, checked by building the pair they give, and the keys
-    it states as unknown (null or ``unknown``: the configured pair's values stand in; not the
-    signature's :data:`SIGNATURE_GEAR`)."""
-    f = path / "gear.yaml"
+def _read_gear(path: Path, gear: GearPair, where: str) -> tuple[dict, tuple[str, ...]]:
+    """The overrides of ``gear.yaml`` in the folder ``path``, checked by building the pair they
+    give, and the keys it states as unknown (null or ``unknown``: the configured pair's values
+    stand in; not the signature's :data:`SIGNATURE_GEAR`)."""
+    return _read_sidecar(path / "gear.yaml", gear, where, {
+        k: f"the tooth numbers {SIGNATURE_GEAR} set the orders of the signature and cannot be "
+           "unknown; count them, or leave the key out to use the configured pair's"
+        for k in SIGNATURE_GEAR})
+
+
+def _read_operating(path: Path, operating: Operating, where: str) -> tuple[dict, tuple[str, ...]]:
+    """The overrides of ``operating.yaml`` beside a feature table, checked by building the
+    operating point they give, and whether it states the torque unknown (calibrated then:
+    ``torque_factor`` of :data:`physics.loop.model.declared.TORQUE`, around the configured
+    torque); the speed and the bulk temperature must be stated or left out."""
+    return _read_sidecar(path / "operating.yaml", operating, where, {
+        k: "only torque_Nm may be unknown (the loop calibrates it); state this one, or leave "
+           "the key out to use the configured value" for k in ("n1_rpm", "bulk_temperature_K")})
+
+
+def _read_sidecar(f: Path, current, where: str, stated: dict[str, str]
+                  ) -> tuple[dict, tuple[str, ...]]:
+    """The overrides of the YAML file ``f`` of the dataclass ``current``'s keys (none if there
+    is no such file), checked by building the value they give, and the keys it states as
+    unknown (``stated``: the keys that may not be unknown, each with the reason)."""
     if not f.is_file():
         return {}, ()
+    name = f.name
     size = f.stat().st_size
     if size > MAX_YAML_BYTES:
-        raise _fail(path, None, f"gear.yaml holds {size:,} bytes, above the limit of "
-                                f"{MAX_YAML_BYTES:,}; it maps a few gear keys to values")
+        raise ValueError(f"{where}: {name} holds {size:,} bytes, above the limit of "
+                         f"{MAX_YAML_BYTES:,}; it maps a few keys to values")
     try:
         text = f.read_text()
-        _plain_yaml(text)  # raises ValueError
+        _plain_yaml(text, name)  # raises ValueError
         # OmegaConf's YAML reads 4.9e4 as a number (PyYAML's YAML 1.1 reads a string)
         overrides = OmegaConf.to_container(OmegaConf.create(text or "{}"))
     except (yaml.YAMLError, UnicodeDecodeError, OmegaConfBaseException) as err:
         text = " ".join(str(err).split())
-        raise _fail(path, None, f"gear.yaml is not readable YAML ({text})") from None
+        raise ValueError(f"{where}: {name} is not readable YAML ({text})") from None
     except ValueError as err:  # an anchor, alias or tag
-        raise _fail(path, None, str(err)) from None
+        raise ValueError(f"{where}: {err}") from None
+    known = {f.name for f in dataclasses.fields(current)}
     if not isinstance(overrides, dict):
-        raise _fail(path, None, "gear.yaml must map gear keys (conf/physics/gear) to values")
-    known = {f.name for f in dataclasses.fields(GearPair)}
+        raise ValueError(f"{where}: {name} must map keys ({sorted(known)}) to values")
     unknown = sorted(set(overrides) - known)
     if unknown:
-        raise ValueError(f"bundle {path}: gear.yaml: unknown key(s) {unknown}; allowed: "
+        raise ValueError(f"{where}: {name}: unknown key(s) {unknown}; allowed: "
                          f"{sorted(known)}")
     missing = tuple(k for k, v in overrides.items()
                     if v is None or (isinstance(v, str) and v.strip().lower() in UNKNOWN))
     for k in missing:
-        if k in SIGNATURE_GEAR:
-            raise ValueError(f"bundle {path}: gear.yaml: {k} = {overrides[k]!r}: the tooth "
-                             f"numbers {SIGNATURE_GEAR} set the orders of the signature and "
-                             "cannot be unknown; count them, or leave the key out to use the "
-                             "configured pair's")
+        if k in stated:
+            raise ValueError(f"{where}: {name}: {k} = {overrides[k]!r}: {stated[k]}")
         del overrides[k]
     try:
-        dataclasses.replace(gear, **overrides)
+        dataclasses.replace(current, **overrides)
     except ValueError as err:
-        raise ValueError(f"bundle {path}: gear.yaml: {err}") from None
+        raise ValueError(f"{where}: {name}: {err}") from None
     return overrides, missing
 
 
-def _plain_yaml(text: str) -> None:
+def _plain_yaml(text: str, name: str) -> None:
     """Refuse YAML anchors, aliases and tags (an alias bomb expands a few lines into billions
     of nodes; a tag builds objects): scanned token by token, nothing is expanded."""
     for token in yaml.scan(text, Loader=yaml.SafeLoader):
@@ -204,7 +240,7 @@ def _plain_yaml(text: str) -> None:
             kind = {yaml.AnchorToken: "anchors (&)", yaml.AliasToken: "aliases (*)",
                     yaml.TagToken: "tags (!)"}[type(token)]
             line = token.start_mark.line + 1
-            raise ValueError(f"gear.yaml line {line}: YAML {kind} are not accepted; write "
+            raise ValueError(f"{name} line {line}: YAML {kind} are not accepted; write "
                              "each value out")
 
 
@@ -278,10 +314,12 @@ def record_scenario(base: Scenario, row) -> Scenario:
     return dataclasses.replace(base, operating=op, lubricant=lub, tribology=tri)
 
 
-def read_measurements(path: str | Path, base: Scenario) -> tuple[Bundle | pd.DataFrame, Scenario]:
+def read_measurements(path: str | Path, base: Scenario
+                      ) -> tuple[Bundle | FeatureTable, Scenario]:
     """The bundle (a folder) or feature table (a .csv file) at ``path`` and the scenario with
-    the bundle's gear overrides; every record's scenario is checked against the model's scope.
-    Refuses a bad input before any work."""
+    the bundle's gear overrides (a table's: those of the ``gear.yaml`` and ``operating.yaml``
+    beside it); every record's scenario is checked against the model's scope. Refuses a bad
+    input before any work."""
     path = Path(path)
     if path.is_dir():
         bundle = read_bundle(path, base.gear)
@@ -293,9 +331,16 @@ def read_measurements(path: str | Path, base: Scenario) -> tuple[Bundle | pd.Dat
                 raise _fail(path, row.record, str(err)) from None
         return bundle, scn
     if path.is_file() and path.suffix == ".csv":
-        return read_feature_table(path), check_scenario(check_scope(base))
+        where = f"feature table {path}"
+        gear, unknown_gear = _read_gear(path.parent, base.gear, where)
+        op, unknown_op = _read_operating(path.parent, base.operating, where)
+        scn = dataclasses.replace(base, gear=dataclasses.replace(base.gear, **gear),
+                                  operating=dataclasses.replace(base.operating, **op))
+        table = FeatureTable(path, read_feature_table(path), gear | op,
+                             unknown_gear + unknown_op)
+        return table, check_scenario(check_scope(scn))
     raise ValueError(f"data = {str(path)!r} is neither a bundle folder nor a feature-table .csv "
-                     "file; see shared/specs/measured-bundle.md")
+                     "file; see docs/own-data.md")
 
 
 def write_bundle(path: str | Path, manifest: pd.DataFrame, signals: dict[str, np.ndarray],

@@ -2,7 +2,13 @@
 wear run (:mod:`physics.dynamics.evolution`) per operating point, every profile update kept
 (:class:`WearHistory`), read at the records' cycle counts (or, where only a record's wear depth
 is known, at the cycle count of that depth), and the grid of wear states the model-based wear
-estimate reads a record by (:mod:`physics.loop.search.wear_reading`)."""
+estimate reads a record by (:mod:`physics.loop.search.wear_reading`).
+
+A feature table's rows give depths only, from new to worn out: their states are the pair worn by
+the contact its worn flanks make (:func:`table_models`, the machinery of
+:mod:`physics.reproduce.rig`), which follows the flanks to the tooth's tip thickness
+(:func:`check_table_depths`), where the on-path run stops at tens to a few hundred
+micrometres."""
 
 from __future__ import annotations
 
@@ -17,7 +23,12 @@ import pandas as pd
 from physics.dynamics.evolution import simulate_dynamic_wear
 from physics.dynamics.model import PairModel, build_model
 from physics.gear.stiffness import MeshStiffness, mesh_stiffness
+from physics.gear.tooth import involute_angle
 from physics.params import OutOfScope, Scenario
+from physics.reproduce.rig import worn_models as contact_models
+from physics.reproduce.rig import worn_states as contact_states
+from physics.tribology.contact_wear import wear_per_cycle, whole_flank_grid
+from physics.tribology.wear import quasi_static_force
 
 #: the most pinion cycles a run goes to in search of a wear depth (beyond any gear's life)
 MAX_CYCLES = 1e13
@@ -134,27 +145,6 @@ def records_history(scn: Scenario, rows: pd.DataFrame) -> WearHistory | None:
     return h
 
 
-def _towards(scn: Scenario, wear_mm: np.ndarray) -> tuple[WearHistory, float]:
-    """The run of ``scn`` towards the deepest of ``wear_mm`` [mm] (to it, or to where the
-    model leaves its scope) and that depth."""
-    target = float(np.max(wear_mm))
-    return wear_history(scn, lambda _, root: root[-1] >= target), target
-
-
-def wear_reach(scn: Scenario, wear_mm: np.ndarray) -> tuple[float, str | None]:
-    """The deepest pinion root wear [mm] the model follows towards the deepest of ``wear_mm``
-    at ``scn`` and, where it stops short, why (the scope it leaves; else None)."""
-    h, target = _towards(scn, wear_mm)
-    return (math.inf, None) if h.root_mm[-1] >= target else (float(h.root_mm[-1]), h.left_scope)
-
-
-def cycles_for_wear(scn: Scenario, wear_mm: np.ndarray) -> np.ndarray:
-    """Cycle counts at which the model's pinion root wear reaches ``wear_mm``."""
-    h, target = _towards(scn, wear_mm)
-    _reached(h, target, "the most worn state")
-    return h.cycles_at(wear_mm)
-
-
 def records_cycles(h: WearHistory | None, rows: pd.DataFrame) -> np.ndarray:
     """Load cycles of records of one operating point: stated, else those at which the model
     (its run ``h``, :func:`records_history`) reaches their wear, else 0."""
@@ -193,3 +183,53 @@ def worn_models(scn: Scenario, ms: MeshStiffness, cycles: list[float],
         models[c] = build_model(scn, ms, history.s, w1, w2)
         root[c] = float(w1[0]) * 1e3
     return models, root
+
+
+def tip_thickness_mm(scn: Scenario) -> float:
+    """The thinner tooth's thickness at its tip circle along its drive flank's normal [mm]:
+    ``2 r_a psi_a cos(alpha_a)``, ``psi_a`` the involute's angle from the tooth's centre line
+    at the tip (:func:`physics.gear.tooth.involute_angle`) and ``alpha_a`` the pressure angle
+    there (the normal of an involute is tangent to the base circle, at ``alpha_a`` to the tip
+    circle's tangent). A drive flank worn that deep along its normal leaves no tip."""
+    geom = mesh_stiffness(scn.gear, scn.material).geometry
+    g = scn.gear
+    out = []
+    for z, rb, ra in ((g.z1, geom.rb1, geom.ra1), (g.z2, geom.rb2, geom.ra2)):
+        psi, alpha_a = involute_angle(z, math.radians(g.pressure_angle_deg), rb, ra)
+        out.append(2 * ra * float(psi) * math.cos(float(alpha_a)) * 1e3)
+    return min(out)
+
+
+def check_table_depths(scn: Scenario, wear_mm: np.ndarray) -> None:
+    """Refuse, before any work, a feature table whose worn states the contact-driven wear
+    cannot give: a depth [mm] at or beyond the tip thickness (:func:`tip_thickness_mm`), or a
+    wear law out of its scope at the new flanks (its first block, a fraction of a second;
+    :class:`OutOfScope`, naming the depth it can follow: none)."""
+    tip = tip_thickness_mm(scn)
+    deep = wear_mm >= tip
+    if deep.any():
+        raise OutOfScope(f"feature table: wear_mm = {float(wear_mm[deep].max()):g} mm reaches "
+                         f"the {tip:.3g} mm the thinner tooth is thick at its tip (along its "
+                         f"flank's normal): a flank worn that deep has no tip left to mesh; "
+                         f"the loop follows the flanks to below {tip:.3g} mm: leave out the "
+                         "deeper rows, or check that wear_mm is in mm")
+    if wear_mm.max() <= 0:
+        return
+    ms = mesh_stiffness(scn.gear, scn.material)
+    grid = whole_flank_grid(ms)
+    new = np.zeros_like(grid)
+    try:
+        wear_per_cycle(scn, ms, grid, new, new, quasi_static_force(scn, ms.geometry))
+    except OutOfScope as err:
+        raise OutOfScope(f"feature table: the wear law leaves its scope at the new flanks, so "
+                         f"the loop follows no depth at this operating point (0 of "
+                         f"{float(wear_mm.max()):g} mm): {err}; or wear the flanks by the dry "
+                         "law, tribology.regime=dry") from None
+
+
+def table_models(scn: Scenario, wear_mm: np.ndarray) -> list[PairModel]:
+    """The declared models of a feature table's rows: the pair worn from new by the contact its
+    worn flanks make to each row's depth (the deepest point of either active profile), with
+    the scenario's contact in the dynamics (``dynamics.flank_contact``)."""
+    s, states = contact_states(scn, wear_mm)
+    return contact_models(scn, scn.dynamics.flank_contact, s, states)

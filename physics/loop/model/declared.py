@@ -17,9 +17,12 @@ from __future__ import annotations
 import dataclasses
 import math
 
+from physics.dataset.generation import NuisanceRanges
 from physics.dynamics.model import PairModel
 from physics.dynamics.model_form import with_model_form
-from physics.params import Scenario
+from physics.gear.accuracy import profile_form_tolerance_um, runout_tolerance_um
+from physics.gear.geometry import mesh_geometry
+from physics.params import GearPair, Scenario
 
 #: declared nuisance parameters of the scenario: name, bounds, log-scaled
 NUISANCE = {"damping_ratio": (0.01, 0.3, True), "eccentricity1_um": (0.2, 60.0, True),
@@ -69,6 +72,60 @@ RUNOUT_MODULATION = ("mesh_modulation", "modulation_phase_rad")
 #: several basins): the dynamic ones and the support mode's (a basin per mesh harmonic it can
 #: sit on)
 EXPLORED = (*DYNAMIC_NUISANCE, *SUPPORT, *TORQUE)
+
+
+#: the ISO 1328 accuracy grades of industrial spur gearboxes, from ground to hobbed unground
+#: teeth: the span the datasets draw the pinion's run-out and profile error from
+#: (:class:`physics.dataset.generation.NuisanceRanges`)
+ACCURACY_GRADES = (4, 9)
+
+
+def physical_nuisance(scn: Scenario) -> dict[str, tuple[float, float, bool]]:
+    """The nuisance's search ranges (name: low, high, log-scaled) for the scenario's pair,
+    each from its source:
+
+    - ``damping_ratio``: the datasets' range (:class:`~physics.dataset.generation.
+      NuisanceRanges`: 0.03-0.17 of critical, the span Kasuba & Evans, ASME J. Mech. Des. 103
+      (1981) 398, report for spur meshes);
+    - ``eccentricity1_um``: half the pinion's radial run-out tolerance ``F_r`` (ISO 1328-2:1997,
+      annex B) and ``profile_error_um``: half its profile form tolerance ``f_f_alpha`` (ISO
+      1328-1:1995), each of grades :data:`ACCURACY_GRADES` for the pinion's module and
+      reference diameter (:mod:`physics.gear.accuracy`), as the datasets draw them;
+    - ``housing_mass_kg``: the datasets' 10-40 kg of small single-stage housings, for the
+      thesis pair's centre distance, times the cube of the pair's centre distance over it:
+      geometrically similar casings of one material weigh as their volume, the cube of their
+      size.
+    """
+    ranges = NuisanceRanges()
+    g, thesis = scn.gear, GearPair()
+    d1 = g.module_mm * g.z1
+    runout = [0.5 * runout_tolerance_um(q, g.module_mm, d1) for q in ACCURACY_GRADES]
+    form = [0.5 * profile_form_tolerance_um(q, g.module_mm, d1) for q in ACCURACY_GRADES]
+    size = (mesh_geometry(g).center_distance / mesh_geometry(thesis).center_distance) ** 3
+    mass = [m * size for m in ranges.housing_mass_kg]
+    return {"damping_ratio": (*ranges.damping_ratio, True), "eccentricity1_um": (*runout, True),
+            "profile_error_um": (*form, True), "housing_mass_kg": (*mass, True)}
+
+
+def at_bounds(values: dict, ranges: dict, share: float = 0.01) -> dict[str, tuple[str, float]]:
+    """The parameters of ``values`` within ``share`` of their (log) range of a bound of
+    ``ranges`` (name: low, high, log-scaled): which bound (``lower``, ``upper``) and its value.
+    A fit that ends there wanted to go further: the range, not the data, set its value."""
+    out = {}
+    for n, (lo, hi, lg) in ranges.items():
+        if n in values:
+            u = to_unit(values[n], lo, hi, lg)
+            if u <= share or u >= 1 - share:
+                out[n] = ("lower", lo) if u <= share else ("upper", hi)
+    return out
+
+
+def with_torque(m: PairModel, nuisance: dict) -> PairModel:
+    """``m`` with its static mesh force times an unknown torque's calibrated ``torque_factor``
+    (:data:`TORQUE`; ``m`` itself where ``nuisance`` has none); its worn teeth stay those of the
+    configured torque."""
+    f = nuisance.get("torque_factor")
+    return m if f is None else dataclasses.replace(m, static_force=m.static_force * f)
 
 
 def declared_nuisance(scn: Scenario) -> dict[str, float]:

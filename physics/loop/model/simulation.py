@@ -15,7 +15,13 @@ from physics.dynamics.model import PairModel, simulate
 from physics.dynamics.model_form import with_modulation
 from physics.loop.effects import Effect
 from physics.loop.measured.records import Records
-from physics.loop.model.declared import DYNAMIC_NUISANCE, TORQUE, modes_of, with_nuisance
+from physics.loop.model.declared import (
+    DYNAMIC_NUISANCE,
+    TORQUE,
+    modes_of,
+    with_nuisance,
+    with_torque,
+)
 from physics.signals.measurement import declared_chain, sensed
 
 #: simulations kept by :func:`responses` (candidates fitted on parallel threads share them)
@@ -51,10 +57,9 @@ def responses(rec: Records, idx: np.ndarray, nuisance: dict, eff: Effect | None,
     ms = [with_nuisance(m, nuisance, base_ratio)
           for m in (models if models is not None else [rec.models[i] for i in idx])]
     unknown = rec.torque_unknown
-    if unknown is not None and "torque_factor" in nuisance:  # before an effect: a ripple's
-        f = nuisance["torque_factor"]                         # share is of this torque
-        ms = [dataclasses.replace(m, static_force=m.static_force * f) if unknown[i] else m
-              for m, i in zip(ms, idx, strict=True)]
+    if unknown is not None:  # before an effect: a ripple's share is of this torque
+        ms = [with_torque(m, nuisance) if unknown[i] else m for m, i in zip(ms, idx,
+                                                                            strict=True)]
     if dynamic:
         ms = [eff.model(m, values) for m in ms]
     ms = [with_modulation(m, nuisance) for m in ms]
