@@ -23,8 +23,8 @@ import pandas as pd
 import torch
 
 from physics.estimators.empirical_inverse import EmpiricalInverse
-from surrogate.data import BASELINE_INPUTS, input_columns
 from surrogate.inference import ScaledEnsemble, Surrogate, torch_predict
+from surrogate.inputs import BASELINE_INPUTS, input_columns
 from surrogate.model import WearRegressor
 from surrogate.schema import FeatureSchema, vector_columns
 

@@ -58,13 +58,15 @@ and maximum relative error [%], the conformal interval's coverage (surrogate), o
 rate, the share of rows missed by the interval and not flagged (``missed_not_flagged``),
 the median reading of the unworn rows [mm] and the mean relative error of the readings
 referenced to each gearbox's unworn record [%] (:func:`referenced`), batch throughput [rows/s]
-and single-row latency [us] on the CPU. Writes ``benchmark.csv``, ``parity.png`` and the
-trained models into ``--out`` (default ``logs/benchmark/<time>``), and ``labelled_counts.csv``:
-how many labelled gearboxes of the independent simulator a network trained on them needs to
-beat the estimator refitted on the same (:func:`labelled_counts`); and ``one_rig.csv``: a
-user's table of one rig of the independent simulator, two speeds and 32 wear stages, the
-acceleration RMS and one other feature, trained at one speed and tested at the other, with
-stages left out, and cross-validated leaving each stage out in turn, beside the linear model
+and single-row latency [us] on the CPU. Writes ``benchmark.csv``, its figures (``summary.png``:
+every model's, the estimator's and the null model's mean relative error on each test set;
+``parity/<test set>.png``: each test set's readings against the true wear, :func:`write_figures`)
+and the trained models into ``--out`` (default ``logs/benchmark/<time>``), and
+``labelled_counts.csv``: how many labelled gearboxes of the independent simulator a network trained
+on them needs to beat the estimator refitted on the same (:func:`labelled_counts`); and
+``one_rig.csv``: a user's table of one rig of the independent simulator, two speeds and 32 wear
+stages, the acceleration RMS and one other feature, trained at one speed and tested at the other,
+with stages left out, and cross-validated leaving each stage out in turn, beside the linear model
 and the estimator (:func:`one_rig`; its table ``one_rig_table.csv``); and ``real_rig.csv``
 (``real_rig_stages.csv``): the public rig's measured table left out one stage at a time, every
 model's figures side by side (:func:`real_rig`; ``--real-rig-only`` runs this part alone).
@@ -92,17 +94,19 @@ from hydra.utils import instantiate
 from physics.dataset.generation import NuisanceRanges
 from physics.dynamics.model_form import FACTORS
 from physics.estimators.empirical_inverse import EmpiricalInverse, wear_errors
-from physics.files import atomic_write, pyplot
+from physics.files import atomic_write, existing_file, pyplot
 from physics.params import Dynamics
+from physics.reference import RIG_RECORDS
 from physics.signals.features import features
 from physics.signals.order_analysis import mesh_harmonics
 from physics.testbeds import IndependentPair, simulate_record, wear_depths
 from surrogate import settings
 from surrogate.baselines import fit_estimator, typical_wear
 from surrogate.data import load_dataset
+from surrogate.figures import error_summary, parity_of_set
 from surrogate.inference import Surrogate
 from surrogate.schema import FeatureSchema
-from surrogate.training import parity_figure, prepare, train
+from surrogate.training import prepare, train
 
 log = logging.getLogger(__name__)
 
@@ -488,10 +492,8 @@ def one_rig(root: Path, out: Path, extra: list[str], seed: int = 0) -> list[dict
     return rows
 
 
-#: the public rig table (../shared/real/institute_rig, README there) beside the repository
-REAL_RIG = Path(__file__).resolve().parents[1].parent / "shared" / "real" / "institute_rig" \
-    / "rig_15rps_records.csv"
-#: its run as a user types it, every stage left out in turn (train.py overrides)
+#: the public rig's run as a user types it (its records: :data:`physics.reference.RIG_RECORDS`),
+#: every stage left out in turn (train.py overrides)
 REAL_RIG_RUN = ["data.inputs=[acc_rms_g,fm_energy]", "data.target=wear_mm",
                 "data.units={acc_rms_g: g, fm_energy: '1', wear_mm: mm}", "data.group=stage",
                 "data.group_by=stage", "data.cv=logo", "data.val_replicates=4"]
@@ -499,20 +501,15 @@ REAL_RIG_RUN = ["data.inputs=[acc_rms_g,fm_energy]", "data.target=wear_mm",
 REAL_RIG_MODELS = ("kept", "network", "linear", "monotone", "median")
 
 
-def real_rig(root: Path, out: Path, extra: list[str], table: Path = REAL_RIG
-             ) -> pd.DataFrame | None:
-    """The real rig's table (:data:`REAL_RIG`) left out one stage at a time as a user runs it
+def real_rig(root: Path, out: Path, extra: list[str], table: Path = RIG_RECORDS
+             ) -> pd.DataFrame:
+    """The real rig's table (by default the packaged one,
+    :data:`physics.reference.RIG_RECORDS`) left out one stage at a time as a user runs it
     (:data:`REAL_RIG_RUN`; each fold chooses its model by cross-validation over its own
     training stages): one row per model of its mean relative error over the worn stages'
     folds and its 95 % interval's coverage over every fold's rows (the kept model's own
     interval; the linear and monotone models' CV+ intervals), and how many folds kept each
-    kind. Writes ``real_rig.csv`` and ``real_rig_stages.csv`` (each stage's errors). None,
-    with a log line, where the table is absent (an installed copy has no ../shared)."""
-    table = Path(table)
-    if not table.is_file():
-        log.warning("the real rig's table %s is absent: its leave-one-stage-out part is "
-                    "skipped (pass --real-rig PATH)", table)
-        return None
+    kind. Writes ``real_rig.csv`` and ``real_rig_stages.csv`` (each stage's errors)."""
     folder = out / "models" / "real_rig"
     start = time.perf_counter()
     train(train_config(root, folder, f"data.table={table}", *REAL_RIG_RUN, *extra))
@@ -542,7 +539,24 @@ def real_rig(root: Path, out: Path, extra: list[str], table: Path = REAL_RIG
     return summary
 
 
-def run(out: Path, root: Path, extra: list[str], seeds: int = 5, real: Path = REAL_RIG
+def write_figures(out: Path, table: pd.DataFrame, plots: dict[tuple[str, str], dict]) -> None:
+    """The benchmark's figures into ``out``: ``summary.png``, every model's, estimator's and
+    null model's mean relative error on each test set (:func:`error_summary`, from ``table``),
+    and ``parity/<test set>.png``, each test set's readings against its true wear
+    (:func:`parity_of_set`; ``plots``: (model, test set) -> :func:`evaluate`'s plot data)."""
+    plt = pyplot()
+
+    def save(name: str, fig) -> None:
+        atomic_write(out / name, lambda p: fig.savefig(p, dpi=110, format="png"))
+        plt.close(fig)
+
+    save("summary.png", error_summary(table))
+    for test in dict.fromkeys(s for _, s in plots):
+        save(f"parity/{test}.png",
+             parity_of_set(test, {m: d for (m, s), d in plots.items() if s == test}))
+
+
+def run(out: Path, root: Path, extra: list[str], seeds: int = 5, real: Path = RIG_RECORDS
         ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Train the models of :data:`MODELS` (those of :data:`SEEDED` once per training seed: the
     seed draws their split and start, and one seed's figure says little) and, for
@@ -550,7 +564,8 @@ def run(out: Path, root: Path, extra: list[str], seeds: int = 5, real: Path = RE
     fleet's labelled gearboxes;
     score them, the estimator and the null model (refitted on the fleet beside a network
     trained on it) on the test sets (column ``seed``); and :func:`labelled_counts`. Writes
-    ``benchmark.csv``, ``labelled_counts.csv`` and ``parity.png``; returns the two tables.
+    ``benchmark.csv``, ``labelled_counts.csv`` and the figures (:func:`write_figures`);
+    returns the two tables.
     ``extra``: train.py overrides for every network."""
     shifted = load_dataset(root / "data" / "dataset_shifted.parquet",
                            {"seed": 1, "replicates": 8, "nuisance": shifted_ranges()})
@@ -616,20 +631,7 @@ def run(out: Path, root: Path, extra: list[str], seeds: int = 5, real: Path = RE
                     plots[(label, "independent_fleet_heldout")] = plot
     table = pd.DataFrame(rows)
     atomic_write(out / "benchmark.csv", lambda p: table.to_csv(p, index=False))
-    plt = pyplot()
-    rows_of_plots = -(-len(plots) // 6)
-    fig, axes = plt.subplots(rows_of_plots, 6, figsize=(26, 4.3 * rows_of_plots))
-    for ax, key in zip(axes.flat, plots, strict=False):
-        d = plots[key]
-        parity_figure(d["true"], d["estimator"], None, "/".join(key), d["target"], ax,
-                      name="empirical inverse")
-        parity_figure(d["true"], d["surrogate"], None, "/".join(key), d["target"], ax)
-        ax.legend(fontsize=7)
-    for ax in axes.flat[len(plots):]:
-        ax.set_visible(False)
-    fig.tight_layout()
-    atomic_write(out / "parity.png", lambda p: fig.savefig(p, dpi=110, format="png"))
-    plt.close(fig)
+    write_figures(out, table, plots)
     counts = labelled_counts(root, out, fleet, extra)
     atomic_write(out / "labelled_counts.csv", lambda p: counts.to_csv(p, index=False))
     rig = pd.DataFrame(one_rig(root, out, extra))
@@ -767,11 +769,10 @@ def main(argv: list[str] | None = None) -> None:
                         help="a train.py override for every network trained (repeatable; "
                              "e.g. model.interval=0.975; not case, seed or data.*, which each "
                              "study sets), checked before any work")
-    parser.add_argument("--real-rig", type=Path, default=REAL_RIG, metavar="PATH",
+    parser.add_argument("--real-rig", type=Path, default=RIG_RECORDS, metavar="PATH",
                         help="the real rig's record table left out one stage at a time "
-                             "(real_rig.csv; default ../shared/real/institute_rig/"
-                             "rig_15rps_records.csv beside the repository, skipped with a "
-                             "message where absent)")
+                             "(real_rig.csv; default the packaged copy, "
+                             "physics/reference/institute_rig/rig_15rps_records.csv)")
     parser.add_argument("--real-rig-only", action="store_true",
                         help="instead: only the real rig's part (about 15 min on 2 cores)")
     parser.add_argument("--one-rig-only", action="store_true",
@@ -798,15 +799,18 @@ def main(argv: list[str] | None = None) -> None:
                  if args.max_epochs else {}),
              **{f"--override {o}": o for o in args.override}}
     extra = list(given.values())
+    try:
+        existing_file(args.real_rig, "--real-rig", "give the rig's record table (a .csv)")
+    except ValueError as err:
+        parser.error(str(err))
     refused = refusal(extra)
     if refused:
         parser.error(f"{' '.join(given)}: {refused}")
     if args.real_rig_only:
         summary = real_rig(Path.cwd(), out.resolve(), extra, args.real_rig)
-        if summary is not None:
-            copy_figures(out.resolve(), args.figures)
-            print(summary.to_string(index=False))
-            print(f"\n-> {out / 'real_rig.csv'}, {out / 'real_rig_stages.csv'}")
+        copy_figures(out.resolve(), args.figures)
+        print(summary.to_string(index=False))
+        print(f"\n-> {out / 'real_rig.csv'}, {out / 'real_rig_stages.csv'}")
         return
     if args.one_rig_only:
         rig = pd.DataFrame(one_rig(Path.cwd(), out.resolve(), extra))
@@ -839,7 +843,8 @@ def main(argv: list[str] | None = None) -> None:
         print("\none rig of the independent simulator (a user's table, acc_rms and "
               "dte_peak_to_peak):")
         print(rig.to_string(index=False))
-    print(f"\n-> {out / 'benchmark.csv'}, {out / 'labelled_counts.csv'}, {out / 'parity.png'}")
+    print(f"\n-> {out / 'benchmark.csv'}, {out / 'labelled_counts.csv'}, {out / 'summary.png'}, "
+          f"{out / 'parity'}/")
 
 
 if __name__ == "__main__":

@@ -1,13 +1,10 @@
-"""Lightning data module over the physics dataset (:mod:`physics.dataset`).
+"""Lightning data module over the physics dataset (:mod:`physics.dataset`) or a user's table.
 
-Rows are split by *trajectory* (one replicate of one case, all its wear states), never by rows
-of one trajectory: neighbouring wear states are nearly the same sample. Per case, a seeded
-permutation of the replicates gives ``test_replicates`` for the test set, ``val_replicates`` for
-validation (by default :func:`validation_count`) and the rest for training; ``holdout_case``
-instead puts a whole case in the test set (leave-one-case-out). Of 16 or more validation
-trajectories, half choose the epoch kept and the other half calibrate the interval
-(:func:`calibration_split`). The input scaling is fitted on the training rows only and travels
-with the model in its :class:`~surrogate.schema.FeatureSchema`.
+The physics dataset is read from its file, built with the dataset API where it is missing
+(:func:`load_dataset`); a user's table is read and checked by :mod:`surrogate.tables`. Rows
+are split by trajectory (:mod:`surrogate.splits`); the network's inputs are those of
+:mod:`surrogate.inputs` unless named. The input scaling is fitted on the training rows only
+and travels with the model in its :class:`~surrogate.schema.FeatureSchema`.
 
 A dataset built here simulates :func:`replicates_per_case` gearboxes per trained case: what a
 network learns about gearboxes it was not trained on is set by how many it was trained on
@@ -37,62 +34,26 @@ from physics.dataset.generation import (
     spec_from_config,
 )
 from physics.dataset.generation import units as dataset_units
-from physics.files import existing_file
 from physics.params import Scenario, operating_cases
-from physics.signals.order_analysis import LINE_ORDERS, MESH_ORDERS
+from surrogate.inputs import CONDITIONS, SENSORS, input_columns
 from surrogate.schema import (
     FeatureSchema,
     first_rows,
     network_frame,
-    repeated_header,
     source_columns,
     vector_columns,
     vector_inputs,
-    vector_parts,
 )
+from surrogate.splits import (
+    calibration_split,
+    check_split,
+    match_groups,
+    split_table,
+    split_trajectories,
+)
+from surrogate.tables import read_user_table, table_units, user_rows, with_vector_units
 
 log = logging.getLogger(__name__)
-#: the sensors a user may have: DTE (``dte_*`` features) and housing acceleration (``acc_*``)
-SENSORS = ("dte", "acc")
-#: the features of each sensor that a gearbox's unknown offsets and scales leave alone. A DTE
-#: record's mean is the half backlash plus the static deflection (tens of um, set by tolerances
-#: the user does not know; an encoder pair measures the DTE only up to a constant), so of the
-#: DTE the mean-free peak-to-peak value, the kurtosis and the levels of mesh harmonics 2-6
-#: relative to the first (ratios of the record's own lines, which wear moves by several dB:
-#: :func:`physics.signals.order_analysis.mesh_harmonic_levels`) are used; the housing
-#: acceleration's level scales with the housing's effective mass and the transfer path, so of it
-#: only the dimensionless shape features are used (Table 13 definitions in
-#: :mod:`physics.signals.features`; docs/surrogate.md measures the gain on gearboxes away from
-#: the training ones, and the harmonics' phases, dataset columns too, as an alternative)
-INVARIANT = {"dte": ("peak_to_peak", "kurtosis", *(f"mesh{k}_db" for k in MESH_ORDERS)),
-             "acc": ("kurtosis", "crest", "margin", "impulse", "shape")}
-#: the absolute reading's default inputs (``data.baseline=false``): the invariant features of
-#: both sensors
-DEFAULT_INPUTS = [f"{q}_{f}" for q in SENSORS for f in INVARIANT[q]]
-CONDITIONS = ["n1_rpm", "torque_Nm"]
-
-
-#: the baseline reading's default inputs: the DTE's mesh lines 1-6, each a complex amplitude
-#: against a once-per-revolution mark (dataset columns ``dte_line<k>_re``, ``_im``), read as
-#: their vector change since the baseline record (docs/surrogate.md, Method, Baseline mode)
-BASELINE_INPUTS = [f"dte_line{k}" for k in LINE_ORDERS]
-
-
-def input_columns(sensors: list[str], operating_point: bool, baseline: bool = False
-                  ) -> list[str]:
-    """The network's default inputs, with or without the operating point: read against the
-    baseline record, the DTE's mesh lines (:data:`BASELINE_INPUTS`); read absolutely, the
-    :data:`INVARIANT` features of the sensors a user has."""
-    unknown = sorted(set(sensors) - set(SENSORS))
-    if unknown or not sensors or len(set(sensors)) != len(sensors):
-        raise ValueError(f"data.sensors = {list(sensors)} must name one or both of {SENSORS}")
-    if baseline and "dte" not in sensors:
-        raise ValueError(f"data.sensors = {list(sensors)}: the reading against the baseline "
-                         "record takes the DTE's mesh lines; without a DTE read absolutely "
-                         "(data.baseline=false) or name the inputs (data.inputs=[...])")
-    cols = (BASELINE_INPUTS if baseline else
-            [f"{q}_{f}" for q in SENSORS if q in sensors for f in INVARIANT[q]])
-    return cols + (CONDITIONS if operating_point else [])
 
 
 def cases_of(case: str | int) -> list[int]:
@@ -110,12 +71,6 @@ def cases_of(case: str | int) -> list[int]:
 #: shifted gearboxes scatters over training seeds with fewer (docs/surrogate.md, Alternatives
 #: considered)
 MIN_REPLICATES = 128
-#: the fewest validation trajectories per case: they choose the epoch and calibrate the
-#: interval
-MIN_VALIDATION = 8
-#: validation trajectories (all cases together) from which on half of each case's calibrate the
-#: interval apart from those that choose the epoch (:func:`calibration_split`)
-MIN_APART = 2 * MIN_VALIDATION
 #: chunks of a dataset built here (fewer where it has fewer trajectories): the build's
 #: processes take chunks as they finish, so many small ones keep both cores busy to the end
 #: (with the dataset API's 5, one of 2 processes idles through the last fifth of a build)
@@ -126,16 +81,6 @@ def replicates_per_case(gearboxes: int, cases: int) -> int:
     """Gearboxes per case for a dataset of ``gearboxes`` shared by ``cases`` operating cases,
     at least :data:`MIN_REPLICATES` (so ``case=all`` has 128 per case)."""
     return max(MIN_REPLICATES, math.ceil(gearboxes / cases))
-
-
-def validation_count(trajectories: int) -> int:
-    """Validation trajectories of a case with ``trajectories``: a sixth, at least
-    :data:`MIN_VALIDATION`. The conformal interval's quantile is read from half of them
-    (:func:`calibration_split`): the fewer, the more its coverage scatters over seeds, and
-    below 19 calibrating gearboxes no quantile reaches the 95 % level (the largest score is
-    taken; :func:`surrogate.conformal.attainable`). A sixth of the main job's 256 gives 43: 21
-    calibrate."""
-    return max(MIN_VALIDATION, round(trajectories / 6))
 
 
 def stale_dataset(path: Path, job: DatasetJob) -> str | None:
@@ -183,408 +128,6 @@ def load_dataset(path: str | Path, spec: dict | None = None, jobs: int = 2) -> p
                     "training on it as it is: delete it (or name another data.dataset) to "
                     "build the one this run describes", path, diff)
     return pd.read_parquet(path)
-
-
-#: the range (low, high) each unit allows a user's column: a value outside is a unit error or
-#: a broken reading. DTE features: 1 mm of transmission error is far beyond any running spur
-#: pair (a worn one shows tens of um); housing acceleration: 1e5 m/s^2 (10^4 g); wear depth: a
-#: tooth of module 2 is 4.5 mm high, so 10 mm is no wear depth; dimensionless shape features
-#: (kurtosis, crest, ...) of a finite record stay far below 1e6
-PLAUSIBLE = {"m": (0.0, 1e-3), "m/s^2": (0.0, 1e5), "1": (-1e6, 1e6), "mm": (0.0, 10.0),
-             "r/min": (0.0, 1e5), "N m": (-1e6, 1e6), "Pa s": (0.0, 1e3), "um": (0.0, 1e4),
-             "kg": (0.0, 1e5), "Hz": (0.0, 1e6), "dB": (-300.0, 300.0), "g": (0.0, 1e4),
-             "m/s": (0.0, 1e3), "rev/s": (0.0, 2e3), "s": (0.0, 1e10), "h": (0.0, 1e7)}
-#: other spellings of the units of :data:`PLAUSIBLE` (``^`` cannot stand unquoted in a Hydra
-#: override: ``data.units={fme15: m/s2}``)
-UNIT_ALIASES = {"m/s2": "m/s^2", "m s^-2": "m/s^2", "m/s**2": "m/s^2", "rpm": "r/min",
-                "1/min": "r/min", "Nm": "N m", "N*m": "N m", "Hz_rev": "rev/s", "rps": "rev/s",
-                "-": "1", "": "1", "µm": "um", "μm": "um"}
-#: the units a wear depth (the target) may be given in: it is not negative and does not fall
-LENGTH_UNITS = ("m", "mm", "um")
-
-
-def normalise_unit(unit) -> str:
-    """A user's unit as the checks know it (:data:`UNIT_ALIASES`); others are kept as given."""
-    text = str(unit).strip()
-    return UNIT_ALIASES.get(text, text)
-
-
-#: per-group medians of one dimensional feature further apart than this: mixed units
-MIXED_UNITS_RATIO = 100.0
-#: the columns of a user table that order a trajectory's rows in time (after data.columns)
-ORDER_COLUMNS = ("cycles", "time_s", "time_h", "time")
-
-
-def _plain(value):
-    """A numpy scalar as the Python value it holds (messages show ``3``, not ``np.int64(3)``)."""
-    return value.item() if isinstance(value, np.generic) else value
-
-
-def _shown(value) -> str:
-    """A cell as a message shows it: numbers plainly, text quoted."""
-    try:
-        return f"{float(value):.6g}"
-    except (TypeError, ValueError):
-        return repr(value)
-
-
-def check_user_table(df: pd.DataFrame, path: Path | str, needed: list[str], group: str,
-                     target: str | None = None, units: dict[str, str] | None = None,
-                     line_parts: tuple[str, ...] = ()) -> None:
-    """A user's table checked before any training, one refusal per rule naming the column,
-    the row (1-based, as the file's data rows) or the group, and the fix:
-
-    - every group key present (no empty or NaN ``group`` value);
-    - every needed value a finite number;
-    - every value within the range its unit allows (:data:`PLAUSIBLE`, by ``units``: the
-      dataset's units of our column names and the user's of his own, :func:`table_units`): a
-      DTE in m of 1e-2 is a unit error; a unit the table does not know is checked for finite
-      values and one unit per column only;
-    - one unit per column: a dimensional feature whose per-group median differs more than
-      :data:`MIXED_UNITS_RATIO` times between two groups mixes units;
-    - the ``line_parts`` (the real and imaginary parts of complex-line inputs,
-      :func:`~surrogate.schema.vector_inputs`) take either sign within their unit's range, and
-      their per-group medians, set by each gearbox's phase against its mark, are not compared;
-    - wear (``target``, in a unit of :data:`LENGTH_UNITS`) not negative and, where an
-      :data:`ORDER_COLUMNS` column is given (with a value in every row; a column left wholly
-      empty counts as not given), not falling within a group in its order.
-    """
-    keys = df[group]
-    empty = keys.isna() | (keys.astype(str).str.strip() == "")
-    if empty.any():
-        r = int(np.argmax(empty.to_numpy()))
-        raise ValueError(f"{path}: row {r + 1} has no value in the group column {group!r} "
-                         f"({keys.iloc[r]!r}); every row needs its trajectory (gearbox, run): "
-                         "fill it in or drop the row")
-    values = df[needed].apply(pd.to_numeric, errors="coerce").to_numpy(float)
-    bad = ~np.isfinite(values)
-    if bad.any():
-        r, c = np.argwhere(bad)[0]
-        raise ValueError(f"{path}: row {r + 1}, column {needed[c]!r} = "
-                         f"{_shown(df[needed[c]].iloc[r])} is not a finite number; repair or "
-                         "drop the row")
-    unit_of = {**dataset_units(), **(units or {})}
-    for c, name in enumerate(needed):
-        unit = unit_of.get(name)
-        if name == target and unit in LENGTH_UNITS and (values[:, c] < 0).any():
-            r = int(np.argmax(values[:, c] < 0))
-            raise ValueError(f"{path}: row {r + 1}, column {name!r} = {values[r, c]:.6g} is "
-                             f"negative; wear is a depth (>= 0, in {unit}): repair the reading")
-        if unit not in PLAUSIBLE:
-            continue
-        lo, hi = PLAUSIBLE[unit]
-        if name in line_parts:
-            lo = -hi
-        out = (values[:, c] < lo) | (values[:, c] > hi)
-        if out.any():
-            r = int(np.argmax(out))
-            fix = ("it is dimensionless: repair the reading" if unit == "1" else
-                   f"convert the column to {unit} (data.columns maps names, not units) or "
-                   "state its unit (data.units)")
-            raise ValueError(f"{path}: row {r + 1}, column {name!r} = {values[r, c]:.6g} lies "
-                             f"outside [{lo:g}, {hi:g}], what its unit {unit} allows; {fix}")
-    codes, names = pd.factorize(keys, sort=True)
-    for c, name in enumerate(needed):
-        if (name == target or name in CONDITIONS or unit_of.get(name) in (None, "1")
-                or name in line_parts):
-            continue
-        med = pd.Series(np.abs(values[:, c])).groupby(codes).median()
-        med = med[med > 0]
-        if len(med) > 1 and med.max() > MIXED_UNITS_RATIO * med.min():
-            hi_g, lo_g = (_plain(names[i]) for i in (med.idxmax(), med.idxmin()))
-            raise ValueError(f"{path}: column {name!r} has a median of {med.max():.3g} in group "
-                             f"{hi_g!r} but {med.min():.3g} in group {lo_g!r}, more than "
-                             f"{MIXED_UNITS_RATIO:g} times apart: mixed units; give every "
-                             f"group in {unit_of[name]}")
-    if target is None or target not in needed or unit_of.get(target) not in LENGTH_UNITS:
-        return  # the order rule is wear's
-    wear = values[:, needed.index(target)]
-    # an order column without a single value is not given (the bundle spec lets cycles be
-    # unknown); one with some values must have them all
-    order = next((c for c in ORDER_COLUMNS if c in df.columns
-                  and pd.to_numeric(df[c], errors="coerce").notna().any()), None)
-    if order is None:
-        return
-    t = pd.to_numeric(df[order], errors="coerce").to_numpy(float)
-    if not np.isfinite(t).all():
-        r = int(np.argmax(~np.isfinite(t)))
-        raise ValueError(f"{path}: row {r + 1}, column {order!r} = {_shown(df[order].iloc[r])} "
-                         "is not a finite number; repair or drop the row")
-    frame = pd.DataFrame({"g": codes, "t": t, "w": wear, "row": np.arange(len(df))})
-    frame = frame.sort_values(["g", "t"], kind="stable")
-    same = frame.g.to_numpy()[1:] == frame.g.to_numpy()[:-1]
-    falls = same & (np.diff(frame.w.to_numpy()) < 0)
-    if falls.any():
-        i = int(np.argmax(falls))
-        a, b = frame.iloc[i], frame.iloc[i + 1]
-        raise ValueError(f"{path}: group {_plain(names[int(b.g)])!r}: {target} falls from "
-                         f"{a.w:.6g} "
-                         f"(row {int(a.row) + 1}, {order} {a.t:g}) to {b.w:.6g} (row "
-                         f"{int(b.row) + 1}, {order} {b.t:g}); wear does not heal: repair the "
-                         f"readings or the {order} column")
-
-
-def with_vector_units(units: dict[str, str], vectors) -> dict[str, str]:
-    """``units`` with each complex-line input's unit, its parts' (one unit for both)."""
-    out = dict(units)
-    for v in vectors:
-        given = {units[c] for c in vector_parts(v)}
-        if len(given) != 1:
-            raise ValueError(f"the parts {vector_parts(v)} of the line input {v} have units "
-                             f"{sorted(given)}; give both parts in one unit")
-        out[v] = given.pop()
-    return out
-
-
-def read_user_table(path: str | Path, columns: dict[str, str]) -> pd.DataFrame:
-    """A user's table as read from ``path`` (CSV or parquet), its columns renamed by
-    ``columns`` (the table's name -> ours)."""
-    path = existing_file(path, "data.table", "give your .csv or .parquet table")
-    if path.suffix not in (".csv", ".parquet"):
-        raise ValueError(f"data.table = {str(path)!r} must be an existing .csv or .parquet file")
-    twice = repeated_header(path)
-    if twice:
-        raise ValueError(f"data.table = {path} has column(s) {twice} more than once; keep one "
-                         "of each")
-    try:
-        df = pd.read_parquet(path) if path.suffix == ".parquet" else pd.read_csv(path)
-    except (pd.errors.EmptyDataError, pd.errors.ParserError, UnicodeDecodeError,
-            OSError) as err:
-        raise ValueError(f"data.table = {path} is not a readable table ({err})") from None
-    unknown = sorted(set(columns) - set(df.columns))
-    if unknown:
-        raise ValueError(f"data.columns names {unknown}, which {path} does not have")
-    df = df.rename(columns=columns)
-    twice = sorted(set(df.columns[df.columns.duplicated()]))
-    if twice:
-        raise ValueError(f"{path} has column(s) {twice} more than once (after data.columns); "
-                         "keep one of each")
-    return df
-
-
-def sidecar_path(path: str | Path) -> Path:
-    """The units sidecar of a user's table: ``mine.units.yaml`` beside ``mine.csv``."""
-    path = Path(path)
-    return path.with_name(f"{path.stem}.units.yaml")
-
-
-def table_units(path: str | Path, columns: dict[str, str], given: dict | None,
-                needed: list[str]) -> dict[str, str]:
-    """The units of a user's table: the dataset's for our column names, then those of its
-    sidecar (:func:`sidecar_path`, ``column: unit`` per line), then ``given``
-    (``data.units``), each later one winning; names as the table's or as mapped by
-    ``columns``. Raises naming every ``needed`` column without a unit."""
-    own: dict[str, str] = {}
-    side = sidecar_path(path)
-    if side.is_file():
-        import yaml
-
-        try:
-            read = yaml.safe_load(side.read_text())
-        except yaml.YAMLError as err:
-            raise ValueError(f"{side} is not readable YAML ({str(err).splitlines()[0]})") from None
-        if read is not None and not (isinstance(read, dict) and all(
-                isinstance(k, str) and isinstance(v, str | int | float) for k, v in read.items())):
-            raise ValueError(f"{side} must map column names to units, one per line "
-                             "(fme15: m/s^2); it holds something else")
-        own.update(read or {})
-    own.update({str(k): v for k, v in dict(given or {}).items()})
-    bad = [k for k, v in own.items() if not isinstance(v, str | int | float) or isinstance(v, bool)]
-    if bad:
-        raise ValueError(f"data.units gives {bad[0]!r} no unit ({own[bad[0]]!r}); give a unit "
-                         "per column: data.units={fme15: m/s2}")
-    own = {columns.get(k, k): normalise_unit(v) for k, v in own.items()}
-    units = {**dataset_units(), **own}
-    missing = [c for c in needed if c not in units]
-    if missing:
-        hint = ", ".join(f"{c}: UNIT" for c in missing)
-        raise ValueError(f"{path}: column(s) {missing} have no unit; give them with "
-                         f"data.units={{{hint}}} or in {side.name} beside the table "
-                         "(1 for a dimensionless feature)")
-    return {c: units[c] for c in dict.fromkeys([*own, *needed])}
-
-
-def user_table(path: str | Path, columns: dict[str, str], group: str | None,
-               needed: list[str], target: str | None = None, units: dict | None = None,
-               group_by: str | None = None) -> pd.DataFrame:
-    """A user's labelled feature table as the data module's rows (:func:`user_rows` of
-    :func:`read_user_table`); ``units`` as :func:`table_units` takes them."""
-    df = read_user_table(path, columns)
-    return user_rows(df, path, group, needed, target,
-                     table_units(path, columns, units, needed), group_by)
-
-
-#: columns a user's table may carry for the thesis's estimator beside the network (its
-#: features and the cycle count), kept in the rows where the table gives them
-ESTIMATOR_COLUMNS = ("dte_peak_to_peak", "dte_kurtosis")
-
-
-def user_rows(df: pd.DataFrame, path: str | Path, group: str | None, needed: list[str],
-              target: str | None = None, units: dict[str, str] | None = None,
-              group_by: str | None = None, line_parts: tuple[str, ...] = ()) -> pd.DataFrame:
-    """A user's table (renamed) as the data module's rows: the ``needed`` columns as numbers,
-    ``case`` 0, ``replicate`` the index of each trajectory in sorted order (a value of
-    ``group``, or with ``group_by`` another column, a pair of the two), ``split_group`` the
-    index of the row's ``group_by`` value in sorted order (of ``group`` without one), ``row``
-    the row of the table, ``cycles`` where given (else NaN) and the estimator's features where
-    given (:data:`ESTIMATOR_COLUMNS`). Checked by :func:`check_user_table` first (``line_parts``
-    as it takes them); the rows of each trajectory are read in the table's order."""
-    path = Path(path)
-    for option, col in (("data.group", group), ("data.group_by", group_by)):
-        if col is not None and col not in df.columns:
-            raise ValueError(f"{option} = {col!r} is not a column of {path}; it has {list(df)}")
-    if group is None:
-        raise ValueError(f"data.group = None must name the column of {path} that tells "
-                         f"the trajectories (gearboxes, test runs) apart; it has {list(df)}")
-    missing = [c for c in needed if c not in df.columns]
-    if missing:
-        raise ValueError(f"{path} lacks column(s) {missing}; map yours with data.columns "
-                         "(units as in the dataset: docs/dataset.md)")
-    if df.empty:
-        raise ValueError(f"data.table = {path} has no rows")
-    if target is None:
-        target = next((c for c in needed if dataset_units().get(c) == "mm"), None)
-    check_user_table(df, path, needed, group, target, units, line_parts)
-    by = group_by or group
-    if by != group:
-        check_user_table(df, path, [], by)  # every row in a group of group_by, too
-    out = df[needed].astype(float)
-    out["case"] = 0
-    keys = [group] if by == group else [by, group]
-    out["replicate"] = df.groupby(keys, sort=True).ngroup().to_numpy()
-    out["split_group"] = pd.factorize(df[by], sort=True)[0]
-    out["row"] = np.arange(len(df))
-    out["cycles"] = (df["cycles"].astype(float) if "cycles" in df.columns and "cycles"
-                     not in needed else np.nan)
-    for name in ESTIMATOR_COLUMNS:
-        if name in df.columns and name not in needed:
-            out[name] = pd.to_numeric(df[name], errors="coerce").to_numpy(float)
-    return out
-
-
-def check_split(case: int, trajectories: int, val_replicates: int | None,
-                test_replicates: int, holdout_case: int | None) -> tuple[int, int]:
-    """The (test, validation) trajectory counts of ``case``; ValueError when it has too few
-    trajectories for them and one to train on."""
-    n_test = 0 if holdout_case is not None else test_replicates
-    n_val = validation_count(trajectories) if val_replicates is None else val_replicates
-    if trajectories < n_test + n_val + 1:
-        raise ValueError(
-            f"case {case} has {trajectories} trajectories; a split with {n_val} "
-            f"validation and {n_test} test trajectories needs at least "
-            f"{n_test + n_val + 1}: lower data.val_replicates and "
-            "data.test_replicates, or add trajectories (data.generate.replicates)")
-    return n_test, n_val
-
-
-def match_groups(values, uniques: pd.Index, option: str, column: str, source) -> list[int]:
-    """The indices in ``uniques`` (a column's sorted distinct values) of the user's ``values``
-    (``data.test_groups``, ``data.val_groups``): numbers matched as numbers (45 is 45.0),
-    others as text. Raises naming a value the column does not have."""
-    codes = []
-    numeric = pd.api.types.is_numeric_dtype(uniques.dtype)
-    for v in list(values or []):
-        if numeric:
-            try:
-                hit = np.flatnonzero(np.isclose(uniques.to_numpy(float), float(v),
-                                                rtol=1e-12, atol=0))
-            except (TypeError, ValueError):
-                hit = np.array([], int)
-        else:
-            hit = np.flatnonzero(uniques.astype(str) == str(v))
-        if hit.size == 0:
-            shown = [u.item() if isinstance(u, np.generic) else u for u in uniques[:20]]
-            raise ValueError(f"{option} = {list(values)}: column {column!r} of {source} has no "
-                             f"value {v!r}; its values: {shown}"
-                             + (" ..." if len(uniques) > 20 else ""))
-        codes.append(int(hit[0]))
-    return list(dict.fromkeys(codes))
-
-
-def split_table(rows: pd.DataFrame, test_codes: list[int] | None, val_codes: list[int] | None,
-                val_replicates: int | None, test_replicates: int, seed: int,
-                describe) -> dict[str, pd.DataFrame]:
-    """Train/val/test rows of a user's table (:func:`user_rows`): the rows whose
-    ``split_group`` is one of ``test_codes`` (``val_codes``) test (validate); where none are
-    named, ``test_replicates`` (``val_replicates``; None: :func:`validation_count`)
-    trajectories are drawn from the others with ``seed``, in the order of
-    :func:`split_trajectories` (which this is, without named groups). ``describe(n)`` says
-    in the user's terms what the table's ``n`` trajectories are, for messages."""
-    reps = np.sort(rows.replicate.unique())
-    of_rep = rows.groupby("replicate").split_group.first().reindex(reps).to_numpy()
-    perm = np.random.default_rng([seed, 0]).permutation(reps)
-    test = (reps[np.isin(of_rep, test_codes)] if test_codes else None)
-    val = (reps[np.isin(of_rep, val_codes)] if val_codes else None)
-    n_test = 0 if test is not None else test_replicates
-    n_val = (0 if val is not None else
-             validation_count(len(reps)) if val_replicates is None else val_replicates)
-    available = len(reps) - sum(len(x) for x in (test, val) if x is not None)
-    if available < n_test + n_val + 1:
-        named = "".join(f", {len(x)} named by data.{k}_groups" for k, x in
-                        (("test", test), ("val", val)) if x is not None)
-        raise ValueError(
-            f"{describe(len(reps))}{named}; {n_val} more to validate and {n_test} more to test, "
-            f"drawn, and one to train need {n_test + n_val + 1} besides the named ones, "
-            f"{available} remain: lower data.val_replicates and data.test_replicates, name "
-            "the groups by value (data.val_groups, data.test_groups), or split by a finer "
-            "column (data.group)")
-    if test is None:
-        free = perm[~np.isin(perm, val if val is not None else [])]
-        test = free[:n_test]
-    if val is None:
-        free = perm[~np.isin(perm, test)]
-        val = free[:n_val]
-    parts = {"test": rows[rows.replicate.isin(test)], "val": rows[rows.replicate.isin(val)]}
-    parts["train"] = rows[~rows.replicate.isin(np.concatenate([test, val]))]
-    return {k: parts[k].reset_index(drop=True) for k in ("train", "val", "test")}
-
-
-def gearboxes(rows: pd.DataFrame) -> np.ndarray:
-    """Each row's gearbox (trajectory: case and replicate) as an integer label."""
-    return rows.groupby(["case", "replicate"], sort=False).ngroup().to_numpy()
-
-
-def calibration_split(frames: dict[str, pd.DataFrame], seed: int) -> dict[str, pd.DataFrame]:
-    """``frames`` with its validation trajectories cut in two: ``val``, which choose the epoch
-    kept (early stopping, the checkpoint), and ``cal``, which calibrate the interval. A
-    split-conformal interval covers its level only on data that chose nothing of the model
-    (Angelopoulos & Bates, "A gentle introduction to conformal prediction", 2021, sec. 2.3):
-    validation rows that also chose the epoch have smaller errors than a new gearbox's, and
-    the interval under-covers (docs/surrogate.md, Where it does not know). Of each case's
-    validation trajectories half (rounded down, drawn with ``seed`` in a stream of their own)
-    calibrate; with fewer than :data:`MIN_APART` validation trajectories in all, both are the
-    same rows."""
-    val = frames["val"]
-    if len(np.unique(gearboxes(val))) < MIN_APART:
-        return {**frames, "cal": val}
-    chosen = []
-    for case, rows in val.groupby("case", sort=True):
-        reps = np.sort(rows.replicate.unique())
-        perm = np.random.default_rng([seed, int(case), 1]).permutation(reps)
-        chosen.append(rows[rows.replicate.isin(perm[:len(reps) // 2])].index)
-    is_cal = val.index.isin(np.concatenate(chosen))
-    return {**frames, "val": val[~is_cal].reset_index(drop=True),
-            "cal": val[is_cal].reset_index(drop=True)}
-
-
-def split_trajectories(df: pd.DataFrame, val_replicates: int | None, test_replicates: int,
-                       seed: int, holdout_case: int | None = None) -> dict[str, pd.DataFrame]:
-    """Train/val/test rows, split by (case, replicate) trajectory; see the module text.
-    ``val_replicates`` None: :func:`validation_count` of each case."""
-    parts: dict[str, list[pd.DataFrame]] = {"train": [], "val": [], "test": []}
-    for case, rows in df.groupby("case", sort=True):
-        reps = np.sort(rows.replicate.unique())
-        if case == holdout_case:
-            parts["test"].append(rows)
-            continue
-        n_test, n_val = check_split(case, len(reps), val_replicates, test_replicates,
-                                    holdout_case)
-        perm = np.random.default_rng([seed, int(case)]).permutation(reps)
-        groups = {"test": perm[:n_test], "val": perm[n_test:n_test + n_val],
-                  "train": perm[n_test + n_val:]}
-        for name, chosen in groups.items():
-            parts[name].append(rows[rows.replicate.isin(chosen)])
-    return {k: pd.concat(v, ignore_index=True) if v else df.iloc[:0] for k, v in parts.items()}
 
 
 class WearDataModule(L.LightningDataModule):
@@ -869,8 +412,9 @@ class WearDataModule(L.LightningDataModule):
 
     def network_rows(self, split: str) -> pd.DataFrame:
         """The rows of ``split`` as the network reads them: line inputs as magnitudes
-        (:func:`vector_magnitudes`) and, with ``baseline``, the features as changes since each
-        trajectory's first row (:func:`baseline_changes`; a line's as its vector change)."""
+        (:func:`~surrogate.schema.vector_magnitudes`) and, with ``baseline``, the features as
+        changes since each trajectory's first row (:func:`~surrogate.schema.baseline_changes`;
+        a line's as its vector change)."""
         return network_frame(self.frames[split], self.inputs, self.baseline, self.vectors,
                              ["case", "replicate"])
 

@@ -17,7 +17,7 @@ Each gearbox needs its baseline record first and at least one record after it; w
 table's row order is taken as the time order (the first row of a gearbox is its baseline).
 From Python::
 
-    from surrogate.inference import Surrogate
+    from surrogate import Surrogate
     wear = Surrogate.load("wear_surrogate.pt").predict(features_df, gearbox=["rig"])
 """
 

@@ -8,7 +8,6 @@ import json
 import logging
 import math
 import os
-import textwrap
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -26,11 +25,13 @@ from physics.estimators.empirical_inverse import wear_errors
 from physics.files import atomic_write, check_inside, pyplot
 from surrogate import baselines, candidates, settings
 from surrogate.conformal import attainable
-from surrogate.data import MIN_APART, WearDataModule, calibration_split, gearboxes, split_table
+from surrogate.data import WearDataModule
+from surrogate.figures import add_baselines, parity_figure
 from surrogate.inference import Chosen, Surrogate, conformal_scale, export, export_chosen
 from surrogate.novelty import LEVEL as NOVELTY_LEVEL
 from surrogate.novelty import Novelty, envelope_report
 from surrogate.schema import FeatureSchema, network_frame
+from surrogate.splits import MIN_APART, calibration_split, gearboxes, split_table
 
 log = logging.getLogger(__name__)
 # lightning 2.6 calls a torch pytree API that torch 2.13 deprecates; harmless, and once per step
@@ -178,7 +179,7 @@ def check_honoured(cfg: DictConfig, init: Surrogate | None) -> None:
                          f"names the inputs ({list(data.inputs)}): drop "
                          f"{' and '.join(f'data.{k}' for k in choose)}, or data.inputs")
     if choose and init is not None:
-        from surrogate.data import input_columns
+        from surrogate.inputs import input_columns
 
         baseline = init.schema.baseline if data.get("baseline") is None else data.baseline
         try:
@@ -453,7 +454,7 @@ def inner_network(job: TrainJob, dm: WearDataModule, pool: pd.DataFrame, out: Pa
 def calibrate(model, dm: WearDataModule, level: float) -> tuple[float, Novelty]:
     """The novelty, its radius set on the validation and calibration rows (inputs only: they
     chose nothing by their inputs), and the interval's conformal scale at ``level`` from the
-    calibration rows (:func:`~surrogate.data.calibration_split`); in both each gearbox
+    calibration rows (:func:`~surrogate.splits.calibration_split`); in both each gearbox
     (trajectory) is one exchangeable unit (:mod:`surrogate.conformal`), and the rows are the
     readings, not the baseline records of a model read against them. Says in the log where
     the calibration rows also chose the epoch."""
@@ -638,26 +639,6 @@ def dm_level(dm: WearDataModule, surrogate: Surrogate) -> float:
     return float(surrogate.model.hparams.get("interval", 0.95))
 
 
-#: markers of the baselines in a parity plot
-_MARKERS = {"linear": "x", "estimator": "+", "monotone": "1", "network": "."}
-
-
-def add_baselines(ax, true: np.ndarray, readings: dict[str, np.ndarray]) -> None:
-    """The baselines' readings in a parity plot: the median as a horizontal line, the others
-    as points; the axes widened to hold them, and the legend."""
-    for name, value in readings.items():
-        if name == "median" and (len(value) == 0 or np.ptp(value) == 0):
-            ax.axhline(float(value[0]) if len(value) else 0.0, color="0.5", ls=":", lw=1,
-                       label=baselines.LABELS[name])
-        else:
-            ax.plot(true, value, _MARKERS.get(name, "."), ms=4, alpha=0.6,
-                    label=baselines.LABELS[name])
-    top = max([ax.get_xlim()[1], *(1.05 * float(np.max(v)) for v in readings.values()
-                                   if len(v))])
-    ax.set(xlim=(0, top), ylim=(0, top))
-    ax.legend(fontsize=7)
-
-
 def cross_validate(job: TrainJob) -> float:
     """``data.cv=logo``: one run per value of ``data.group_by`` left out (its rows test, the
     rest train and validate), each in ``fold_<value>/`` of the run folder as a run of its own.
@@ -731,23 +712,3 @@ def cross_validate(job: TrainJob) -> float:
     pyplot().close(fig)
     value = means.get(cfg.optimized_metric, float("nan"))
     return float(value) if math.isfinite(value) else float("inf")
-
-
-def parity_figure(true: np.ndarray, pred: np.ndarray, half: np.ndarray | None, title: str,
-                  label: str, ax=None, name: str = "surrogate"):
-    """Predicted against true wear with the identity line (and intervals if given: ``half``
-    widths, or a (2, rows) array of the widths below and above); ``name`` labels the points in
-    the legend."""
-    fig = None
-    if ax is None:
-        fig, ax = pyplot().subplots(figsize=(5, 5))
-    ax.errorbar(true, pred, yerr=half, fmt="o", ms=3, alpha=0.6, elinewidth=0.6, label=name)
-    top = max(float(np.max(true)), float(np.max(pred)), ax.get_xlim()[1] / 1.05 if ax.lines
-              else 0.0)
-    lim = [0, top * 1.05]
-    ax.plot(lim, lim, "k--", lw=1)
-    lines = [w for part in title.split("\n") for w in textwrap.wrap(part, 70)]  # to the axes
-    ax.set(xlim=lim, ylim=lim, xlabel=f"true {label}", ylabel=f"predicted {label}",
-           title="\n".join(lines))
-    ax.title.set_fontsize(8)
-    return fig if fig is not None else ax.figure

@@ -12,8 +12,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from surrogate.data import CONDITIONS, DEFAULT_INPUTS
 from surrogate.inference import Surrogate, check_gearboxes
+from surrogate.inputs import CONDITIONS, DEFAULT_INPUTS
 from surrogate.training import train
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -16,7 +16,8 @@ from hydra import compose, initialize_config_module
 
 import surrogate.training as training
 from surrogate import settings
-from surrogate.data import DEFAULT_INPUTS, user_table
+from surrogate.inputs import DEFAULT_INPUTS
+from surrogate.tables import user_table
 
 ROOT = Path(__file__).resolve().parents[2]
 NEEDED = [*DEFAULT_INPUTS, "n1_rpm", "torque_Nm", "root_wear_mm"]
@@ -141,8 +142,8 @@ def test_acceptance_train_refuses_a_table_of_1e300_before_training(tmp_path):
 def test_a_csv_header_that_repeats_a_column_is_refused(tmp_path):
     """pandas reads a repeated CSV column as ``a`` and ``a.1``: the repetition is read from the
     header itself, for a training table and for a prediction input alike."""
-    from surrogate.data import read_user_table
     from surrogate.predict import read_table
+    from surrogate.tables import read_user_table
 
     bad = tmp_path / "twice.csv"
     bad.write_text("rig,dte_rms,dte_rms,wear_mm\nA,1.0,2.0,0.1\n")

@@ -261,7 +261,7 @@ def test_the_linear_model_and_the_verdict():
 def test_calibration_split_halves_the_validation_trajectories_apart_from_the_stopping_ones():
     """Of 16 or more validation trajectories, half (drawn with the seed) calibrate the interval
     and the others choose the epoch: disjoint, together the validation set; fewer stay one."""
-    from surrogate.data import MIN_APART, calibration_split
+    from surrogate.splits import MIN_APART, calibration_split
 
     def frames(n: int, cases: tuple[int, ...] = (3,)) -> dict:
         val = pd.concat([pd.DataFrame({"case": c, "replicate": np.repeat(np.arange(n), 3),

@@ -29,15 +29,7 @@ from physics.params import Dynamics, Scenario, WearSolver
 from physics.signals.order_analysis import LINE_ORDERS
 from surrogate import predict, settings
 from surrogate.conformal import attainable, exchangeable_quantile
-from surrogate.data import (
-    BUILD_CHUNKS,
-    DEFAULT_INPUTS,
-    load_dataset,
-    replicates_per_case,
-    split_trajectories,
-    stale_dataset,
-    validation_count,
-)
+from surrogate.data import BUILD_CHUNKS, load_dataset, replicates_per_case, stale_dataset
 from surrogate.inference import (
     ScaledEnsemble,
     Surrogate,
@@ -45,10 +37,12 @@ from surrogate.inference import (
     export,
     torch_predict,
 )
+from surrogate.inputs import DEFAULT_INPUTS
 from surrogate.model import WearRegressor
 from surrogate.network import EnsembleMLP, mixture
 from surrogate.predict import gearbox_columns, predict_file
 from surrogate.schema import FeatureSchema, baseline_changes, vector_magnitudes
+from surrogate.splits import split_trajectories, validation_count
 from surrogate.training import prepare, train
 
 ROOT = Path(__file__).resolve().parents[2]

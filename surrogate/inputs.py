@@ -1,0 +1,52 @@
+"""The network's default inputs: which columns it reads of the sensors a user has, read
+absolutely or against each gearbox's baseline record, with or without the operating point
+(``data.sensors``, ``data.baseline``, ``data.operating_point``; docs/surrogate.md, Method).
+"""
+
+from __future__ import annotations
+
+from physics.signals.order_analysis import LINE_ORDERS, MESH_ORDERS
+
+#: the sensors a user may have: DTE (``dte_*`` features) and housing acceleration (``acc_*``)
+SENSORS = ("dte", "acc")
+#: the features of each sensor that a gearbox's unknown offsets and scales leave alone. A DTE
+#: record's mean is the half backlash plus the static deflection (tens of um, set by tolerances
+#: the user does not know; an encoder pair measures the DTE only up to a constant), so of the
+#: DTE the mean-free peak-to-peak value, the kurtosis and the levels of mesh harmonics 2-6
+#: relative to the first (ratios of the record's own lines, which wear moves by several dB:
+#: :func:`physics.signals.order_analysis.mesh_harmonic_levels`) are used; the housing
+#: acceleration's level scales with the housing's effective mass and the transfer path, so of it
+#: only the dimensionless shape features are used (Table 13 definitions in
+#: :mod:`physics.signals.features`; docs/surrogate.md measures the gain on gearboxes away from
+#: the training ones, and the harmonics' phases, dataset columns too, as an alternative)
+INVARIANT = {"dte": ("peak_to_peak", "kurtosis", *(f"mesh{k}_db" for k in MESH_ORDERS)),
+             "acc": ("kurtosis", "crest", "margin", "impulse", "shape")}
+#: the absolute reading's default inputs (``data.baseline=false``): the invariant features of
+#: both sensors
+DEFAULT_INPUTS = [f"{q}_{f}" for q in SENSORS for f in INVARIANT[q]]
+#: the operating point's columns, inputs beside the features with ``data.operating_point``
+#: (as measured, never read against the baseline record)
+CONDITIONS = ["n1_rpm", "torque_Nm"]
+
+
+#: the baseline reading's default inputs: the DTE's mesh lines 1-6, each a complex amplitude
+#: against a once-per-revolution mark (dataset columns ``dte_line<k>_re``, ``_im``), read as
+#: their vector change since the baseline record (docs/surrogate.md, Method, Baseline mode)
+BASELINE_INPUTS = [f"dte_line{k}" for k in LINE_ORDERS]
+
+
+def input_columns(sensors: list[str], operating_point: bool, baseline: bool = False
+                  ) -> list[str]:
+    """The network's default inputs, with or without the operating point: read against the
+    baseline record, the DTE's mesh lines (:data:`BASELINE_INPUTS`); read absolutely, the
+    :data:`INVARIANT` features of the sensors a user has."""
+    unknown = sorted(set(sensors) - set(SENSORS))
+    if unknown or not sensors or len(set(sensors)) != len(sensors):
+        raise ValueError(f"data.sensors = {list(sensors)} must name one or both of {SENSORS}")
+    if baseline and "dte" not in sensors:
+        raise ValueError(f"data.sensors = {list(sensors)}: the reading against the baseline "
+                         "record takes the DTE's mesh lines; without a DTE read absolutely "
+                         "(data.baseline=false) or name the inputs (data.inputs=[...])")
+    cols = (BASELINE_INPUTS if baseline else
+            [f"{q}_{f}" for q in SENSORS if q in sensors for f in INVARIANT[q]])
+    return cols + (CONDITIONS if operating_point else [])
