@@ -241,32 +241,32 @@ DOCS: dict[str, Case] = {
     "python -m physics.reproduce --help": Case(),
     "python train.py hparams_search=optuna": Case(
         (*TINY_DATA, "hydra.sweeper.n_trials=1", *FAST_TRAIN), start=TRAIN_CASE3,
-        only=("data",), check=files("optuna_case3.db")),
+        only=("data",), check=files("optuna_case3.db"), slow=True),
     "python train.py experiment=all_cases": Case(
         ("+data.generate.replicates=3", "+data.generate.wear_states=2", *TINY_DATA[2:],
-         *FAST_TRAIN), check=files("logs/train/runs/caseall_*")),
+         *FAST_TRAIN), check=files("logs/train/runs/caseall_*"), slow=True),
     "python train.py case=3 data.baseline=false": Case(
         TINY_DATA + FAST_TRAIN, start=TRAIN_CASE3, only=("data",), check=absolute),
     "python -m surrogate.predict ckpt=logs/train/runs/<run>/wear_surrogate.pt "
     "input=data/dataset_case3.parquet output=wear.csv": Case(
         start="python train.py case=3 data.baseline=false", check=predicted),
     f"python train.py {TABLE_ARGS} data.sensors=[dte]": Case(
-        FAST_TRAIN + SMALL_SPLIT, start=USER_TABLE, check=another_run),
+        FAST_TRAIN + SMALL_SPLIT, start=USER_TABLE, check=another_run, slow=True),
     f"python train.py {TABLE_ARGS} init_from=logs/train/runs/<run>/wear_surrogate.pt "
     "model.trainable=head": Case(("trainer.max_epochs=3", "trainer.min_epochs=1", *SMALL_SPLIT),
-                                 start=USER_TABLE, check=another_run),
+                                 start=USER_TABLE, check=another_run, slow=True),
     "python train.py --help": Case(),
     "python -m physics.dataset out_dir=noisy data.replicates=4 data.nuisance.snr_db=[15,25] "
     "store_signals=true": Case(("data.cases=[3]", "data.wear_states=2", "data.chunks=2"),
                                slow=True, check=files(
         "noisy/dataset_signals.npy")),
     "python -m physics.dataset -m chunk=0,1,2,3,4 hydra/launcher=joblib": Case(
-        ("data.cases=[3]", "data.replicates=5", "data.wear_states=2"),
+        ("data.cases=[3]", "data.replicates=5", "data.wear_states=2"), slow=True,
         check=files("data/dataset_chunks/chunk_004.parquet")),
     "python -m physics.loop data=independent_bundle reference=sister_bundle": Case(
         SMALL_LOOP, start=DEMO, check=referenced, slow=True),
     "python -m physics.loop data=physics/reference/thesis_tables/"
-    "table15_measured_acceleration_features.csv": Case(SMALL_LOOP, check=report),
+    "table15_measured_acceleration_features.csv": Case(SMALL_LOOP, check=report, slow=True),
     "python -m physics.loop --help": Case(),
     "python -m surrogate.benchmark": Case(("--max-epochs", "3"), slow=True),
     "python bench/bench_stiffness.py": Case(slow=True),
