@@ -129,6 +129,8 @@ def tooth_positions_um(z: int, grade: int, module_mm: float, d_mm: float,
     tolerance ``F_p`` of the grade for the usual tooth counts."""
     if z < 2:
         raise ValueError(f"z = {z} teeth: give at least two")
+    if not (isinstance(seed, int | np.integer) and seed >= 0):
+        raise ValueError(f"seed = {seed!r} must be a whole number >= 0 (the gear's draw)")
     sigma = single_pitch_tolerance_um(grade, module_mm, d_mm, rounded=False) / (3 * math.sqrt(2))
     x = np.random.default_rng(seed).normal(0.0, sigma, z)
     return x - x.mean()
