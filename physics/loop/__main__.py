@@ -10,6 +10,7 @@ from physics.interrupt import install_at_start
 install_at_start(__name__)  # Ctrl-C and SIGTERM handled from here on, during the slow imports
 
 import logging
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -18,6 +19,7 @@ from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, OmegaConf
 
 from physics.command import entry, register_schema, run_command
+from physics.files import check_writable
 from physics.loop.bundle_loop import run_loop
 from physics.loop.config import LoopConfig, LoopSettings
 from physics.loop.measured.bundle import (
@@ -59,6 +61,13 @@ class LoopJob:
 def prepare(cfg: DictConfig) -> LoopJob:
     opts = OmegaConf.to_container(cfg.loop, resolve=True)
     settings = LoopSettings(**opts)
+    for key in ("data", "reference"):
+        if isinstance(cfg[key], str) and not cfg[key].strip():
+            raise ValueError(f"{key}= is empty (it was read as the working folder); "
+                             + ("give a bundle folder or a feature-table .csv file "
+                                "(docs/own-data.md)" if key == "data" else
+                                "give first:N, before:X or a sister gearbox's bundle folder, "
+                                "or leave out reference="))
     base = scenario_from_config(cfg)
     if base.dynamics.flank_contact != "path" and Path(cfg.data).suffix != ".csv":
         raise ValueError(f"dynamics.flank_contact = {base.dynamics.flank_contact!r}: the loop's "
@@ -66,6 +75,7 @@ def prepare(cfg: DictConfig) -> LoopJob:
                          "off-path pairs of the exact contact are not in them yet); leave it at "
                          "'path' (a feature table takes either: docs/loop.md)")
     data, scn = read_measurements(cfg.data, base)
+    check_stated_once(cfg, data, base)
     if isinstance(data, FeatureTable):  # what the loop cannot follow: refused before work
         check_table(data, scn)
     history = parse_history(cfg.reference)
@@ -81,9 +91,20 @@ def prepare(cfg: DictConfig) -> LoopJob:
         shown_candidates(candidates_for(set(data.manifest.quantity), settings), data, scn,
                          settings)
     if history is not None:
-        check_usable(reference, scn, settings)
+        try:
+            check_usable(reference, scn, settings)
+        except ValueError as err:
+            rule = str(err).removeprefix(f"bundle {reference.path}: ")
+            if "train and one test record" in rule:
+                rule = ("the reference is calibrated as the loop calibrates, on a train and a "
+                        "test record of each group")
+            raise ValueError(f"reference={cfg.reference} takes {len(reference.records)} "
+                             f"record(s) {reference.records} as the reference: {rule}; take "
+                             "more records as the reference (first:2 or more), or give a "
+                             "sister gearbox's bundle") from None
         check_reference(data, reference.gear, group_keys(reference.manifest)[0])
     elif cfg.reference is not None:
+        check_reference_folder(cfg.reference)
         check_not_own_reference(cfg.data, cfg.reference)
         if not isinstance(data, Bundle):
             raise ValueError(f"reference={cfg.reference}: a reference serves bundles of "
@@ -98,6 +119,65 @@ def prepare(cfg: DictConfig) -> LoopJob:
     return LoopJob(data, scn, settings, bool(cfg.progress),
                    Path(HydraConfig.get().runtime.output_dir), reference,
                    history.spec if history is not None else None)
+
+
+def _given() -> set[str]:
+    """The keys given on the command line (``hydra.overrides.task``; none where unknown)."""
+    try:
+        task = HydraConfig.get().overrides.task
+    except (ValueError, AttributeError):
+        return set()
+    return {str(o).split("=", 1)[0].lstrip("+~") for o in task}
+
+
+def check_stated_once(cfg: DictConfig, data: Bundle | FeatureTable, base: Scenario) -> None:
+    """Refuse a setting of the command line the data overrides, which the run would ignore
+    without a word: a ``gear.*`` (or ``operating.*``, or ``case=``) value that the
+    ``gear.yaml`` (``operating.yaml``) beside the data states otherwise, and with a bundle an
+    ``operating.n1_rpm``, or an ``operating.torque_Nm`` where every record states its torque
+    (each record's own speed and torque are used: ``manifest.csv``)."""
+    given = _given()
+    stated = dict(data.gear) if isinstance(data, Bundle) else dict(data.stated)
+    for k, v in stated.items():
+        group = "gear" if hasattr(base.gear, k) else "operating"
+        current = getattr(getattr(base, group), k)
+        keys = [f"{group}.{k}"] + (["case"] if group == "operating" and cfg.case is not None
+                                   and k in ("n1_rpm", "torque_Nm") else [])
+        setting = next((key for key in keys if key in given), None)
+        if setting is not None and float(v) != float(current):
+            sidecar = "gear.yaml" if group == "gear" else "operating.yaml"
+            shown = f"case={cfg.case}" if setting == "case" else f"{setting}={current:g}"
+            raise ValueError(f"{shown} on the command line and {k}: {v:g} in the {sidecar} of "
+                             f"data={cfg.data} disagree (the file's would be used); state it "
+                             "in one place")
+    if isinstance(data, Bundle):
+        man = data.manifest
+        if "operating.n1_rpm" in given:
+            raise ValueError(f"operating.n1_rpm={base.operating.n1_rpm:g}: a bundle's records "
+                             f"state their own speed (manifest.csv n1_rpm of data={cfg.data}), "
+                             "so this setting would not be used; leave it out")
+        if "operating.torque_Nm" in given and man.torque_Nm.notna().all():
+            raise ValueError(f"operating.torque_Nm={base.operating.torque_Nm:g}: every record "
+                             f"of data={cfg.data} states its torque (manifest.csv torque_Nm), "
+                             "so this setting would not be used (it is the start of the "
+                             "calibration only where a record's torque is unknown); leave it "
+                             "out")
+
+
+def check_reference_folder(spec: str) -> None:
+    """Refuse a ``reference=`` that is neither of the unit's own history's forms
+    (:func:`~physics.loop.search.own_history.parse_history`) nor a folder, naming
+    ``reference=`` and the forms it takes (it was read as a bundle and blamed on ``data=``)."""
+    path = Path(spec)
+    if path.is_dir():
+        return
+    what = ("does not exist" if not path.exists() else
+            "is a feature table, not a bundle" if path.suffix == ".csv" else "is not a folder")
+    raise ValueError(f"reference={spec}: neither first:N, before:X nor a bundle folder "
+                     f"({str(path)!r} {what}); "
+                     "reference= takes first:N (this unit's first N records of each group), "
+                     "before:X (its records before X load cycles or the ISO 8601 date X) or a "
+                     "sister gearbox's bundle folder; e.g. reference=first:2")
 
 
 def execute(job: LoopJob) -> None:
@@ -133,7 +213,41 @@ def task(cfg: DictConfig) -> None:
                                   "round); run the command again"))
 
 
-main = entry(task, check=prepare)
+_main = entry(task, check=prepare)
+
+
+def check_run_folder(argv: list[str]) -> None:
+    """Refuse (one line, exit 2) a run whose run folder (``hydra.run.dir``, or
+    ``hydra.sweep.dir`` with ``-m``; ``logs/loop/...`` of the working folder by default) cannot
+    be made, before Hydra tries: from a read-only working folder Hydra raised a
+    PermissionError traceback. Help and config printing (``--help``, ``--cfg``, ...) make no
+    folder and are left alone."""
+    if any(a.split("=")[0] in ("--help", "-h", "--hydra-help", "--cfg", "-c", "--info", "-i",
+                               "--shell-completion", "-sc", "--resolve") for a in argv):
+        return
+    sweep = any(a in ("-m", "--multirun") for a in argv)
+    key = "hydra.sweep.dir" if sweep else "hydra.run.dir"
+    given = [a.split("=", 1)[1] for a in argv if a.split("=", 1)[0].lstrip("+") == key]
+    spec = given[-1].strip("'\"") if given else (
+        "logs/loop/multiruns/${now:}" if sweep else "logs/loop/runs/${now:}")
+    parts = Path(spec).parts
+    fixed = Path(*parts[:next((i for i, p in enumerate(parts) if "${" in p), len(parts))] or ".")
+    try:
+        check_writable(fixed, key)
+    except ValueError as err:
+        reason = str(err).removesuffix("; choose a folder you can write to")
+        print(f"error: {reason}: the run's folder is made there (working folder {Path.cwd()}); "
+              f"run from a folder you can write to, or give {key}=<such a folder>",
+              file=sys.stderr)
+        raise SystemExit(2) from None
+
+
+def main():
+    check_run_folder(sys.argv[1:])
+    return _main()
+
+
+main.__doc__ = task.__doc__
 
 
 if __name__ == "__main__":

@@ -46,7 +46,7 @@ from physics.dynamics.model import PairModel, simulate
 from physics.loop.config import LoopSettings
 from physics.loop.effects import EFFECTS, Effect
 from physics.loop.judge.adoption import holds, null_test
-from physics.loop.measured.bundle import FeatureTable
+from physics.loop.measured.bundle import MAX_ACCEL_RMS, MAX_DTE_MODULES, FeatureTable
 from physics.loop.measured.worn_states import check_table_depths, table_models
 from physics.loop.model.declared import (
     SCENARIO_DYNAMIC,
@@ -64,7 +64,7 @@ from physics.loop.report import LoopReport
 from physics.loop.search.attribution import candidates_for
 from physics.loop.threads import one_blas_thread
 from physics.params import Scenario
-from physics.signals.features import FEATURES, features
+from physics.signals.features import DIMENSIONAL, FEATURES, features
 from physics.signals.measurement import declared_chain, sensed
 
 log = logging.getLogger(__name__)
@@ -138,11 +138,62 @@ def check_table(table: FeatureTable, base: Scenario) -> None:
     """Refuse, before any work, a table the loop cannot judge or follow: its columns, fewer
     than three rows, a depth the worn states cannot reach
     (:func:`~physics.loop.measured.worn_states.check_table_depths`)."""
-    parse_columns(table.frame)
+    quantity, cols = parse_columns(table.frame)
+    check_feature_values(table, quantity, cols, base.gear.module_mm)
     if len(table.frame) < 3:
         raise ValueError(f"feature table: {len(table.frame)} rows; the cross-validation needs "
                          "at least 3 wear states")
     check_table_depths(base, table.frame.wear_mm.to_numpy(float))
+
+
+def check_feature_values(table: FeatureTable, quantity: str, cols: dict[str, tuple[str, float]],
+                         module_mm: float) -> None:
+    """Refuse a feature value its definition or its unit does not allow (one line naming the
+    row, the column, the value and the rule): a dimensionless feature below 1 (Pearson's
+    kurtosis, crest, margin, impulse and shape factors are 1 at least for any signal), an
+    RMS or peak-to-peak that is not positive, or beyond what the quantity reaches: a housing
+    acceleration's RMS above :data:`~physics.loop.measured.bundle.MAX_ACCEL_RMS`, a DTE's
+    beyond :data:`~physics.loop.measured.bundle.MAX_DTE_MODULES` of the module (twice that
+    peak to peak), the bounds and their physical basis of a bundle's records."""
+    where = f"feature table {table.path}" if table.path is not None else "feature table"
+    limit = (MAX_ACCEL_RMS if quantity == "accel_m_s2" else MAX_DTE_MODULES * module_mm * 1e-3)
+    unit = "m/s^2" if quantity == "accel_m_s2" else "m"
+    for col, (feat, scale) in cols.items():
+        values = table.frame[col].to_numpy(float)
+        if feat in DIMENSIONAL:
+            si = values * scale
+            top = limit * (2 if feat == "peak_to_peak" and quantity == "dte_m" else 1)
+            top = math.inf if feat == "peak_to_peak" and quantity == "accel_m_s2" else top
+            bad = (si <= 0) | (si > top)
+            rule = (f"must be positive and at most {top:.3g} {unit}" + (
+                " (~1000 g RMS, beyond any gearbox housing's vibration: ISO 20816; not in "
+                "m/s^2? raw ADC counts, mm/s^2)" if quantity == "accel_m_s2" else
+                f" (a tenth of the module, {module_mm:g} mm: beyond any tooth deflection, "
+                "profile error and backlash; not in m? um or mm given as m)"))
+        else:
+            bad = values < 1
+            rule = ("must be 1 at least: the kurtosis, crest, margin, impulse and shape factors "
+                    "of any signal are (a normal signal's kurtosis is 3, not 0: Pearson's, not "
+                    "the excess)")
+        if bad.any():
+            row = int(np.argmax(bad))
+            raise ValueError(f"{where}: row {row + 1}, column {col!r} = {values[row]:g} {rule}")
+    for col in ("cycles", "cycles_1e6"):
+        if col in table.frame and (table.frame[col].to_numpy(float) < 0).any():
+            row = int(np.argmax(table.frame[col].to_numpy(float) < 0))
+            raise ValueError(f"{where}: row {row + 1}, column {col!r} = "
+                             f"{table.frame[col].iloc[row]:g} must be >= 0 (load cycles)")
+    si = {feat: table.frame[col].to_numpy(float) * scale for col, (feat, scale) in cols.items()}
+    if quantity == "accel_m_s2" and {"rms", "peak_to_peak"} <= set(si):
+        # a signal of mean zero (a housing acceleration's is removed) spans at least twice its
+        # RMS: its variance is at most (max - min)^2 / 4 (Popoviciu's inequality)
+        bad = si["peak_to_peak"] < 2 * si["rms"] * (1 - 1e-3)
+        if bad.any():
+            row = int(np.argmax(bad))
+            raise ValueError(f"{where}: row {row + 1}: peak_to_peak {si['peak_to_peak'][row]:g} "
+                             f"m/s^2 is below twice the RMS {si['rms'][row]:g} m/s^2, which no "
+                             "signal of mean zero gives (its variance is at most a quarter of "
+                             "its range squared): check the columns' units and scales")
 
 
 def prepare_table(table: FeatureTable, base: Scenario, settings: LoopSettings) -> TableData:

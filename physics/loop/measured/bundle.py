@@ -43,6 +43,29 @@ SIGNATURE_GEAR = ("z1", "z2")
 MAX_YAML_BYTES = 64 * 1024
 #: the most the records of one bundle may take in memory together, as float64
 MAX_RECORDS_BYTES = 2 * 1024**3
+#: the most samples one record may hold. The loop analyses every segment of ``loop.segment_s``
+#: of a record at once (:func:`physics.signals.order_analysis.signature_segments`) and its noise
+#: floor over the whole record (``white_noise_std``): about 90 bytes of working memory a sample
+#: beyond the record's own 8 (measured: 1.2 GB more for 1.6e7 samples; a record of 1e8 took
+#: 8 GB). 2**24 samples keep one record's analysis near 1.5 GB and are 336 s at 50 kHz, 1342
+#: segments of 0.25 s: the scatter between segments, the comparison's noise, is known to 2 %
+#: long before (its relative standard error is 1 / sqrt(2 (n - 1))); the model simulates one
+#: segment a record whatever its length
+MAX_RECORD_SAMPLES = 2**24
+#: the largest RMS (about the mean) a housing acceleration [m/s^2] can have. Vibration
+#: severity (ISO 20816-1 and -3, formerly ISO 10816) stops a machine at tens of mm/s RMS of
+#: housing velocity (zone D); acceleration is velocity times 2 pi f, so 0.1 m/s RMS at the
+#: highest mesh harmonics of a gearbox (~10 kHz) is 6e3 m/s^2; industrial accelerometers
+#: (IEPE, 10-100 mV/g) saturate at 50-500 g (5e2-5e3 m/s^2). 1e4 m/s^2 (~1000 g) RMS is beyond
+#: any running gearbox's housing: a record above is not in m/s^2 (raw ADC counts, mm/s^2)
+MAX_ACCEL_RMS = 1e4
+#: the largest |DTE| [m], as a share of the module: the DTE along the line of action is the
+#: tooth pair's elastic deflection (its mean: ~1e-5 m at rated load, a tooth that deflected a
+#: good share of its module would break), its profile and pitch errors (ISO 1328-1's coarsest
+#: grade allows total deviations of ~0.1 mm at module 2) and, where the flanks part, the
+#: backlash (~0.04-0.1 module); a tenth of the module (0.2 mm at module 2) is beyond them
+#: together: a DTE above is not in metres (um or mm given as m) or holds the encoders' offset
+MAX_DTE_MODULES = 0.1
 
 
 @dataclass(frozen=True)
@@ -91,8 +114,10 @@ def read_bundle(path: str | Path, gear: GearPair | None = None) -> Bundle:
         raise ValueError(f"bundle {path}: no such folder (see docs/own-data.md)")
     man = _read_manifest(path)
     overrides, unknown = _read_gear(path, gear, f"bundle {path}")
-    z1 = dataclasses.replace(gear, **overrides).z1
-    sizes = {rec: _signal_size(path, rec) for rec in man.record}
+    pair = dataclasses.replace(gear, **overrides)
+    z1 = pair.z1
+    sizes = {rec: _signal_size(path, rec, fs)
+             for rec, fs in zip(man.record, man.fs_hz, strict=True)}
     total = sum(sizes.values()) * 8
     if total > MAX_RECORDS_BYTES:
         raise _fail(path, None, f"the records hold {sum(sizes.values()):,} samples together, "
@@ -110,16 +135,67 @@ def read_bundle(path: str | Path, gear: GearPair | None = None) -> Bundle:
         if row.fs_hz < f_need:
             raise _fail(path, rec, f"fs_hz = {row.fs_hz:g} is below 4 x the third mesh "
                                    f"harmonic ({f_need:g} Hz)")
+        check_values(path, rec, row.quantity, x, pair.module_mm)
         signals[rec] = x
     return Bundle(path, man, signals, overrides, unknown)
+
+
+def check_values(path: Path, rec: str, quantity: str, x: np.ndarray, module_mm: float) -> None:
+    """Refuse a record whose samples its declared quantity cannot hold: constant throughout (a
+    sensor stuck or not connected), a housing acceleration of RMS above :data:`MAX_ACCEL_RMS`
+    or a DTE beyond :data:`MAX_DTE_MODULES` of the module (not in the declared unit); one line
+    naming the record, the value, the rule and the likely mistake."""
+    lo, hi = float(np.min(x)), float(np.max(x))
+    if hi - lo <= 1e-12 * max(abs(lo), abs(hi), np.finfo(float).tiny):
+        raise _fail(path, rec, f"every sample is {lo:g}: a constant record (a sensor stuck, "
+                               "not connected or not recorded) has no vibration to compare; "
+                               "leave it out or record it again")
+    unit = "m/s^2" if quantity == "accel_m_s2" else "m"
+    if np.all(x == np.round(x)):
+        raise _fail(path, rec, f"every sample of this {quantity} record is a whole number "
+                               f"(RMS {float(np.std(x)):.3g}): quantised at 1 {unit}, it is raw "
+                               "ADC counts, not " + unit + ": scale them by the converter's "
+                               "volts per count and the sensor's sensitivity")
+    if quantity == "accel_m_s2":
+        rms = float(np.std(x))
+        if rms > MAX_ACCEL_RMS:
+            raise _fail(path, rec, f"accel_m_s2 of RMS {rms:.3g} m/s^2 lies above "
+                                   f"{MAX_ACCEL_RMS:g} m/s^2 (~1000 g), beyond any gearbox "
+                                   "housing's vibration (ISO 20816 stops a machine at tens of "
+                                   "mm/s; accelerometers saturate at 50-500 g): the signal is "
+                                   "not in m/s^2 (mm/s^2 are 1e-3 m/s^2; raw ADC counts?)")
+    else:
+        peak, limit = max(abs(lo), abs(hi)), MAX_DTE_MODULES * module_mm * 1e-3
+        if peak > limit:
+            raise _fail(path, rec, f"dte_m reaches {peak:.3g} m, above {limit:.3g} m, a tenth "
+                                   f"of the module ({module_mm:g} mm), beyond any tooth "
+                                   "deflection, profile error and backlash together: the signal "
+                                   "is not in metres (um are 1e-6 m, mm 1e-3 m), or it "
+                                   "holds the encoders' angle offset (its mean is the static "
+                                   "deflection, some um)")
+
+
+def _regular(path: Path, rec: str | None, f: Path, fix: str) -> None:
+    """Refuse ``f`` (a file of the bundle at ``path``) unless it is an existing regular file:
+    missing, a folder, or a FIFO or device (reading it waits or never ends) is said so."""
+    if not f.exists():
+        what = "is missing"
+    elif f.is_dir():
+        what = "is a folder, not a file"
+    elif not f.is_file():
+        what = "is not a regular file (a FIFO, a device or a socket)"
+    else:
+        return
+    name = f.relative_to(path) if f.is_relative_to(path) else f
+    if rec is None:
+        raise ValueError(f"bundle {path}: {name} {what}; {fix}")
+    raise _fail(path, rec, f"{name} {what}; {fix}")
 
 
 def _read_manifest(path: Path) -> pd.DataFrame:
     """manifest.csv with every cell checked; a bad cell is reported against its own record."""
     f = path / "manifest.csv"
-    if not f.is_file():
-        raise ValueError(f"bundle {path}: manifest.csv is missing (see "
-                         "docs/own-data.md)")
+    _regular(path, None, f, "it lists the records (see docs/own-data.md)")
     try:
         man = pd.read_csv(f, dtype=str, keep_default_na=False)
     except (pd.errors.EmptyDataError, pd.errors.ParserError, UnicodeDecodeError) as err:
@@ -195,8 +271,12 @@ def _read_sidecar(f: Path, current, where: str, stated: dict[str, str]
     """The overrides of the YAML file ``f`` of the dataclass ``current``'s keys (none if there
     is no such file), checked by building the value they give, and the keys it states as
     unknown (``stated``: the keys that may not be unknown, each with the reason)."""
-    if not f.is_file():
+    if not (f.exists() or f.is_symlink()):
         return {}, ()
+    if not f.is_file():
+        kind = "a folder" if f.is_dir() else ("not a regular file (a FIFO, a device, a socket "
+                                              "or a broken link)")
+        raise ValueError(f"{where}: {f} is {kind}; give a YAML file there, or remove it")
     name = f.name
     size = f.stat().st_size
     if size > MAX_YAML_BYTES:
@@ -207,7 +287,11 @@ def _read_sidecar(f: Path, current, where: str, stated: dict[str, str]
         _plain_yaml(text, name)  # raises ValueError
         # OmegaConf's YAML reads 4.9e4 as a number (PyYAML's YAML 1.1 reads a string)
         overrides = OmegaConf.to_container(OmegaConf.create(text or "{}"))
-    except (yaml.YAMLError, UnicodeDecodeError, OmegaConfBaseException) as err:
+    except UnicodeDecodeError as err:
+        raise ValueError(f"{where}: {f} is not UTF-8 text (byte {err.object[err.start]:#04x} "
+                         f"at offset {err.start}): a binary file? it must be YAML text mapping "
+                         "keys to values") from None
+    except (yaml.YAMLError, OmegaConfBaseException) as err:
         text = " ".join(str(err).split())
         raise ValueError(f"{where}: {name} is not readable YAML ({text})") from None
     except ValueError as err:  # an anchor, alias or tag
@@ -259,12 +343,11 @@ def _npy_header(f: Path) -> tuple[tuple[int, ...], np.dtype, int]:
         return shape, dtype, fp.tell()
 
 
-def _signal_size(path: Path, rec: str) -> int:
-    """The samples of record ``rec`` by its header, checked against the file's size before
-    anything is loaded."""
+def _signal_size(path: Path, rec: str, fs_hz: float) -> int:
+    """The samples of record ``rec`` by its header, checked against the file's size and
+    :data:`MAX_RECORD_SAMPLES` before anything is loaded."""
     f = path / "signals" / f"{rec}.npy"
-    if not f.is_file():
-        raise _fail(path, rec, f"signals/{rec}.npy is missing")
+    _regular(path, rec, f, "save the record there with numpy.save")
     try:
         shape, dtype, offset = _npy_header(f)
     except (ValueError, OSError, EOFError) as err:
@@ -278,13 +361,21 @@ def _signal_size(path: Path, rec: str) -> int:
         raise _fail(path, rec, f"signals/{rec}.npy: its header claims shape {shape} of {dtype} "
                                f"({claimed:,} bytes) but the file holds {held:,} bytes of data; "
                                "it is damaged or truncated: save it again with numpy.save")
+    if count > MAX_RECORD_SAMPLES:
+        most = MAX_RECORD_SAMPLES / fs_hz
+        raise _fail(path, rec, f"{count:,} samples ({count / fs_hz:.4g} s at fs_hz = "
+                               f"{fs_hz:g}), above the {MAX_RECORD_SAMPLES:,} a record may hold: "
+                               "the loop analyses all of a record's segments at once, ~100 "
+                               "bytes of memory a sample (1.7 GB at the limit), and their "
+                               f"scatter is known long before; cut it into records of at most "
+                               f"{most:.4g} s at this rate (each a row of the manifest) or give "
+                               "an excerpt")
     return count
 
 
 def _read_signal(path: Path, rec: str) -> np.ndarray:
     f = path / "signals" / f"{rec}.npy"
-    if not f.is_file():
-        raise _fail(path, rec, f"signals/{rec}.npy is missing")
+    _regular(path, rec, f, "save the record there with numpy.save")
     try:
         x = np.load(f, allow_pickle=False)
     except (ValueError, OSError, EOFError) as err:
@@ -339,8 +430,13 @@ def read_measurements(path: str | Path, base: Scenario
         table = FeatureTable(path, read_feature_table(path), gear | op,
                              unknown_gear + unknown_op)
         return table, check_scenario(check_scope(scn))
+    if path.exists() and not path.is_file():
+        raise ValueError(f"data = {str(path)!r} is not a regular file (a FIFO, a device or a "
+                         "socket) nor a folder; give a bundle folder or a feature-table .csv "
+                         "file (docs/own-data.md)")
+    why = " (no such file or folder)" if not path.exists() else ""
     raise ValueError(f"data = {str(path)!r} is neither a bundle folder nor a feature-table .csv "
-                     "file; see docs/own-data.md")
+                     f"file{why}; see docs/own-data.md")
 
 
 def write_bundle(path: str | Path, manifest: pd.DataFrame, signals: dict[str, np.ndarray],

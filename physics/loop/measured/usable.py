@@ -12,10 +12,13 @@ from __future__ import annotations
 import dataclasses
 import math
 
+import numpy as np
+
 from physics.loop.config import LoopSettings
 from physics.loop.effects import Effect, Param
 from physics.loop.measured.bundle import Bundle
 from physics.loop.measured.records import split_records
+from physics.loop.measured.worn_states import tip_thickness_mm
 from physics.params import Scenario
 
 #: the highest line the signature reads, as a share of the sampling rate
@@ -23,15 +26,39 @@ TOP_SHARE = 0.45
 #: a line is resolved in an analysis segment of ``segment_s`` if it lies this many frequency
 #: bins (``1 / segment_s``) from its neighbour (the Hann window's main lobe is +-2 bins)
 RESOLVED_BINS = 2.0
+#: the most pinion load cycles a record may state: a pinion at 20 000 r/min without a stop for
+#: 95 years (ISO 6336-2's life curves end at 1e10 cycles); below the wear run's own limit
+#: (:data:`~physics.loop.measured.worn_states.MAX_CYCLES`), which it searched up to for minutes
+MAX_LIFE_CYCLES = 1e12
 
 
 def check_usable(bundle: Bundle, base: Scenario, settings: LoopSettings) -> None:
-    """Refuse, before any work, a bundle the loop cannot use: a record whose analysis segment
+    """Refuse, before any work, a bundle the loop cannot use: a stated wear at or beyond the
+    thinner tooth's tip thickness (:func:`~physics.loop.measured.worn_states.tip_thickness_mm`:
+    no tip left to mesh) or stated cycles beyond a gear's life (:data:`MAX_LIFE_CYCLES`; both
+    found by the wear run after a minute before), a record whose analysis segment
     (``loop.segment_s``) holds less than one pinion revolution (the synchronous average needs
-    one), a record shorter than two segments (their scatter is the comparison's noise), or a
-    split without a train and a test record."""
+    one), a record shorter than two segments (their scatter is the comparison's noise), a
+    constant segment (a sensor that dropped out: its statistics are undefined), or a split
+    without a train and a test record."""
     man = bundle.manifest
     seg = settings.segment_s
+    gear = dataclasses.replace(base.gear, **bundle.gear)
+    tip = tip_thickness_mm(dataclasses.replace(base, gear=gear))
+    for row in man.itertuples(index=False):
+        if row.wear_mm >= tip:  # NaN (not stated) compares False
+            raise ValueError(f"bundle {bundle.path}: record {row.record!r}: wear_mm = "
+                             f"{row.wear_mm:g} reaches the {tip:.3g} mm the thinner tooth is "
+                             "thick at its tip (along its flank's normal; module "
+                             f"{gear.module_mm:g} mm): a flank worn that deep has no tip left "
+                             "to mesh; check that wear_mm is the pinion's root wear in mm "
+                             "(um are 1e-3 mm), or leave the cell empty")
+        if row.cycles > MAX_LIFE_CYCLES:
+            raise ValueError(f"bundle {bundle.path}: record {row.record!r}: cycles = "
+                             f"{row.cycles:.3g} lies beyond {MAX_LIFE_CYCLES:.0e} pinion load "
+                             "cycles, more than any gear's life (20 000 r/min for 95 years), "
+                             "which the wear model cannot run to; give the pinion's load "
+                             "cycles (revolutions) at the record, or leave the cell empty")
     for row in man.itertuples(index=False):
         revs = seg * row.n1_rpm / 60
         if revs < 1:
@@ -47,10 +74,32 @@ def check_usable(bundle: Bundle, base: Scenario, settings: LoopSettings) -> None
                              "(their scatter is the comparison's noise): set loop.segment_s <= "
                              f"{seconds / 2:.3g} (and >= {60 / row.n1_rpm:.3g}, one revolution) "
                              "or give longer records")
+        _check_segments(bundle, row.record, row.fs_hz, seg)
     try:
         split_records(man, settings.test_fraction, settings.seed)
     except ValueError as err:
         raise ValueError(f"bundle {bundle.path}: {err}") from None
+
+
+def _check_segments(bundle: Bundle, rec: str, fs_hz: float, segment_s: float) -> None:
+    """Refuse a record with a constant analysis segment (as
+    :func:`physics.signals.features.features` tells one: its range within 1e-12 of its
+    magnitude), naming the segment's time span."""
+    x = bundle.signals[rec]
+    n = round(segment_s * fs_hz)
+    if n < 2 or x.size < n:
+        return
+    seg = x[:x.size // n * n].reshape(-1, n)
+    top, low = seg.max(axis=1), seg.min(axis=1)
+    scale = np.maximum(np.maximum(np.abs(top), np.abs(low)), np.finfo(float).tiny)
+    flat = np.flatnonzero(top - low <= 1e-12 * scale)
+    if flat.size:
+        k = int(flat[0])
+        raise ValueError(f"bundle {bundle.path}: record {rec!r}: its analysis segment {k + 1} "
+                         f"of {len(seg)} ({k * segment_s:g}-{(k + 1) * segment_s:g} s, "
+                         f"loop.segment_s = {segment_s:g}) is constant at {float(seg[k, 0]):g}: "
+                         "a sensor that dropped out or a gap filled in; its kurtosis and "
+                         "crest are undefined: cut the record before the gap, or leave it out")
 
 
 def _clipped(p: Param, high: float) -> Param:

@@ -138,11 +138,24 @@ def records_history(scn: Scenario, rows: pd.DataFrame) -> WearHistory | None:
     if h.left_scope is None:
         _reached(h, GRID_REACH * max(w_max, h.root_at(c_max)), "the wear-state grid's top")
         return h
-    _reached(h, w_max, "the most worn record")
+    if h.root_mm[-1] < w_max:
+        _reached(h, w_max, f"the most worn record{_most(rows, 'wear_mm', np.isnan(stated))}")
     if c_max > h.cycles[-1]:
-        raise OutOfScope(f"records at {c_max:.3g} cycles lie beyond the {h.cycles[-1]:.3g} "
-                         f"cycles at which the model leaves its scope: {h.left_scope}")
+        raise OutOfScope(f"records at {c_max:.3g} cycles{_most(rows, 'cycles')} lie beyond the "
+                         f"{h.cycles[-1]:.3g} cycles at which the model leaves its scope: "
+                         f"{h.left_scope}")
     return h
+
+
+def _most(rows: pd.DataFrame, column: str, among: np.ndarray | None = None) -> str:
+    """`` (record 'NAME')``: the record of ``rows`` (``among`` them) with the largest
+    ``column``; empty where the rows are not named."""
+    values = rows[column].to_numpy(float).copy()
+    if among is not None:
+        values[~among] = np.nan
+    if "record" not in rows or not np.isfinite(values).any():
+        return ""
+    return f" (record {rows.record.iloc[int(np.nanargmax(values))]!r})"
 
 
 def records_cycles(h: WearHistory | None, rows: pd.DataFrame) -> np.ndarray:
