@@ -213,7 +213,11 @@ def table_units(path: str | Path, columns: dict[str, str], given: dict | None,
         import yaml
 
         try:
-            read = yaml.safe_load(side.read_text())
+            read = yaml.safe_load(side.read_text(encoding="utf-8"))
+        except UnicodeDecodeError as err:
+            raise ValueError(f"{side} is not UTF-8 text (byte {err.object[err.start]:#04x} at "
+                             f"offset {err.start}); write the units sidecar as text, "
+                             "column: unit per line") from None
         except yaml.YAMLError as err:
             raise ValueError(f"{side} is not readable YAML ({str(err).splitlines()[0]})") from None
         if read is not None and not (isinstance(read, dict) and all(

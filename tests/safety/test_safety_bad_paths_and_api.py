@@ -297,3 +297,15 @@ def test_an_unquoted_value_beyond_ascii_gets_the_way_to_quote_it(tmp_path):
         "Hydra: ckpt='/tmp/mé.pt' (in the shell: \"ckpt='/tmp/mé.pt'\"; in a list, each such "
         "item: [a,'é'])"], run.stderr
     assert not any(tmp_path.iterdir())
+
+
+def test_a_binary_units_sidecar_is_named(tmp_path):
+    """A units sidecar that is not text: one line naming the file and the byte, not a bare
+    decoding error."""
+    from surrogate.tables import table_units
+
+    table = tmp_path / "mine.csv"
+    table.write_text("a,wear_mm\n1,0.1\n")
+    (tmp_path / "mine.units.yaml").write_bytes(b"\x80\x81 binary")
+    with pytest.raises(ValueError, match=r"mine\.units\.yaml is not UTF-8 text \(byte 0x80"):
+        table_units(table, {}, None, ["a"])
