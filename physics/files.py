@@ -197,6 +197,21 @@ def check_writable(path: str | os.PathLike, key: str) -> None:
                          "choose a folder you can write to") from None
 
 
+def check_fresh(path: str | os.PathLike, key: str, patterns: tuple[str, ...], overwrite: bool,
+                flag: str) -> None:
+    """Refuse (ValueError, one line) an output folder ``path`` that already holds files of the
+    kinds a run writes there (``patterns``, e.g. ``*.csv``): an earlier run's or the user's
+    own, which the run would replace unasked; ``overwrite`` (the user's ``flag``) lets it."""
+    folder = Path(path)
+    if overwrite or not folder.is_dir():
+        return
+    found = sorted(p.name for pattern in patterns for p in folder.glob(pattern) if p.is_file())
+    if found:
+        more = f" and {len(found) - 1} more" if len(found) > 1 else ""
+        raise ValueError(f"{key} = {str(path)!r} already holds {found[0]}{more}, which this run "
+                         f"would replace; choose a new folder, or {flag} to replace them")
+
+
 def check_inside(path: str | os.PathLike, root: str | os.PathLike, key: str) -> None:
     """Refuse (ValueError, one line) a ``path`` that resolves outside ``root`` (e.g. a run
     folder made from ``task_name=../../x``): ``..`` and links are resolved first."""

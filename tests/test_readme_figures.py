@@ -39,7 +39,7 @@ def test_the_stored_reproduction_is_the_recorded_default_run():
     stored = table_hashes(REPRODUCED, sorted(p.name for p in REPRODUCED.glob("*.csv")))
     assert stored == recorded, (
         "docs/figures/reproduce is not the recorded default run: regenerate it with "
-        "python -m physics.reproduce out_dir=docs/figures/reproduce")
+        "python -m physics.reproduce out_dir=docs/figures/reproduce overwrite=true")
 
 
 def test_table8_quote():

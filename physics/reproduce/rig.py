@@ -46,7 +46,7 @@ import pandas as pd
 from scipy import stats
 
 from physics.dynamics.model import EXACT_PHASES, PairModel, build_model, simulate
-from physics.files import check_writable, pyplot, save_figure, write_csv
+from physics.files import check_fresh, check_writable, pyplot, save_figure, write_csv
 from physics.params import Scenario
 from physics.reference import RIG_RECORDS
 from physics.tribology.contact_wear import simulate_contact_wear
@@ -197,6 +197,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                          "%(default)s")
     ap.add_argument("--out", type=Path, default=Path("outputs") / "rig",
                     help="folder the files go to (default: %(default)s)")
+    ap.add_argument("--overwrite", action="store_true",
+                    help="replace the rig files an earlier run left in --out (else refused)")
     args = ap.parse_args(argv)
     if not args.table.is_file():
         print(f"error: --table {args.table} is not a file; give the rig's records table "
@@ -205,6 +207,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         table = read_rig_table(args.table)
         check_writable(args.out, "--out")
+        check_fresh(args.out, "--out", ("rig_*.csv", "rig_*.png"), args.overwrite, "--overwrite")
     except ValueError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2

@@ -49,7 +49,7 @@ from physics.dynamics.evolution import (
 )
 from physics.dynamics.model import build_model, simulate
 from physics.estimators.empirical_inverse import EmpiricalInverse, accuracy
-from physics.files import check_writable, sha256_file, write_csv, write_text
+from physics.files import check_fresh, check_writable, sha256_file, write_csv, write_text
 from physics.gear.contact import reduced_modulus
 from physics.gear.geometry import MeshGeometry
 from physics.gear.load_sharing import pair_loads
@@ -462,6 +462,8 @@ class ReproduceConfig(PhysicsConfig):
     #: after the tables, record their sha256 in tests/reproduce/table_hashes.sha256 of the
     #: checkout (HASH_RECORD): the default run only, from a repository checkout
     record_hashes: bool = False
+    #: replace the tables and figures an earlier run left in out_dir (else refused before work)
+    overwrite: bool = False
 
 
 @dataclass(frozen=True)
@@ -514,7 +516,7 @@ HASH_RECORD = Path(__file__).resolve().parents[2] / "tests" / "reproduce" / "tab
 UNRECORDED = frozenset({"estimator_accuracy.csv"})
 #: the keys that may be given with record_hashes=true: they change no recorded table
 #: (thesis_tables does: Table 15's model holds the measured rises beside its own)
-RECORD_KEYS = frozenset({"record_hashes", "out_dir"})
+RECORD_KEYS = frozenset({"record_hashes", "out_dir", "overwrite"})
 
 
 def table_hashes(folder: Path, names: list[str]) -> dict[str, str]:
@@ -571,6 +573,7 @@ def prepare(cfg: DictConfig) -> ReproducePlan:
     model's scope (:func:`physics.scope.check_scope`)."""
     record = _hash_record(cfg)
     check_writable(cfg.out_dir, "out_dir")
+    check_fresh(cfg.out_dir, "out_dir", ("*.csv", "*.png"), cfg.overwrite, "overwrite=true")
     scn = check_record(scenario_from_config(cfg))
     lubs = {lub.name: lub for lub in map(_lubricant_from_group, cfg.lubricants)}
     st, ev = cfg.stiffness, cfg.evolution

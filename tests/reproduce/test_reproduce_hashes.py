@@ -207,8 +207,8 @@ def test_a_refused_recording_ends_in_one_line_and_leaves_the_record(tmp_path):
     assert proc.returncode == 2, proc.stderr
     assert proc.stderr.splitlines() == [
         "error: record_hashes = true with case=4: the record holds the default run's tables, "
-        "which the test compares with a default run; drop case=4 (only out_dir, record_hashes "
-        "may be given with it)"]
+        "which the test compares with a default run; drop case=4 (only out_dir, overwrite, "
+        "record_hashes may be given with it)"]
     assert not any(tmp_path.iterdir()) and HASH_RECORD.read_bytes() == before
 
 

@@ -1,0 +1,47 @@
+"""The reproduction and the rig comparison never replace files they did not make: an output
+folder that already holds tables or figures (an earlier run's, or the user's own) is refused
+before work, unless the user says overwrite."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from physics.files import check_fresh
+from physics.reproduce.rig import main as rig_main
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_a_folder_with_a_table_of_the_users_is_refused_and_kept(tmp_path):
+    out = tmp_path / "res"
+    out.mkdir()
+    (out / "table02_speed.csv").write_text("mine\n")
+    proc = subprocess.run([sys.executable, "-m", "physics.reproduce", f"out_dir={out}",
+                           f"hydra.run.dir={tmp_path / 'hydra'}"], capture_output=True,
+                          text=True, timeout=120, cwd=ROOT)
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr.strip().splitlines()[-1] == (
+        f"error: out_dir = '{out}' already holds table02_speed.csv, which this run would "
+        "replace; choose a new folder, or overwrite=true to replace them")
+    assert (out / "table02_speed.csv").read_text() == "mine\n"
+    assert sorted(p.name for p in out.iterdir()) == ["table02_speed.csv"]
+
+
+def test_the_rig_comparison_refuses_its_own_earlier_files_without_overwrite(tmp_path, capsys):
+    (tmp_path / "rig_summary.csv").write_text("earlier\n")
+    assert rig_main(["--out", str(tmp_path)]) == 2
+    assert "already holds rig_summary.csv" in capsys.readouterr().err
+    assert (tmp_path / "rig_summary.csv").read_text() == "earlier\n"
+
+
+def test_overwrite_and_an_empty_or_new_folder_pass(tmp_path):
+    (tmp_path / "a.csv").write_text("x")
+    with pytest.raises(ValueError, match=r"already holds a\.csv, which this run would replace"):
+        check_fresh(tmp_path, "out_dir", ("*.csv",), False, "overwrite=true")
+    check_fresh(tmp_path, "out_dir", ("*.csv",), True, "overwrite=true")
+    check_fresh(tmp_path, "out_dir", ("*.png",), False, "overwrite=true")
+    check_fresh(tmp_path / "new", "out_dir", ("*.csv",), False, "overwrite=true")
