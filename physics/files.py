@@ -230,12 +230,19 @@ def existing_file(value: object, key: str, fix: str) -> Path:
     if isinstance(value, bool) or not isinstance(value, str | os.PathLike) or value == "":
         raise ValueError(f"{key} = {value!r} is not a file name; {fix}")
     path = Path(value)
-    if not path.exists():
-        what = "does not exist"
-    elif path.is_dir():
-        what = "is a folder, not a file"
-    elif not path.is_file():
-        what = "is not a regular file (a FIFO, a device or a socket)"
-    else:
+    what = file_problem(path)
+    if what is None:
         return path
     raise ValueError(f"{key} = {str(path)!r} {what}; {fix}")
+
+
+def file_problem(path: Path, missing: str = "does not exist") -> str | None:
+    """What keeps ``path`` from being read as a regular file (``missing`` where it does not
+    exist; a folder; a FIFO, device or socket, whose reading waits or never ends), or None."""
+    if not path.exists():
+        return missing
+    if path.is_dir():
+        return "is a folder, not a file"
+    if not path.is_file():
+        return "is not a regular file (a FIFO, a device or a socket)"
+    return None

@@ -29,7 +29,12 @@ from physics.loop.measured.bundle import (
     read_measurements,
 )
 from physics.loop.measured.records import group_keys
-from physics.loop.measured.usable import check_usable, shown_candidates
+from physics.loop.measured.usable import (
+    check_reference_folder,
+    check_stated_once,
+    check_usable,
+    shown_candidates,
+)
 from physics.loop.report import write_report
 from physics.loop.search.attribution import candidates_for
 from physics.loop.search.form_error import check_reference, form_reference
@@ -75,7 +80,7 @@ def prepare(cfg: DictConfig) -> LoopJob:
                          "off-path pairs of the exact contact are not in them yet); leave it at "
                          "'path' (a feature table takes either: docs/loop.md)")
     data, scn = read_measurements(cfg.data, base)
-    check_stated_once(cfg, data, base)
+    check_stated_once(cfg, data, base, _given())
     if isinstance(data, FeatureTable):  # what the loop cannot follow: refused before work
         check_table(data, scn)
     history = parse_history(cfg.reference)
@@ -128,56 +133,6 @@ def _given() -> set[str]:
     except (ValueError, AttributeError):
         return set()
     return {str(o).split("=", 1)[0].lstrip("+~") for o in task}
-
-
-def check_stated_once(cfg: DictConfig, data: Bundle | FeatureTable, base: Scenario) -> None:
-    """Refuse a setting of the command line the data overrides, which the run would ignore
-    without a word: a ``gear.*`` (or ``operating.*``, or ``case=``) value that the
-    ``gear.yaml`` (``operating.yaml``) beside the data states otherwise, and with a bundle an
-    ``operating.n1_rpm``, or an ``operating.torque_Nm`` where every record states its torque
-    (each record's own speed and torque are used: ``manifest.csv``)."""
-    given = _given()
-    stated = dict(data.gear) if isinstance(data, Bundle) else dict(data.stated)
-    for k, v in stated.items():
-        group = "gear" if hasattr(base.gear, k) else "operating"
-        current = getattr(getattr(base, group), k)
-        keys = [f"{group}.{k}"] + (["case"] if group == "operating" and cfg.case is not None
-                                   and k in ("n1_rpm", "torque_Nm") else [])
-        setting = next((key for key in keys if key in given), None)
-        if setting is not None and float(v) != float(current):
-            sidecar = "gear.yaml" if group == "gear" else "operating.yaml"
-            shown = f"case={cfg.case}" if setting == "case" else f"{setting}={current:g}"
-            raise ValueError(f"{shown} on the command line and {k}: {v:g} in the {sidecar} of "
-                             f"data={cfg.data} disagree (the file's would be used); state it "
-                             "in one place")
-    if isinstance(data, Bundle):
-        man = data.manifest
-        if "operating.n1_rpm" in given:
-            raise ValueError(f"operating.n1_rpm={base.operating.n1_rpm:g}: a bundle's records "
-                             f"state their own speed (manifest.csv n1_rpm of data={cfg.data}), "
-                             "so this setting would not be used; leave it out")
-        if "operating.torque_Nm" in given and man.torque_Nm.notna().all():
-            raise ValueError(f"operating.torque_Nm={base.operating.torque_Nm:g}: every record "
-                             f"of data={cfg.data} states its torque (manifest.csv torque_Nm), "
-                             "so this setting would not be used (it is the start of the "
-                             "calibration only where a record's torque is unknown); leave it "
-                             "out")
-
-
-def check_reference_folder(spec: str) -> None:
-    """Refuse a ``reference=`` that is neither of the unit's own history's forms
-    (:func:`~physics.loop.search.own_history.parse_history`) nor a folder, naming
-    ``reference=`` and the forms it takes (it was read as a bundle and blamed on ``data=``)."""
-    path = Path(spec)
-    if path.is_dir():
-        return
-    what = ("does not exist" if not path.exists() else
-            "is a feature table, not a bundle" if path.suffix == ".csv" else "is not a folder")
-    raise ValueError(f"reference={spec}: neither first:N, before:X nor a bundle folder "
-                     f"({str(path)!r} {what}); "
-                     "reference= takes first:N (this unit's first N records of each group), "
-                     "before:X (its records before X load cycles or the ISO 8601 date X) or a "
-                     "sister gearbox's bundle folder; e.g. reference=first:2")
 
 
 def execute(job: LoopJob) -> None:

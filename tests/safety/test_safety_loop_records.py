@@ -20,10 +20,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-import physics.loop.__main__ as loop_main
 import physics.loop.measured.bundle as bundle_mod
 from physics.loop import LoopSettings, check_usable, read_bundle, write_bundle
 from physics.loop.measured.bundle import FeatureTable, read_measurements
+from physics.loop.measured.usable import check_reference_folder, check_stated_once
 from physics.loop.measured.worn_states import tip_thickness_mm
 from physics.loop.table_loop import check_table
 from physics.params import Scenario
@@ -225,7 +225,7 @@ def test_a_malformed_reference_blames_reference_and_gives_its_forms(tmp_path, mo
     monkeypatch.chdir(tmp_path)
     (tmp_path / "t.csv").write_text(TABLE)
     with pytest.raises(ValueError) as err:
-        loop_main.check_reference_folder(spec)
+        check_reference_folder(spec)
     text = one_line(err)
     assert text.startswith(f"reference={spec}: neither first:N, before:X nor a bundle folder")
     assert said in text and "e.g. reference=first:2" in text and "data=" not in text
@@ -258,34 +258,26 @@ def test_a_dte_table_in_metres_nonsense_is_refused(tmp_path):
         check_table(_table(tmp_path, text), Scenario())
 
 
-def _given(monkeypatch, *overrides):
-    hc = types.SimpleNamespace(overrides=types.SimpleNamespace(task=list(overrides)))
-    monkeypatch.setattr(loop_main, "HydraConfig", types.SimpleNamespace(get=lambda: hc))
-
-
-def test_a_command_line_value_a_sidecar_overrides_is_refused(tmp_path, monkeypatch):
+def test_a_command_line_value_a_sidecar_overrides_is_refused(tmp_path):
     (tmp_path / "operating.yaml").write_text("n1_rpm: 1000\ntorque_Nm: unknown\n")
     table = _table(tmp_path)
     cfg = types.SimpleNamespace(case=None, data=str(tmp_path / "t.csv"))
-    _given(monkeypatch, "operating.n1_rpm=1500")
     base = Scenario()
     base = dataclasses.replace(base, operating=dataclasses.replace(base.operating, n1_rpm=1500.0))
     with pytest.raises(ValueError, match=r"operating.n1_rpm=1500 on the command line and "
                                          r"n1_rpm: 1000 in the operating.yaml"):
-        loop_main.check_stated_once(cfg, table, base)
-    _given(monkeypatch, "operating.torque_Nm=200")  # the centre of an unknown torque's prior
-    loop_main.check_stated_once(cfg, table, Scenario())
+        check_stated_once(cfg, table, base, {"operating.n1_rpm"})
+    # the centre of an unknown torque's prior
+    check_stated_once(cfg, table, Scenario(), {"operating.torque_Nm"})
 
 
-def test_a_bundles_speed_on_the_command_line_is_refused(tmp_path, monkeypatch):
+def test_a_bundles_speed_on_the_command_line_is_refused(tmp_path):
     bundle = read_bundle(write_bundle(tmp_path / "b", manifest(), signals()))
     cfg = types.SimpleNamespace(case=None, data=str(bundle.path))
-    _given(monkeypatch, "operating.n1_rpm=1500")
     with pytest.raises(ValueError, match=r"a bundle's records state their own speed"):
-        loop_main.check_stated_once(cfg, bundle, Scenario())
-    _given(monkeypatch, "operating.torque_Nm=200")
+        check_stated_once(cfg, bundle, Scenario(), {"operating.n1_rpm"})
     with pytest.raises(ValueError, match=r"every record .* states its torque"):
-        loop_main.check_stated_once(cfg, bundle, Scenario())
+        check_stated_once(cfg, bundle, Scenario(), {"operating.torque_Nm"})
 
 
 @pytest.mark.parametrize("key", ["data", "reference"])

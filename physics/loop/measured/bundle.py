@@ -26,6 +26,7 @@ import yaml
 from omegaconf import OmegaConf
 from omegaconf.errors import OmegaConfBaseException
 
+from physics.files import file_problem
 from physics.params import GearPair, Operating, Scenario
 from physics.scope import check_scope
 from physics.tribology.asperity_table import check_scenario
@@ -178,13 +179,8 @@ def check_values(path: Path, rec: str, quantity: str, x: np.ndarray, module_mm: 
 def _regular(path: Path, rec: str | None, f: Path, fix: str) -> None:
     """Refuse ``f`` (a file of the bundle at ``path``) unless it is an existing regular file:
     missing, a folder, or a FIFO or device (reading it waits or never ends) is said so."""
-    if not f.exists():
-        what = "is missing"
-    elif f.is_dir():
-        what = "is a folder, not a file"
-    elif not f.is_file():
-        what = "is not a regular file (a FIFO, a device or a socket)"
-    else:
+    what = file_problem(f, missing="is missing")
+    if what is None:
         return
     name = f.relative_to(path) if f.is_relative_to(path) else f
     if rec is None:

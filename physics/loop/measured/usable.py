@@ -11,12 +11,14 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from physics.loop.config import LoopSettings
 from physics.loop.effects import Effect, Param
-from physics.loop.measured.bundle import Bundle
+from physics.loop.measured.bundle import Bundle, FeatureTable
 from physics.loop.measured.records import split_records
 from physics.loop.measured.worn_states import tip_thickness_mm
 from physics.params import Scenario
@@ -150,3 +152,53 @@ def shown_candidates(candidates: list[tuple[Effect, dict]], bundle: Bundle, base
                          "loop.candidates or lengthen loop.segment_s")
     return kept, dropped
 
+
+def check_stated_once(cfg: Any, data: Bundle | FeatureTable, base: Scenario,
+                      given: set[str]) -> None:
+    """Refuse a setting of the command line (``given``: the keys it sets; ``cfg``: the run's
+    ``case`` and ``data``) the data overrides, which the run would ignore without a word: a
+    ``gear.*`` (or ``operating.*``, or ``case=``) value that the ``gear.yaml`` (``operating.yaml``)
+    beside the data states otherwise, and with a bundle an ``operating.n1_rpm``, or an
+    ``operating.torque_Nm`` where every record states its torque (each record's own speed and torque
+    are used: ``manifest.csv``)."""
+    stated = dict(data.gear) if isinstance(data, Bundle) else dict(data.stated)
+    for k, v in stated.items():
+        group = "gear" if hasattr(base.gear, k) else "operating"
+        current = getattr(getattr(base, group), k)
+        keys = [f"{group}.{k}"] + (["case"] if group == "operating" and cfg.case is not None
+                                   and k in ("n1_rpm", "torque_Nm") else [])
+        setting = next((key for key in keys if key in given), None)
+        if setting is not None and float(v) != float(current):
+            sidecar = "gear.yaml" if group == "gear" else "operating.yaml"
+            shown = f"case={cfg.case}" if setting == "case" else f"{setting}={current:g}"
+            raise ValueError(f"{shown} on the command line and {k}: {v:g} in the {sidecar} of "
+                             f"data={cfg.data} disagree (the file's would be used); state it "
+                             "in one place")
+    if isinstance(data, Bundle):
+        man = data.manifest
+        if "operating.n1_rpm" in given:
+            raise ValueError(f"operating.n1_rpm={base.operating.n1_rpm:g}: a bundle's records "
+                             f"state their own speed (manifest.csv n1_rpm of data={cfg.data}), "
+                             "so this setting would not be used; leave it out")
+        if "operating.torque_Nm" in given and man.torque_Nm.notna().all():
+            raise ValueError(f"operating.torque_Nm={base.operating.torque_Nm:g}: every record "
+                             f"of data={cfg.data} states its torque (manifest.csv torque_Nm), "
+                             "so this setting would not be used (it is the start of the "
+                             "calibration only where a record's torque is unknown); leave it "
+                             "out")
+
+
+def check_reference_folder(spec: str) -> None:
+    """Refuse a ``reference=`` that is neither of the unit's own history's forms
+    (:func:`~physics.loop.search.own_history.parse_history`) nor a folder, naming
+    ``reference=`` and the forms it takes (it was read as a bundle and blamed on ``data=``)."""
+    path = Path(spec)
+    if path.is_dir():
+        return
+    what = ("does not exist" if not path.exists() else
+            "is a feature table, not a bundle" if path.suffix == ".csv" else "is not a folder")
+    raise ValueError(f"reference={spec}: neither first:N, before:X nor a bundle folder "
+                     f"({str(path)!r} {what}); "
+                     "reference= takes first:N (this unit's first N records of each group), "
+                     "before:X (its records before X load cycles or the ISO 8601 date X) or a "
+                     "sister gearbox's bundle folder; e.g. reference=first:2")
