@@ -84,3 +84,17 @@ def test_real_rig_quote(model):
         kept = table.loc["kept"]
         assert (f"95 % interval covers {kept.interval_coverage_stages:.2f} of stages, "
                 f"{kept.interval_coverage_rows:.2f} of records") in cell
+
+
+def test_main_job_quote():
+    """The main job's figures, from the metrics.json of a clean-clone ``python train.py case=3``
+    kept in docs/figures."""
+    import json
+
+    m = json.loads((FIGURES / "main_job_case3_metrics.json").read_text())
+    quote = (f"{m['test_mean_relative_error_pct']:.2f} % mean relative error (a linear model of "
+             f"the same inputs {m['test_linear_mean_relative_error_pct']:.2f} %, the thesis's "
+             f"estimator {m['test_estimator_mean_relative_error_pct']:.0f} %); its 95 % interval "
+             f"covers {m['test_interval_coverage']:.1f} of the held-out readings")
+    assert quote in readme_row("Main job, case 3")
+
