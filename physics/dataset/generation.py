@@ -524,6 +524,12 @@ def plan_dataset(base: Scenario, spec: DatasetSpec, out_dir: str | Path, name: s
     if out.exists() and not out.is_dir():
         raise ValueError(f"{out_key} = {str(out_dir)!r} is a file; give a folder")
     check_writable(out, out_key)
+    for ours, record in ((out / f"{name}.parquet", out / f"{name}.json"),
+                         (out / f"{name}_signals.npy", out / f"{name}.json")):
+        if ours.exists() and not record.is_file():  # not this app's: the user's own file
+            raise ValueError(f"{out_key} = {str(out_dir)!r} already holds {ours.name}, which no "
+                             f"build of this app made (no {record.name} beside it) and this "
+                             "one would replace; choose another out_dir or name, or move it")
     digest = dataset_digest(base, spec)
     folder = chunk_folder(out, name)
     manifest = read_manifest(folder) if folder.is_dir() else {}

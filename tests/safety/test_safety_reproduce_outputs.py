@@ -45,3 +45,17 @@ def test_overwrite_and_an_empty_or_new_folder_pass(tmp_path):
     check_fresh(tmp_path, "out_dir", ("*.csv",), True, "overwrite=true")
     check_fresh(tmp_path, "out_dir", ("*.png",), False, "overwrite=true")
     check_fresh(tmp_path / "new", "out_dir", ("*.csv",), False, "overwrite=true")
+
+
+def test_the_dataset_app_keeps_a_dataset_file_it_did_not_make(tmp_path):
+    """A dataset.parquet without the app's dataset.json beside it is the user's: refused
+    before work, and kept."""
+    from physics.dataset.generation import DatasetSpec, plan_dataset
+    from physics.params import Scenario
+
+    (tmp_path / "dataset.parquet").write_text("mine")
+    spec = DatasetSpec(cases=[3], replicates=2, wear_states=2, chunks=2)
+    with pytest.raises(ValueError, match=r"already holds dataset\.parquet, which no build of "
+                                         r"this app made"):
+        plan_dataset(Scenario(), spec, tmp_path)
+    assert (tmp_path / "dataset.parquet").read_text() == "mine"
