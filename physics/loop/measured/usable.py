@@ -1,7 +1,8 @@
 """What a bundle lets the loop do, decided before any work: the rules a bundle the loop cannot
 use breaks (:func:`check_usable`, each refusal one line naming the record, the value, the rule
 and the fix), and each candidate effect's parameter range clipped to what the records can show
-(:func:`shown_candidates`).
+(:func:`shown_candidates`); a command-line setting the data's sidecars would silently override
+(:func:`check_stated_once`) and a ``reference=`` of no known form (:func:`check_reference_folder`).
 
 A bundle that passes the format's rules (:mod:`physics.loop.measured.bundle`) and these runs to the
 end.
