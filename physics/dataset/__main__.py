@@ -23,6 +23,7 @@ from physics.dataset.generation import (
     acquire_output,
     base_scenario,
     build_dataset,
+    check_not_users,
     chunk_is_done,
     chunks_kept,
     plan_dataset,
@@ -48,6 +49,7 @@ def plan(cfg: DictConfig) -> DatasetJob:
 
 def prepare(cfg: DictConfig) -> DatasetJob:
     job = plan(cfg)
+    check_not_users(job)  # this app always writes the dataset it plans
     acquire_output(job)  # the last check: one writer per dataset (released by build_dataset)
     return job
 

@@ -524,12 +524,6 @@ def plan_dataset(base: Scenario, spec: DatasetSpec, out_dir: str | Path, name: s
     if out.exists() and not out.is_dir():
         raise ValueError(f"{out_key} = {str(out_dir)!r} is a file; give a folder")
     check_writable(out, out_key)
-    for ours, record in ((out / f"{name}.parquet", out / f"{name}.json"),
-                         (out / f"{name}_signals.npy", out / f"{name}.json")):
-        if ours.exists() and not record.is_file():  # not this app's: the user's own file
-            raise ValueError(f"{out_key} = {str(out_dir)!r} already holds {ours.name}, which no "
-                             f"build of this app made (no {record.name} beside it) and this "
-                             "one would replace; choose another out_dir or name, or move it")
     digest = dataset_digest(base, spec)
     folder = chunk_folder(out, name)
     manifest = read_manifest(folder) if folder.is_dir() else {}
@@ -543,6 +537,18 @@ def plan_dataset(base: Scenario, spec: DatasetSpec, out_dir: str | Path, name: s
 def lock_path(job: DatasetJob) -> Path:
     """The lock file of a build (:func:`physics.dataset.chunks.lock_file`)."""
     return lock_file(job.out, job.name, job.chunk)
+
+
+def check_not_users(job: DatasetJob, out_key: str = "out_dir") -> None:
+    """Refuse, before work, a build that would replace a dataset file it did not make: a
+    ``<name>.parquet`` or ``<name>_signals.npy`` in the output folder without the
+    ``<name>.json`` every build writes beside them is the user's own."""
+    record = job.out / f"{job.name}.json"
+    for ours in (job.out / f"{job.name}.parquet", job.out / f"{job.name}_signals.npy"):
+        if job.merge and ours.exists() and not record.is_file():
+            raise ValueError(f"{out_key} = {str(job.out)!r} already holds {ours.name}, which no "
+                             f"build of this app made (no {record.name} beside it) and this "
+                             "one would replace; choose another out_dir or name, or move it")
 
 
 def acquire_output(job: DatasetJob) -> Path:
