@@ -132,9 +132,9 @@ def quiet_workers() -> None:
     - A worker starts with SIGINT blocked, from its first instruction on (loky starts it by
       fork and exec): one still importing would print a traceback of its own.
     - Loky stops its workers from a thread of its own through ``pgrep`` (without psutil),
-      which now starts with SIGINT blocked too: a second Ctrl-C ended ``pgrep``, the thread
-      died with a traceback, and the workers ran on: they wrote chunks after the app's line
-      had said none was kept, and kept the app from exiting until they were killed."""
+      which starts with SIGINT blocked too: a second Ctrl-C would end ``pgrep``, the thread
+      would die with a traceback and the workers run on, writing chunks after the app's line
+      had said none was kept and keeping the app from exiting until they were killed."""
     from joblib.externals.loky import process_executor
     from joblib.externals.loky.backend import fork_exec as module
 

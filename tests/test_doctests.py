@@ -1,5 +1,5 @@
 """The docstring examples of ``physics`` and ``surrogate`` run as doctests in the default test run
-(issue 70, item 5), and the main entry points keep theirs.
+and the main entry points keep theirs.
 
 A module takes part when its source contains ``>>>``: the files are read as text, so a module
 without examples is not imported here (``surrogate`` would import torch). ``__main__`` modules
@@ -22,7 +22,7 @@ PACKAGES = ("physics", "surrogate")
 FLAGS = doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE
 
 #: the public functions and classes whose docstrings must carry a numpydoc ``Examples`` section
-#: with at least one example (issue 70, item 5); each must also be found by the doctest finder,
+#: with at least one example; each must also be found by the doctest finder,
 #: so that its examples run
 ENTRY_POINTS = (
     "physics.gear.geometry.mesh_geometry",

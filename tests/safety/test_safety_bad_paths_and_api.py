@@ -1,10 +1,10 @@
-"""The last tracebacks and misleading messages of the surrogate's commands and Python API, each
-now one line naming the value, what is wrong and the fix:
+"""Bad input to the surrogate's commands and Python API, each answered in one line naming the
+value, what is wrong and the fix:
 
 - a checkpoint whose stored input deviations (or target scale) are zero: refused on loading
-  (it predicted infinities, or zero wear with an interval of width zero);
+  (it would predict infinities, or zero wear with an interval of width zero);
 - ``surrogate.summarise`` on a folder that does not exist, a file, an empty folder, a folder
-  without run folders, a run whose records cannot be read (each a traceback);
+  without run folders, a run whose records cannot be read;
 - a full disk while ``surrogate.predict`` writes: one line, exit 1, no half-written file;
   an output that is a device (/dev/full) refused before work (with ``overwrite=true`` it
   would have been replaced by a file);

@@ -1,9 +1,8 @@
-"""Issue 71, the loop's side: record values checked against what their quantity allows (item 5),
-records larger than the loop analyses refused before loading (item 5), a stated wear or cycle
-count no gear can have refused before work (item 6), a constant record, a read-only working
-folder and a binary sidecar named in one line (item 7), a FIFO or device given as a signal file
-and a malformed ``reference=`` said to be so (item 8); and what the hostile pass over the loop's
-inputs found: impossible feature values in a table, command-line settings a sidecar or manifest
+"""The loop's inputs: record values checked against what their quantity allows, records larger
+than the loop analyses refused before loading, a stated wear or cycle count no gear can have
+refused before work, a constant record, a read-only working folder and a binary sidecar named
+in one line, a FIFO or device given as a signal file and a malformed ``reference=`` said to be
+so; impossible feature values in a table, and command-line settings a sidecar or manifest
 would override without a word."""
 
 from __future__ import annotations
@@ -63,7 +62,7 @@ def app(tmp_path: Path, *args: str, cwd: Path = ROOT) -> tuple[subprocess.Comple
     return run, time.monotonic() - start
 
 
-# --- item 5: units and sizes ------------------------------------------------------------------
+# --- units and sizes -----------------------------------------------------------------------------
 
 def test_acceptance_acceleration_in_raw_counts_is_refused_naming_record_value_and_rule(tmp_path):
     """The user's probe: counts of about 1e9 were accepted without a word."""
@@ -121,7 +120,7 @@ def test_a_record_above_the_analysed_size_is_refused_before_loading(tmp_path, mo
     assert "at most 335.5 s at this rate" in text
 
 
-# --- item 6: refusals before work ---------------------------------------------------------------
+# --- refusals before work ------------------------------------------------------------------------
 
 @pytest.mark.parametrize("column, cells, shown", [
     ("wear_mm", [0, 0, 0, 5.0], "wear_mm = 5 reaches the 1.15 mm the thinner tooth is thick"),
@@ -149,7 +148,7 @@ def test_the_tip_thickness_follows_the_bundles_gear(tmp_path):
     assert tip_thickness_mm(Scenario()) < 1.5
 
 
-# --- item 7: constant records, read-only folders, binary sidecars -------------------------------
+# --- constant records, read-only folders, binary sidecars ----------------------------------------
 
 def test_acceptance_an_all_zero_record_is_named(tmp_path):
     sig = signals()
@@ -192,7 +191,7 @@ def test_a_binary_sidecar_is_named(tmp_path, sidecar):
         one_line(err)
 
 
-# --- item 8: messages that point the right way --------------------------------------------------
+# --- messages that point the right way -----------------------------------------------------------
 
 @pytest.mark.parametrize("kind", ["fifo", "device"])
 def test_a_fifo_or_device_as_a_signal_file_is_said_to_be_so(tmp_path, kind):
@@ -231,7 +230,7 @@ def test_a_malformed_reference_blames_reference_and_gives_its_forms(tmp_path, mo
     assert said in text and "e.g. reference=first:2" in text and "data=" not in text
 
 
-# --- the hostile pass ---------------------------------------------------------------------------
+# --- values and settings -------------------------------------------------------------------------
 
 def _table(tmp_path, text=TABLE) -> FeatureTable:
     (tmp_path / "t.csv").write_text(text)

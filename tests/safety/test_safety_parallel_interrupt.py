@@ -2,11 +2,11 @@
 ``train.py`` building a missing dataset): one ``interrupted:`` line saying truly which chunks
 were kept, exit code 130, no worker's traceback, no hang, no worker left running.
 
-It ended otherwise at two moments. A Ctrl-C between a worker's start and joblib's record of it
-left that worker unknown to joblib: it printed a traceback after the app's line. And a second
-Ctrl-C (it reaches the whole process group) ended the ``pgrep`` through which loky stops its
-workers: loky's thread died with a traceback, the workers ran on and wrote both chunks after
-the line had said none was kept, and the app waited for them until it was killed."""
+Two moments need care. A Ctrl-C between a worker's start and joblib's record of it leaves that
+worker unknown to joblib, free to print a traceback after the app's line. And a second Ctrl-C
+(it reaches the whole process group) would end the ``pgrep`` through which loky stops its
+workers: loky's thread would die with a traceback and the workers run on, writing chunks after
+the line had said none was kept, with the app waiting for them."""
 
 from __future__ import annotations
 

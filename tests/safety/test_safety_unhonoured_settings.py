@@ -1,8 +1,8 @@
 """Every setting a training run cannot honour is refused before any work, in one line naming it
-and the fix: ``init_from=m.pt data.sensors=[dte]`` trained (exit 0) with the network's
-acceleration features and said nothing. Also refused: the default inputs' choice beside
+and the fix: ``init_from=m.pt data.sensors=[dte]`` (a network that reads acceleration
+features). Also refused: the default inputs' choice beside
 ``data.inputs``, another shape for a fine-tune, the physics dataset's build settings beside a
-table of one's own, and ``data.inputs=[]`` (it asked for the project's 14 default columns)."""
+table of one's own, and ``data.inputs=[]``."""
 
 from __future__ import annotations
 

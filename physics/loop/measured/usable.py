@@ -39,7 +39,7 @@ def check_usable(bundle: Bundle, base: Scenario, settings: LoopSettings) -> None
     """Refuse, before any work, a bundle the loop cannot use: a stated wear at or beyond the
     thinner tooth's tip thickness (:func:`~physics.loop.measured.worn_states.tip_thickness_mm`:
     no tip left to mesh) or stated cycles beyond a gear's life (:data:`MAX_LIFE_CYCLES`; both
-    found by the wear run after a minute before), a record whose analysis segment
+    else found by the wear run after minutes of work), a record whose analysis segment
     (``loop.segment_s``) holds less than one pinion revolution (the synchronous average needs
     one), a record shorter than two segments (their scatter is the comparison's noise), a
     constant segment (a sensor that dropped out: its statistics are undefined), or a split
@@ -192,7 +192,7 @@ def check_stated_once(cfg: Any, data: Bundle | FeatureTable, base: Scenario,
 def check_reference_folder(spec: str) -> None:
     """Refuse a ``reference=`` that is neither of the unit's own history's forms
     (:func:`~physics.loop.search.own_history.parse_history`) nor a folder, naming
-    ``reference=`` and the forms it takes (it was read as a bundle and blamed on ``data=``)."""
+    ``reference=`` and the forms it takes (read as a bundle, it would be blamed on ``data=``)."""
     path = Path(spec)
     if path.is_dir():
         return
