@@ -9,14 +9,18 @@ of 8 records; one reading: a gearbox's baseline record and one record); as refer
 in the same run, the same computation in torch (:func:`surrogate.inference.torch_predict`) and
 the analytic empirical-inverse estimator (target: >= 1e6 rows/s and >= 100 times the
 estimator). Timing does not depend on the weights' values, so the network is built with its
-initial weights; the schema is fitted to random rows.
+initial weights; the schema is fitted to random rows. ``--out FILE.json`` also writes the
+figures (``docs/figures/bench_surrogate.json`` is the run the README quotes).
 """
 
 from __future__ import annotations
 
+import argparse
+import json
 import time
 import timeit
 from functools import partial
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -56,6 +60,12 @@ def records(rng: np.random.Generator, n: int, per_gearbox: int) -> pd.DataFrame:
 
 
 def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--out", type=Path, help="also write the figures to this JSON file")
+    args = ap.parse_args()
+    if args.out is not None and args.out.suffix != ".json":
+        ap.error(f"--out = {str(args.out)!r} is not a .json file name; give e.g. "
+                 "docs/figures/bench_surrogate.json")
     torch.manual_seed(0)
     cols = input_columns(["dte", "acc"], True, baseline=True)
     lines = tuple(BASELINE_INPUTS)
@@ -105,6 +115,15 @@ def main() -> None:
           f"reading through predict; torch {one_ref:.0f} us)")
     print(f"empirical inverse, batch            : {est_rate:,.0f} rows/s, one row {est_one:.0f} us")
     print(f"surrogate / estimator (batch)       : {batch / est_rate:.0f} x (target >= 100)")
+    if args.out is not None:
+        figures = {"torch_threads": threads, "batch_rows_per_s": batch,
+                   "one_thread_rows_per_s": serial, "torch_rows_per_s": ref,
+                   "torch_one_thread_rows_per_s": ref_serial, "predict_rows_per_s": checked,
+                   "one_row_us": one, "one_reading_through_predict_us": one_checked,
+                   "torch_one_row_us": one_ref, "estimator_rows_per_s": est_rate,
+                   "estimator_one_row_us": est_one, "over_estimator": batch / est_rate}
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+        args.out.write_text(json.dumps(figures, indent=1) + "\n")
 
 
 if __name__ == "__main__":

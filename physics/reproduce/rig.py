@@ -26,6 +26,10 @@ here, each choice named:
 Each column is divided by its new-gear value (the rig's healthy stage mean). The summary gives,
 per contact and torque, Spearman's rank correlation over the stages and the rises at the stages
 nearest 0.4 and 0.9 mm, model beside rig.
+
+The stage means also go out as the measured-data loop's feature table (:func:`loop_table`,
+folder ``rig_loop_table``): ``wear_mm`` and ``rms_g`` per stage, with the ``gear.yaml`` and
+``operating.yaml`` of what the rig's source states (the torque ``unknown``).
 """
 
 # ruff: noqa: E402 (the imports after the handlers: see install_at_start)
@@ -46,7 +50,7 @@ import pandas as pd
 from scipy import stats
 
 from physics.dynamics.model import EXACT_PHASES, PairModel, build_model, simulate
-from physics.files import check_fresh, check_writable, pyplot, save_figure, write_csv
+from physics.files import check_fresh, check_writable, pyplot, save_figure, write_csv, write_text
 from physics.params import Scenario
 from physics.reference import RIG_RECORDS
 from physics.tribology.contact_wear import simulate_contact_wear
@@ -77,12 +81,29 @@ def read_rig_table(path: Path) -> pd.DataFrame:
     return table
 
 
+def _stage_rms(table: pd.DataFrame) -> pd.DataFrame:
+    """One row per stage in stage order: ``stage_order``, ``stage``, ``wear_mm`` and the mean
+    ``rms_g`` of its records."""
+    return (table.groupby(["stage_order", "stage"], sort=True)
+            .agg(wear_mm=("wear_mm", "first"), rms_g=("acc_rms_g", "mean")).reset_index())
+
+
 def stage_means(table: pd.DataFrame) -> pd.DataFrame:
     """Stage means of the rig's RMS, in stage order, over the healthy stage's."""
-    means = (table.groupby(["stage_order", "stage"], sort=True)
-             .agg(wear_mm=("wear_mm", "first"), rms=("acc_rms_g", "mean")).reset_index())
-    healthy = float(means.loc[means["wear_mm"] == 0, "rms"].mean())
-    return means.assign(rms_measured=means["rms"] / healthy).drop(columns="rms")
+    means = _stage_rms(table)
+    healthy = float(means.loc[means["wear_mm"] == 0, "rms_g"].mean())
+    return means.assign(rms_measured=means["rms_g"] / healthy).drop(columns="rms_g")
+
+
+def loop_table(table: pd.DataFrame, folder: Path) -> None:
+    """The rig's stage means as a feature table of the measured-data loop (``python -m
+    physics.loop data=FOLDER/rig_stage_means.csv``): ``wear_mm`` and the stage's mean
+    ``rms_g`` in stage order, beside a ``gear.yaml`` of the rig's stated geometry and an
+    ``operating.yaml`` of its stated speed, the torque ``unknown``."""
+    write_csv(_stage_rms(table)[["wear_mm", "rms_g"]], folder / "rig_stage_means.csv")
+    gear = "".join(f"{k}: {v:g}\n" for k, v in RIG_GEAR.items())
+    write_text(folder / "gear.yaml", gear)
+    write_text(folder / "operating.yaml", f"n1_rpm: {RIG_SPEED_RPM:g}\ntorque_Nm: unknown\n")
 
 
 def rig_scenario(torque_Nm: float) -> Scenario:
@@ -191,7 +212,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         description="The model's housing vibration against wear beside a real rig's stage "
                     "means, the rig's unknown load swept over 20-200 N m.",
         epilog="writes rig_comparison.csv (one row per stage), rig_summary.csv (one row per "
-               "torque) and rig_comparison.png into --out")
+               "torque), rig_comparison.png and the loop's feature table rig_loop_table/ "
+               "(rig_stage_means.csv, gear.yaml, operating.yaml) into --out")
     ap.add_argument("--table", type=Path, default=default_table(),
                     help="the rig's records (stage, stage_order, wear_mm, acc_rms_g); default: "
                          "%(default)s")
@@ -207,7 +229,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         table = read_rig_table(args.table)
         check_writable(args.out, "--out")
-        check_fresh(args.out, "--out", ("rig_*.csv", "rig_*.png"), args.overwrite, "--overwrite")
+        check_fresh(args.out, "--out", ("rig_*.csv", "rig_*.png", "rig_loop_table/*"),
+                    args.overwrite, "--overwrite")
     except ValueError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
@@ -220,6 +243,7 @@ def _run(table: pd.DataFrame, out: Path) -> int:
     write_csv(stages, out / "rig_comparison.csv")
     write_csv(summary, out / "rig_summary.csv")
     plot_rig_comparison(stages, out / "rig_comparison.png")
+    loop_table(table, out / "rig_loop_table")
     print(summary.to_string(index=False, float_format=lambda v: f"{v:.3g}"))
     return 0
 

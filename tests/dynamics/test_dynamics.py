@@ -168,7 +168,9 @@ def test_two_dof_and_reduced_forms_agree(ms):
     """The compiled reduced integrator against solve_ivp on the two-inertia equations, the
     reference sampled like the integrator's record (the DTE at every step, the force averaged
     over every step by Simpson's rule) and passed through the same anti-aliasing filter as
-    the sensors' records."""
+    the sensors' records. The reference's tolerances (rtol 1e-7) move the difference by less
+    than 1e-6 of the range from rtol 1e-9's; the two agree within 0.03 % (DTE) and 0.05 %
+    (force) of the range."""
     scn = _scn(duration_s=0.004, transient_s=0.0)
     model = build_model(scn, ms)
     resp = simulate(model, scn.dynamics)
@@ -176,12 +178,13 @@ def test_two_dof_and_reduced_forms_agree(ms):
     half = (len(anti_aliasing_filter(n_sub)) - 1) // (2 * n_sub)
     n_out = resp.dte.shape[1]
     steps = np.arange(2 * (n_sub - half * n_sub), 2 * (n_out + half) * n_sub + 3) / 2
-    x, force = simulate_two_dof(model, resp.time[0] + (steps - n_sub) * dt)
+    x, force = simulate_two_dof(model, resp.time[0] + (steps - n_sub) * dt, rtol=1e-7,
+                                atol=1e-11)
     x = x[:-2:2]
     force = (force[:-2:2] + 4 * force[1::2] + force[2::2]) / 6
-    assert np.max(np.abs(anti_aliased(x, n_sub, n_out) - resp.dte[0])) < 0.01 * np.ptp(resp.dte)
+    assert np.max(np.abs(anti_aliased(x, n_sub, n_out) - resp.dte[0])) < 1e-3 * np.ptp(resp.dte)
     assert (np.max(np.abs(anti_aliased(force, n_sub, n_out) - resp.force[0]))
-            < 0.01 * np.ptp(resp.force))
+            < 1e-3 * np.ptp(resp.force))
 
 
 def test_records_are_anti_aliased():

@@ -65,15 +65,22 @@ def test_wear_profile_outputs(out):
     assert not list(out.glob(".*.tmp"))  # atomic writes leave no temporaries
 
 
-def test_overrides_reach_the_physics(tmp_path):
-    subprocess.run(
-        [sys.executable, "-m", "physics.reproduce", f"out_dir={tmp_path}", *FAST,
-         "gear.module_mm=3", "gear.bore_radius1_mm=12",
-         "gear.bore_radius2_mm=20", f"hydra.run.dir={tmp_path / 'hydra'}"],
-        check=True, cwd=Path(__file__).resolve().parents[2],
-    )
-    df = pd.read_csv(tmp_path / "wear_profile.csv")
-    assert df.radius_mm.max() == pytest.approx(3 * 27 / 2 + 3, rel=1e-6)  # gear tip radius
+def test_overrides_reach_the_physics(tmp_path, config_store):
+    """Gear overrides on the command line reach the scenario the reproduction runs, and its
+    geometry: the gear's tip radius m z2 / 2 + m of a module-3 pair."""
+    from physics.gear.stiffness import mesh_stiffness
+    from tests.acceptance.test_bad_input import APPS, composed
+
+    spec = APPS["reproduce"]
+    prepare = spec.prepare()
+    plan = prepare(composed(spec, [f"out_dir={tmp_path / 'out'}", *FAST, "gear.module_mm=3",
+                                   "gear.bore_radius1_mm=12", "gear.bore_radius2_mm=20"],
+                            tmp_path / "run"))
+    g = plan.scenario.gear
+    assert (g.module_mm, g.bore_radius1_mm, g.bore_radius2_mm) == (3.0, 12.0, 20.0)
+    ra2 = mesh_stiffness(g, plan.scenario.material).geometry.ra2
+    assert ra2 == pytest.approx((3 * 27 / 2 + 3) * 1e-3, rel=1e-9)
+    assert not (tmp_path / "out").exists()  # prepare writes nothing
 
 
 def test_bad_override_fails_before_writing(tmp_path):

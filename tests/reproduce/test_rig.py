@@ -93,3 +93,25 @@ def test_the_command_refuses_a_table_without_its_columns(tmp_path, capsys):
     assert rig.main(["--table", str(bad), "--out", str(tmp_path / "out")]) == 2
     assert "columns ['acc_rms_g', 'stage_order'] are missing" in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
+
+
+def test_the_loop_table_is_the_stage_means_with_the_rigs_stated_data(tmp_path):
+    """The loop's feature table: per stage, the mean of its records' RMS (hand-computed here
+    by a loop over the stages), read by the loop's reader with the rig's module, teeth and
+    speed, and its torque unknown."""
+    from physics.loop.measured.bundle import read_measurements
+    from physics.params import Scenario
+
+    records = rig.read_rig_table(rig.default_table())
+    rig.loop_table(records, tmp_path)
+    table, scn = read_measurements(tmp_path / "rig_stage_means.csv", Scenario())
+    frame = table.frame
+    orders = sorted(records.stage_order.unique())
+    assert len(frame) == len(orders) == 36 and frame.wear_mm.is_monotonic_increasing
+    for row, order in zip(frame.itertuples(), orders, strict=True):
+        mine = records[records.stage_order == order]
+        assert row.wear_mm == mine.wear_mm.iloc[0]
+        assert row.rms_g == pytest.approx(mine.acc_rms_g.sum() / len(mine), rel=1e-12)
+    assert (scn.gear.module_mm, scn.gear.z1, scn.gear.z2, scn.operating.n1_rpm) == (
+        3.0, 18, 35, 900.0)
+    assert table.torque_unknown
