@@ -19,10 +19,11 @@ so the floor column is empty there. Prints and writes ``loop_runs.csv`` (one row
 bundle: truth, choice and verdict, held-out error before/after and that of the data-generating
 model itself, wear-estimate error and skill and the model that reads it, seconds, the first
 round's best candidate with the null test's figures on it, and the clean floor with whether
-halving is attainable at all, :func:`physics.testbeds.loop_bench.attainable`) and
-``loop_confusion.csv`` (truth x choice counts), each bundle's ``report.json`` and ``report.md``
-under ``reports/<generator>_<effect>_<seed>_<quantity>/`` (every candidate's figures), the
-rates the loop is judged by: right effect named (or an unexplained residual reported), held-out
+halving is attainable at all, :func:`physics.testbeds.loop_bench.attainable`),
+``loop_confusion.csv`` (truth x choice counts) and ``loop_timing.json`` (the solo timing),
+each bundle's ``report.json`` and ``report.md`` under
+``reports/<generator>_<effect>_<seed>_<quantity>/`` (every candidate's figures), the rates
+the loop is judged by: right effect named (or an unexplained residual reported), held-out
 error at least halved, nothing added on clean bundles, and ``loop_visibility.csv``: for each
 bundle the entry family or mesh harmonic whose residual most exceeds that of the other clean
 bundles of its quantity (:func:`physics.testbeds.loop_bench.visibility`).
@@ -50,6 +51,7 @@ threads.
 from __future__ import annotations
 
 import argparse
+import json
 import multiprocessing
 import os
 import tempfile
@@ -143,11 +145,11 @@ def one(job: tuple[str, str | None, int, int, dict, str, tuple[str, ...], str,
 
 
 def solo_timing(generator: str, loop: dict, tmp: Path, both: bool = False,
-                reference: FormReference | None = None) -> None:
+                reference: FormReference | None = None) -> dict:
     """Time one bundle alone on the machine (the pool's bundles share its cores): the own
     generator's of 20 records of 1 s, the independent one's of 12 records of 0.5 s (the
     target's size; 24 with ``both``), all with a tip relief, the loop only (a reference
-    calibrated before)."""
+    calibrated before). Returns the figures printed (``loop_timing.json``)."""
     base = base_scenario(generator)
     if generator == "own":
         path, _ = make_bundle(tmp / "timing", base, "tip_relief", 99, records=20)
@@ -164,6 +166,9 @@ def solo_timing(generator: str, loop: dict, tmp: Path, both: bool = False,
           + (f"; the serial design: {ref:.1f} s alone on 2 cores, {ref / wall:.1f} "
              "times this" if ref else "")
           + ("; target: 12 records of 0.5 s in <= 30 s" if generator == "independent" else ""))
+    return {"generator": generator, "both": both, "reference": reference is not None,
+            "records": len(bundle.records), "wall_s": wall, "cpu_s": cpu,
+            "load_average": os.getloadavg()[0], "cores": os.cpu_count()}
 
 
 def main() -> None:
@@ -210,8 +215,9 @@ def main() -> None:
         refs = (references(args.generator, args.both, args.records, Path(tmp))
                 if args.reference else {})
         if not args.own_history:
-            solo_timing(args.generator, loop, Path(tmp), args.both,
-                        refs.get("both" if args.both else "accel_m_s2"))
+            timing = solo_timing(args.generator, loop, Path(tmp), args.both,
+                                 refs.get("both" if args.both else "accel_m_s2"))
+            (out / "loop_timing.json").write_text(json.dumps(timing, indent=1) + "\n")
         if args.timing_only:
             return
         names = EFFECTS if args.generator == "own" else EFFECT_NAMES
