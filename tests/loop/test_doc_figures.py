@@ -1,0 +1,61 @@
+"""The figures docs/loop.md quotes from the loop's runs stored in ``docs/figures/loop/`` (each
+run's ``report.json``, written by ``python -m physics.loop`` with the command the page gives):
+each quote is rebuilt from its file at the digits shown, so changing a file or the page alone
+fails."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+RUNS = ROOT / "docs" / "figures" / "loop"
+
+
+def _page() -> str:
+    return " ".join((ROOT / "docs" / "loop.md").read_text().split())
+
+
+def _report(run: str) -> dict:
+    return json.loads((RUNS / run / "report.json").read_text())
+
+
+def test_table15_at_the_configured_torque():
+    r = _report("table15_configured")
+    assert r["chosen_effect"] == "tip_relief" and r["verdict"] == "effect"
+    cal = r["calibration"]
+    rise, measured = r["rise_after"], r["rise_measured"]
+    quotes = [
+        f"(damping {cal['damping_ratio']:.2f}, profile error {cal['profile_error_um']:.0f} um, "
+        f"`m_h` {cal['housing_mass_kg']:.0f} kg:",
+        f"a {r['chosen_parameters']['relief_um']:.0f} um tip relief is adopted (held-out error "
+        f"{r['error_before']:.3f} -> {r['error_after']:.3f})",
+        f"RMS x{rise['rms']:.2f} (measured x{measured['rms']:.2f}), peak-to-peak "
+        f"x{rise['peak_to_peak']:.2f} (x{measured['peak_to_peak']:.2f}) and kurtosis "
+        f"x{rise['kurtosis']:.2f} (x{measured['kurtosis']:.1f})",
+    ]
+    page = _page()
+    for quote in quotes:
+        assert quote in page, quote
+
+
+def test_table15_with_its_torque_unknown():
+    r = _report("table15_unknown")
+    assert r["chosen_effect"] is None and r["verdict"] == "none"
+    best = r["ranking"][0]
+    check = r["verdicts"][0]["checks"]["delta_bic"]
+    assert best["effect"] == "tooth_defect" and not check["holds"]
+    cut = 1 - best["heldout_error"] / r["error_before"]
+    quote = (f"torque {r['assumed']['torque_Nm']['calibrated']:.0f} N m; a tooth defect cuts the "
+             f"held-out error by {cut:.0%} ({r['error_before']:.3f} -> "
+             f"{best['heldout_error']:.3f}), its BIC by {-check['value']:.0f} of the "
+             f"{-check['bound']:.0f} required").replace("%", " %")
+    assert quote in _page(), quote
+
+
+@pytest.mark.parametrize("run", ["table15_configured", "table15_unknown"])
+def test_each_stored_run_is_a_feature_table_run(run):
+    r = _report(run)
+    assert r["mode"] == "feature_table" and r["wear_mm"] == [0.0, 0.005, 0.01, 0.015]
