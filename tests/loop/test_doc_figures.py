@@ -59,3 +59,27 @@ def test_table15_with_its_torque_unknown():
 def test_each_stored_run_is_a_feature_table_run(run):
     r = _report(run)
     assert r["mode"] == "feature_table" and r["wear_mm"] == [0.0, 0.005, 0.01, 0.015]
+
+
+def test_the_public_rigs_stage_means():
+    r = _report("rig")
+    torque = r["assumed"]["torque_Nm"]
+    low = r["at_bound"]["before"]["housing_mass_kg"]
+    defect = r["chosen_parameters"]
+    quotes = [
+        f"torque {torque['calibrated']:.0f} N m (prior {torque['prior'][0]:.0f}-"
+        f"{torque['prior'][1]:.0f}), the null's `m_h` at its {low[1]:.0f} kg bound",
+        f"a tooth defect growing with the wear adopted ({r['error_before']:.3f} -> "
+        f"{r['error_after']:.3f}; mean relative {r['feature_error_before_pct']:.1f} -> "
+        f"{r['feature_error_after_pct']:.1f} %; RMS rise to the last stage "
+        f"{r['rise_measured']['rms']:.2f}, model {r['rise_before']['rms']:.2f} -> "
+        f"{r['rise_after']['rms']:.2f})",
+        f"its depth at its bound ({defect['depth_um']:.0f} of "
+        f"{r['at_bound']['chosen effect']['depth_um'][1]:.0f} um, {defect['face_share']:.2f} of "
+        f"the face), the torque refitted to {torque['after']:.0f} N m",
+    ]
+    assert r["chosen_effect"] == "tooth_defect" and len(r["wear_mm"]) == 36
+    assert low[0] == "lower"
+    page = _page()
+    for quote in quotes:
+        assert quote in page, quote
