@@ -22,17 +22,66 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
 from physics.dynamics.model import PairModel
+from physics.gear.accuracy import DIAMETER_BANDS, MODULE_BANDS, cumulative_pitch_tolerance_um
 from physics.gear.tooth_contact import NO_CONTACT
+
+#: how far a tooth may stand off its place, in cumulative pitch tolerances ``F_p`` of the
+#: coarsest ISO 1328-1:1995 grade (12): a tooth's position deviation from its theoretical place
+#: is a cumulative pitch deviation, which that grade bounds by ``F_p`` (spread of the teeth),
+#: and a common offset of all teeth (a tooth thickness) is of the same size at the most. For the
+#: thesis pinion (m 2 mm, d 36 mm) the bound is 2 x 162 um = 0.32 mm; a value in um or mm given
+#: as metres lies far beyond it.
+POSITION_BOUND_FP = 2.0
+
+
+def _shown(value: Any) -> str:
+    """``repr(value)`` on one line and at most 60 characters (an array's repr wraps)."""
+    text = " ".join(repr(value).split())
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _tooth_models(teeth: Any, name: str = "teeth") -> list[PairModel]:
+    """``teeth`` as a list when it is a non-empty sequence of :class:`PairModel`; ``TypeError``
+    naming the argument, the offending value and what is allowed otherwise."""
+    fix = ("give a list of one-period PairModel, one per pinion tooth "
+           "(physics.dynamics.model.build_model)")
+    if isinstance(teeth, str | bytes | PairModel) or not isinstance(teeth, Sequence):
+        raise TypeError(f"{name} = {_shown(teeth)} ({type(teeth).__name__}) must be a sequence "
+                        f"of PairModel; {fix}")
+    if len(teeth) == 0:
+        raise ValueError(f"{name} = {_shown(teeth)} is empty; {fix}")
+    for i, m in enumerate(teeth):
+        if not isinstance(m, PairModel):
+            raise TypeError(f"{name}[{i}] = {_shown(m)} ({type(m).__name__}) is not a PairModel; "
+                            f"{fix}")
+    return list(teeth)
+
+
+def _finite_tables(teeth: list[PairModel]) -> None:
+    """Refuse a tooth model whose stiffness or gap tables hold NaN or infinities (gaps out of
+    reach are ``NO_CONTACT``, finite)."""
+    for i, m in enumerate(teeth):
+        for field in ("k_a", "k_b", "g_a", "g_b", "k_off", "g_off"):
+            table = getattr(m, field)
+            if table is not None and not np.all(np.isfinite(table)):
+                raise ValueError(f"teeth[{i}].{field} holds NaN or infinite values; build the "
+                                 "tooth models from finite wear depths and tooth positions")
 
 
 def per_tooth_model(teeth: Sequence[PairModel]) -> PairModel:
     """The revolution model whose pinion tooth ``i`` is ``teeth[i]``'s (one-period models of the
     same pair and operating point, one per pinion tooth, in mesh order; module doc). Damping,
-    inertias, errors and the other scalars are the first tooth's."""
+    inertias, errors and the other scalars are the first tooth's.
+
+    ``teeth`` that is no sequence of :class:`PairModel` is refused (``TypeError``), as are
+    tables with NaN or infinite values (``ValueError``)."""
+    teeth = _tooth_models(teeth)
+    _finite_tables(teeth)
     z1 = len(teeth)
     first = teeth[0]
     z = round(first.omega_mesh / first.omega1)
@@ -63,9 +112,18 @@ def with_tooth_positions(teeth: Sequence[PairModel], positions_m: Sequence[float
     ``positions_m[i]`` [m] ahead of its theoretical place along the line of action (behind
     where negative): its drive flank meets the mate earlier, so every gap of its pair (on the
     path and off it, wherever the tooth stands in the mesh sequence) is smaller by that much,
-    as worn material makes it larger. Gaps of pairs out of reach stay so."""
-    if len(positions_m) != len(teeth):
-        raise ValueError(f"{len(positions_m)} tooth positions for {len(teeth)} tooth models; "
+    as worn material makes it larger. Gaps of pairs out of reach stay so.
+
+    ``teeth`` must be a sequence of :class:`PairModel` and ``positions_m`` a one-dimensional
+    sequence of finite real numbers [m], one per tooth model, each within twice the cumulative
+    pitch tolerance ``F_p`` of the coarsest ISO 1328-1 grade for the pinion
+    (:data:`POSITION_BOUND_FP`; 0.32 mm for the thesis pinion): positions in um, such as
+    :func:`physics.gear.accuracy.tooth_positions_um` gives, are scaled by ``1e-6`` first.
+    Anything else is refused before any work."""
+    teeth = _tooth_models(teeth)
+    positions = _positions_m(positions_m, teeth)
+    if len(positions) != len(teeth):
+        raise ValueError(f"{len(positions)} tooth positions for {len(teeth)} tooth models; "
                          "give one per pinion tooth")
 
     def moved(g: np.ndarray | None, d: float) -> np.ndarray | None:
@@ -73,5 +131,49 @@ def with_tooth_positions(teeth: Sequence[PairModel], positions_m: Sequence[float
 
     return [dataclasses.replace(m, g_a=moved(m.g_a, d), g_b=moved(m.g_b, d),
                                 g_off=moved(m.g_off, d))
-            for m, d in zip(teeth, (float(x) for x in positions_m), strict=True)]
+            for m, d in zip(teeth, (float(x) for x in positions), strict=True)]
+
+
+def _positions_m(positions_m: Any, teeth: list[PairModel]) -> np.ndarray:
+    """``positions_m`` as a float array when it is a one-dimensional sequence of finite real
+    numbers [m] within the bound of :data:`POSITION_BOUND_FP`; otherwise ``TypeError`` (no
+    sequence of numbers) or ``ValueError``, naming the argument, the value, the rule and the
+    fix."""
+    what = "must be a 1-D sequence of finite numbers [m], one per pinion tooth"
+    fix = "give one position per tooth model in metres"
+    if positions_m is None or isinstance(positions_m, str | bytes | dict | set):
+        raise TypeError(f"positions_m = {_shown(positions_m)} "
+                        f"({type(positions_m).__name__}) {what}; {fix}")
+    try:
+        x = np.asarray(positions_m)
+    except (TypeError, ValueError) as e:  # ragged nesting
+        raise TypeError(f"positions_m = {_shown(positions_m)} {what}; {fix}") from e
+    if x.ndim == 0:
+        raise TypeError(f"positions_m = {_shown(positions_m)} is a single value: it {what}; "
+                        f"{fix}")
+    if x.ndim != 1:
+        raise ValueError(f"positions_m = {_shown(positions_m)} has shape {x.shape}: it {what}; "
+                         f"{fix}")
+    if x.dtype.kind not in "iuf":
+        raise TypeError(f"positions_m = {_shown(positions_m)} holds {x.dtype} values: it "
+                        f"{what} (not bools, text or None); {fix}")
+    x = x.astype(float)
+    bad = np.flatnonzero(~np.isfinite(x))
+    if bad.size:
+        raise ValueError(f"positions_m[{bad[0]}] = {float(x[bad[0]])!r}: positions_m {what}; "
+                         f"{fix}")
+    g = teeth[0].geometry.gear
+    # ISO 1328-1:1995 F_p of grade 12 (its coarsest) for the pinion, its module and reference
+    # diameter brought into the standard's size bands (the formula's own range)
+    m = min(max(g.module_mm, MODULE_BANDS[0]), MODULE_BANDS[-1])
+    d = min(max(g.module_mm * g.z1, DIAMETER_BANDS[0]), DIAMETER_BANDS[-1])
+    limit = POSITION_BOUND_FP * cumulative_pitch_tolerance_um(12, m, d, rounded=False) * 1e-6
+    worst = int(np.argmax(np.abs(x)))
+    if abs(x[worst]) > limit:
+        raise ValueError(
+            f"positions_m[{worst}] = {x[worst]:g} m lies beyond +-{limit:.3g} m, "
+            f"{POSITION_BOUND_FP:g} x the cumulative pitch tolerance F_p of ISO 1328-1's "
+            "coarsest grade (12) for this pinion; give the positions in metres "
+            "(1e-6 x the um of tooth_positions_um)")
+    return x
 

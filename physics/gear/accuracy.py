@@ -39,8 +39,13 @@ from __future__ import annotations
 
 import itertools
 import math
+import numbers
+from dataclasses import fields
+from typing import Any
 
 import numpy as np
+
+from physics.params import GearPair
 
 #: ISO 1328-1:1995 size bands [mm]: reference diameter and normal module
 DIAMETER_BANDS = (5.0, 20.0, 50.0, 125.0, 280.0, 560.0, 1000.0, 1600.0, 2500.0, 4000.0,
@@ -55,6 +60,64 @@ FEED_TOLERANCE = {4: (7, 1.26), 5: (8, 1.0), 6: (8, 1.26), 7: (9, 1.0), 8: (9, 1
                   9: (10, 1.0)}
 #: centre-distance allowance f_a per accuracy grade: the IT grade of which it is half
 CENTRE_ALLOWANCE_IT = {3: 6, 4: 6, 5: 7, 6: 7, 7: 8, 8: 8, 9: 9, 10: 9}
+#: the accuracy grades of ISO 1328-1:1995 (0 the finest, 12 the coarsest)
+GRADES = (0, 12)
+
+
+def _gear_limits(name: str) -> tuple[float, float]:
+    """The allowed range of a :class:`physics.params.GearPair` field, so that the checks here
+    follow the pair's own."""
+    meta = {f.name: f.metadata for f in fields(GearPair)}[name]
+    return meta["lo"], meta["hi"]
+
+
+def _shown(value: Any) -> str:
+    """``repr(value)`` on one line and at most 60 characters (an array's repr wraps)."""
+    text = " ".join(repr(value).split())
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _whole(name: str, value: Any, lo: int, hi: int, fix: str) -> int:
+    """``value`` as an ``int`` when it is a whole number in ``[lo, hi]`` by the rule of
+    :class:`physics.params.GearPair`'s whole fields (an int, a numpy integer or a float without
+    a fraction such as ``18.0``; never a bool). ``TypeError`` for a value that is no number,
+    ``ValueError`` for a number that breaks the rule; both name the argument, the value, the
+    rule and ``fix``."""
+    rule = (f"must be a whole number in [{lo}, {hi}] (an int, a numpy integer or a float such "
+            f"as {lo}.0)")
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(f"{name} = {_shown(value)} ({type(value).__name__}) {rule}; {fix}")
+    whole = isinstance(value, numbers.Integral) or (isinstance(value, float)
+                                                    and value.is_integer())
+    if not whole or not lo <= value <= hi:
+        raise ValueError(f"{name} = {_shown(value)} {rule}; {fix}")
+    return int(value)
+
+
+def _real(name: str, value: Any, fix: str, *, positive: bool = False) -> float:
+    """``value`` as a ``float`` when it is a finite real number (not a bool; ``positive``:
+    also > 0); otherwise ``TypeError`` (no number) or ``ValueError``, naming the argument, the
+    value, the rule and ``fix``."""
+    rule = "must be a finite number" + (" > 0" if positive else "")
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(f"{name} = {_shown(value)} ({type(value).__name__}) {rule}; {fix}")
+    if not math.isfinite(value) or (positive and not value > 0):
+        raise ValueError(f"{name} = {_shown(value)} {rule}; {fix}")
+    return float(value)
+
+
+def _grade(grade: Any, lo: int = GRADES[0], hi: int = GRADES[1]) -> int:
+    return _whole("grade", grade, lo, hi,
+                  f"give an ISO 1328-1:1995 accuracy grade, {lo} the finest to {hi}")
+
+
+def _sizes(module_mm: Any, d_mm: Any) -> tuple[float, float]:
+    """The geometric means of the ISO 1328-1 size bands of the module and the reference
+    diameter [mm], both checked first."""
+    m = _real("module_mm", module_mm, "give the normal module in mm", positive=True)
+    d = _real("d_mm", d_mm, "give the reference diameter m z in mm", positive=True)
+    return (band_mean(m, MODULE_BANDS, "module_mm (normal module)"),
+            band_mean(d, DIAMETER_BANDS, "d_mm (reference diameter)"))
 
 
 def band_mean(x: float, edges: tuple[float, ...], what: str) -> float:
@@ -63,7 +126,8 @@ def band_mean(x: float, edges: tuple[float, ...], what: str) -> float:
     for lo, hi in itertools.pairwise(edges):
         if lo < x <= hi or x == lo == edges[0]:
             return math.sqrt(lo * hi) if lo > 0 else math.sqrt(1.0 * hi)
-    raise ValueError(f"{what} = {x:g} mm lies outside [{edges[0]:g}, {edges[-1]:g}] mm")
+    raise ValueError(f"{what} = {x:g} mm lies outside the standard's size bands "
+                     f"[{edges[0]:g}, {edges[-1]:g}] mm; the formulas hold only inside them")
 
 
 def iso_round(value_um: float) -> float:
@@ -75,18 +139,27 @@ def iso_round(value_um: float) -> float:
     return math.floor(value_um * 10 + 0.5) / 10
 
 
+def _pressure_angle(pressure_angle_deg: Any) -> float:
+    lo, hi = _gear_limits("pressure_angle_deg")
+    alpha = _real("pressure_angle_deg", pressure_angle_deg, "give it in degrees, e.g. 20")
+    if not lo < alpha < hi:
+        raise ValueError(f"pressure_angle_deg = {alpha:g} must lie in ({lo:g}, {hi:g}) degrees "
+                         "as physics.params.GearPair's; give it in degrees, e.g. 20")
+    return alpha
+
+
 def _grade_factor(grade: int) -> float:
-    if not 0 <= grade <= 12:
-        raise ValueError(f"accuracy grade = {grade} must lie in [0, 12] (ISO 1328-1:1995)")
-    return 2.0 ** ((grade - 5) / 2)
+    """The factor of ``grade`` on the grade-5 value, ``2^((Q - 5)/2)``, the grade checked: a
+    whole accuracy grade in [0, 12] (ISO 1328-1:1995)."""
+    return 2.0 ** ((_grade(grade) - 5) / 2)
 
 
 def cumulative_pitch_tolerance_um(grade: int, module_mm: float, d_mm: float,
                                   rounded: bool = True) -> float:
     """Total cumulative pitch tolerance ``F_p`` [um] (ISO 1328-1:1995)."""
-    m = band_mean(module_mm, MODULE_BANDS, "module")
-    d = band_mean(d_mm, DIAMETER_BANDS, "reference diameter")
-    v = (0.3 * m + 1.25 * math.sqrt(d) + 7.0) * _grade_factor(grade)
+    factor = _grade_factor(grade)
+    m, d = _sizes(module_mm, d_mm)
+    v = (0.3 * m + 1.25 * math.sqrt(d) + 7.0) * factor
     return iso_round(v) if rounded else v
 
 
@@ -99,9 +172,9 @@ def runout_tolerance_um(grade: int, module_mm: float, d_mm: float, rounded: bool
 def profile_form_tolerance_um(grade: int, module_mm: float, d_mm: float,
                               rounded: bool = True) -> float:
     """Profile form tolerance ``f_f_alpha`` [um] (ISO 1328-1:1995)."""
-    m = band_mean(module_mm, MODULE_BANDS, "module")
-    d = band_mean(d_mm, DIAMETER_BANDS, "reference diameter")
-    v = (2.5 * math.sqrt(m) + 0.17 * math.sqrt(d) + 0.5) * _grade_factor(grade)
+    factor = _grade_factor(grade)
+    m, d = _sizes(module_mm, d_mm)
+    v = (2.5 * math.sqrt(m) + 0.17 * math.sqrt(d) + 0.5) * factor
     return iso_round(v) if rounded else v
 
 
@@ -109,9 +182,9 @@ def single_pitch_tolerance_um(grade: int, module_mm: float, d_mm: float,
                               rounded: bool = True) -> float:
     """Single pitch tolerance ``f_pt`` [um] (ISO 1328-1:1995): the largest difference between
     a pitch of the gear and its theoretical pitch."""
-    m = band_mean(module_mm, MODULE_BANDS, "module")
-    d = band_mean(d_mm, DIAMETER_BANDS, "reference diameter")
-    v = (0.3 * (m + 0.4 * math.sqrt(d)) + 4.0) * _grade_factor(grade)
+    factor = _grade_factor(grade)
+    m, d = _sizes(module_mm, d_mm)
+    v = (0.3 * (m + 0.4 * math.sqrt(d)) + 4.0) * factor
     return iso_round(v) if rounded else v
 
 
@@ -126,11 +199,22 @@ def tooth_positions_um(z: int, grade: int, module_mm: float, d_mm: float,
     around the gear, summing to zero) reach the tolerance ``f_pt`` at three standard deviations
     (``sigma = f_pt / (3 sqrt 2)``); the positions are taken about their mean (a common offset
     is a tooth thickness, the backlash's). Their total spread stays below the cumulative pitch
-    tolerance ``F_p`` of the grade for the usual tooth counts."""
-    if z < 2:
-        raise ValueError(f"z = {z} teeth: give at least two")
-    if not (isinstance(seed, int | np.integer) and seed >= 0):
-        raise ValueError(f"seed = {seed!r} must be a whole number >= 0 (the gear's draw)")
+    tolerance ``F_p`` of the grade for the usual tooth counts.
+
+    ``z`` is a whole number of teeth in :class:`physics.params.GearPair`'s range (5 to 1000;
+    ``18``, ``np.int64(18)`` and ``18.0`` alike, as the pair takes them), ``grade`` a whole
+    accuracy grade in [0, 12] and ``seed`` an int or numpy integer >= 0 (not a bool, not
+    ``None``: it names the gear, so that its teeth come out the same each time); anything else
+    is refused before any work, ``TypeError`` for what is no number at all."""
+    lo, hi = _gear_limits("z1")
+    z = _whole("z", z, int(lo), int(hi), "give the gear's number of teeth, as physics.params."
+               "GearPair takes it")
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer):
+        raise TypeError(f"seed = {_shown(seed)} ({type(seed).__name__}) must be an int >= 0; "
+                        "give a whole number: it names the gear, the same seed the same teeth")
+    if seed < 0:
+        raise ValueError(f"seed = {seed!r} must be an int >= 0; give a whole number: it names "
+                         "the gear, the same seed the same teeth")
     sigma = single_pitch_tolerance_um(grade, module_mm, d_mm, rounded=False) / (3 * math.sqrt(2))
     x = np.random.default_rng(seed).normal(0.0, sigma, z)
     return x - x.mean()
@@ -138,19 +222,28 @@ def tooth_positions_um(z: int, grade: int, module_mm: float, d_mm: float,
 
 def it_tolerance_um(it_grade: int, size_mm: float) -> float:
     """The standard tolerance IT6-IT10 of a nominal size up to 500 mm [um] (ISO 286-1)."""
-    big_d = band_mean(size_mm, IT_BANDS, "nominal size")
+    it_grade = _whole("it_grade", it_grade, min(IT_FACTOR), max(IT_FACTOR),
+                      "give the IT grade as a number, e.g. 7 for IT7")
+    size = _real("size_mm", size_mm, "give the nominal size in mm", positive=True)
+    big_d = band_mean(size, IT_BANDS, "size_mm (nominal size)")
     return IT_FACTOR[it_grade] * (0.45 * big_d ** (1 / 3) + 0.001 * big_d)
 
 
 def minimum_backlash_um(centre_distance_mm: float, module_mm: float) -> float:
     """Minimum normal backlash ``j_bn,min`` [um] (ISO/TR 10064-2:1996)."""
+    centre_distance_mm = _real("centre_distance_mm", centre_distance_mm,
+                               "give the centre distance in mm", positive=True)
+    module_mm = _real("module_mm", module_mm, "give the normal module in mm", positive=True)
     return 2.0 / 3.0 * (0.06 + 0.0005 * centre_distance_mm + 0.03 * module_mm) * 1000.0
 
 
 def tooth_thickness_tolerance_um(grade: int, module_mm: float, d_mm: float,
                                  pressure_angle_deg: float) -> float:
     """Tooth thickness tolerance ``T_sn = 2 tan(alpha) sqrt(F_r^2 + b_r^2)`` [um]
-    (ISO/TR 10064-2:1996)."""
+    (ISO/TR 10064-2:1996), for the grades 4 to 9 whose cutting-feed tolerance it states."""
+    grade = _grade(grade, min(FEED_TOLERANCE), max(FEED_TOLERANCE))
+    _sizes(module_mm, d_mm)
+    _pressure_angle(pressure_angle_deg)
     it, factor = FEED_TOLERANCE[grade]
     b_r = factor * it_tolerance_um(it, d_mm)
     f_r = runout_tolerance_um(grade, module_mm, d_mm, rounded=False)
@@ -161,8 +254,13 @@ def maximum_backlash_um(grade: int, module_mm: float, d1_mm: float, d2_mm: float
                         centre_distance_mm: float, pressure_angle_deg: float) -> float:
     """Largest normal backlash [um] of a pair of accuracy ``grade`` built for the minimum
     backlash: both teeth at their thinnest and the centre distance at its largest (module
-    text)."""
-    alpha = math.radians(pressure_angle_deg)
+    text), for the grades 4 to 9 (those of :func:`tooth_thickness_tolerance_um`)."""
+    grade = _grade(grade, min(FEED_TOLERANCE), max(FEED_TOLERANCE))
+    for name, d in (("d1_mm", d1_mm), ("d2_mm", d2_mm)):
+        _real(name, d, "give the reference diameter m z in mm", positive=True)
+    _real("centre_distance_mm", centre_distance_mm, "give the centre distance in mm",
+          positive=True)
+    alpha = math.radians(_pressure_angle(pressure_angle_deg))
     thinner = sum(tooth_thickness_tolerance_um(grade, module_mm, d, pressure_angle_deg)
                   for d in (d1_mm, d2_mm))
     f_a = it_tolerance_um(CENTRE_ALLOWANCE_IT[grade], centre_distance_mm) / 2
