@@ -19,8 +19,8 @@ module :class:`WearDataModule`. The rest is reached through its module:
 - :mod:`surrogate.network`: the deep ensemble of Gaussian MLPs in plain torch, and a trained
   network as inference loads it;
 - :mod:`surrogate.model`: that ensemble as one Lightning module, for training;
-- :mod:`surrogate.candidates`, :mod:`surrogate.baselines`: the linear, monotone and estimator
-  models and the choice among them; the models scored beside the one kept;
+- :mod:`surrogate.candidates`, :mod:`surrogate.baselines`: the linear, monotone, average and
+  estimator models and the choice among them; the models scored beside the one kept;
 - :mod:`surrogate.training`: ``train(cfg)``, its two phases ``prepare`` and ``fit`` (called by
   ``train.py``);
 - :mod:`surrogate.inference`: export, safe loading, CPU prediction with intervals and flags;

@@ -5,8 +5,8 @@
 - the thesis's **estimator** (:func:`fit_estimator`, thesis 4.4,
   :class:`physics.estimators.empirical_inverse.EmpiricalInverse`) where its inputs exist in
   the rows: DTE peak-to-peak and kurtosis, and a cycle count in the training rows;
-- the linear and monotone models of the same inputs (:mod:`surrogate.candidates`, which also
-  fits them as candidates).
+- the linear and monotone models of the same inputs and their average
+  (:mod:`surrogate.candidates`, which also fits them as candidates).
 
 Each reading is clipped at zero wear.
 """
@@ -20,7 +20,7 @@ from physics.estimators.empirical_inverse import EmpiricalInverse, wear_errors
 from surrogate import candidates
 
 #: the models scored beside the one kept, in the order reports list them
-NAMES = ("network", "linear", "monotone", "estimator", "median")
+NAMES = ("network", "linear", "monotone", "average", "estimator", "median")
 #: how the log and the plot name them
 LABELS = {**candidates.LABELS, "kept": "model kept"}
 

@@ -5,14 +5,27 @@ it minimises: every training row weighs ``1 / (rows of its group)`` (a group of 
 records counts as one group) times ``1 / max(y, y_least)``, ``y_least`` the least nonzero
 training wear (a zero wear, whose relative error is undefined, is read relative to the least
 worn stage), with an absolute-error loss where the learner has one (:func:`relative_weights`):
+sample weights, not a log target, so that the loss is the relative error itself.
 
-- ``linear``: scikit-learn's ``QuantileRegressor`` (the median, no penalty, ``highs``) of the
-  standardised inputs: the weighted absolute error, i.e. the group-weighted mean relative
-  error, minimised exactly;
+- ``linear``: scikit-learn's ``QuantileRegressor`` (the median, no penalty, ``highs``): the
+  weighted absolute error, i.e. the group-weighted mean relative error, minimised exactly. A
+  measured feature that is positive in every training row (an RMS, an energy, a peak-to-peak
+  value) enters as its logarithm, its level (:func:`level_columns`): vibration severity is read
+  by ratios (levels in dB), and a feature that grows exponentially as a part degrades is
+  linear in its logarithm (Gebraeel, Lawley, Li & Ryan, IIE Trans. 37 (2005) 543). The
+  operating point (:data:`surrogate.inputs.CONDITIONS`) and any feature that reaches zero or
+  below enter as given;
 - ``monotone``: one input, ``IsotonicRegression`` (direction of the training rows' Spearman
   correlation; squared loss, so the weights are squared: the relative squared error); several,
   ``HistGradientBoostingRegressor(loss="absolute_error", monotonic_cst=...)``, each input's
-  direction its Spearman correlation's sign;
+  direction its Spearman correlation's sign (trees do not depend on a monotone transform of
+  an input, so levels change nothing here);
+- ``average``: the mean of the linear and the monotone models' readings, with equal weights
+  (a combination of forecasts: Bates & Granger, Oper. Res. Q. 20 (1969) 451; equal weights,
+  which estimate nothing, are hard to beat: Clemen, Int. J. Forecast. 5 (1989) 559). Where the
+  two read different stages well, their mean reads most stages near the better one; where
+  cross-validation over a few dozen groups cannot tell them apart, the choice between them
+  follows which group is held out, and the mean does not (docs/surrogate.md, The real rig);
 - ``estimator``: the thesis's (4.4, :class:`physics.estimators.empirical_inverse.EmpiricalInverse`)
   where the inputs hold DTE peak-to-peak and kurtosis and the rows a cycle count (its own
   least-squares fit);
@@ -21,9 +34,11 @@ worn stage), with an absolute-error loss where the learner has one (:func:`relat
 
 :func:`group_folds` splits the training groups with scikit-learn's ``GroupKFold``;
 :func:`choose` keeps the kind of the least cross-validated error (:func:`group_error`: each
-worn group's mean relative error, averaged over the groups). A fitted candidate is written
-without pickle (:meth:`Candidate.payload`: arrays and numbers; the boosted trees as their node
-arrays, walked by :func:`_walk`), so that ``torch.load(weights_only=True)`` reads it.
+worn group's mean relative error, averaged over the groups; a tie to the simpler). The
+average's cross-validation is its members' (:func:`averaged`: the same folds, the mean of
+their out-of-fold readings), not a second fit. A fitted candidate is written without pickle
+(:meth:`Candidate.payload`: arrays and numbers; the boosted trees as their node arrays,
+walked by :func:`_walk`), so that ``torch.load(weights_only=True)`` reads it.
 """
 
 from __future__ import annotations
@@ -37,13 +52,17 @@ from threadpoolctl import threadpool_limits
 
 from physics.estimators.empirical_inverse import EmpiricalInverse
 from surrogate.conformal import unit_weights
+from surrogate.inputs import CONDITIONS
 
 #: the kinds a run compares, in the order reports list them; ``model.kind`` forces one
-KINDS = ("network", "linear", "monotone", "estimator")
+KINDS = ("network", "linear", "monotone", "average", "estimator")
 #: the order a tie of cross-validated errors is broken in
-SIMPLEST_FIRST = ("linear", "monotone", "estimator", "network")
+SIMPLEST_FIRST = ("linear", "monotone", "average", "estimator", "network")
+#: the kinds the ``average`` takes the mean of, with equal weights
+AVERAGED = ("linear", "monotone")
 #: how logs and plots name them
 LABELS = {"network": "network", "linear": "linear model", "monotone": "monotone model",
+          "average": "average of the linear and monotone models",
           "estimator": "thesis estimator", "median": "median (null model)"}
 #: the estimator's inputs (it reads a cycle count from the rows when fitted)
 ESTIMATOR_INPUTS = ("dte_peak_to_peak", "dte_kurtosis")
@@ -86,6 +105,33 @@ def group_folds(groups: np.ndarray, folds: int = FOLDS) -> list[tuple[np.ndarray
                                                            groups=groups))
 
 
+def level_columns(raw: np.ndarray | None, inputs: list[str] | None) -> np.ndarray:
+    """The columns of the unscaled training rows ``raw`` the linear model reads as logarithms
+    (module text): measured features (not :data:`~surrogate.inputs.CONDITIONS`) positive in
+    every row. None of them without ``raw`` or ``inputs``."""
+    if raw is None or inputs is None:
+        return np.zeros(0, np.int64)
+    raw = np.asarray(raw, float)
+    return np.asarray([j for j, name in enumerate(inputs)
+                       if name not in CONDITIONS and bool(np.all(raw[:, j] > 0))], np.int64)
+
+
+def _linear_rows(p: dict, x: np.ndarray, raw: np.ndarray | None) -> np.ndarray:
+    """The linear model's inputs of standardised rows ``x``: its level columns replaced by
+    their standardised logarithms of the unscaled rows ``raw`` (a value below the least
+    training value read as that value: the logarithm of zero is not a number)."""
+    cols = np.asarray(p.get("levels", np.zeros(0)), np.int64)
+    if cols.size == 0:
+        return x
+    if raw is None:
+        raise ValueError("this linear model reads some inputs as logarithms: it needs the "
+                         "unscaled rows")
+    out = np.array(x, float, copy=True)
+    logs = np.log(np.maximum(np.asarray(raw, float)[:, cols], np.asarray(p["floor"], float)))
+    out[:, cols] = (logs - np.asarray(p["log_shift"], float)) / np.asarray(p["log_scale"], float)
+    return out
+
+
 def _directions(x: np.ndarray, y: np.ndarray) -> list[int]:
     out = []
     for j in range(x.shape[1]):
@@ -119,17 +165,30 @@ class Candidate:
 
     @classmethod
     def fit(cls, kind: str, x: np.ndarray, y: np.ndarray, groups: np.ndarray,
-            rows: pd.DataFrame | None = None, inputs: list[str] | None = None) -> Candidate:
+            rows: pd.DataFrame | None = None, inputs: list[str] | None = None,
+            raw: np.ndarray | None = None) -> Candidate:
         """Fit ``kind`` (not the network) on standardised ``x`` and wear ``y`` (module text);
-        ``rows`` and ``inputs`` give the estimator its cycle count and columns."""
+        ``rows`` and ``inputs`` give the estimator its cycle count and columns, ``raw`` (the
+        rows unscaled) and ``inputs`` the linear model its levels (:func:`level_columns`)."""
         x, y = np.asarray(x, float), np.asarray(y, float)
         w = relative_weights(y, groups)
         if kind == "linear":
             from sklearn.linear_model import QuantileRegressor
 
+            cols = level_columns(raw, inputs)
+            p = {}
+            if cols.size:
+                logs = np.log(np.asarray(raw, float)[:, cols])
+                spread = logs.std(axis=0)
+                p = {"levels": cols, "floor": np.asarray(raw, float)[:, cols].min(axis=0),
+                     "log_shift": logs.mean(axis=0),
+                     "log_scale": np.where(spread > 0, spread, 1.0)}
             m = QuantileRegressor(quantile=0.5, alpha=0.0, solver="highs")
-            m.fit(x, y, sample_weight=w)
-            return cls(kind, {"coef": m.coef_.astype(float), "intercept": float(m.intercept_)})
+            m.fit(_linear_rows(p, x, raw), y, sample_weight=w)
+            return cls(kind, {"coef": m.coef_.astype(float), "intercept": float(m.intercept_),
+                              **p})
+        if kind == "average":
+            return cls.average([cls.fit(k, x, y, groups, rows, inputs, raw) for k in AVERAGED])
         if kind == "monotone" and x.shape[1] == 1:
             from sklearn.isotonic import IsotonicRegression
 
@@ -153,8 +212,9 @@ class Candidate:
                               "trees": trees})
         if kind == "estimator":
             need = [inputs.index(c) for c in ESTIMATOR_INPUTS]
-            raw = rows[list(ESTIMATOR_INPUTS)].to_numpy(float)
-            est = EmpiricalInverse.fit(rows.cycles.to_numpy(float), raw[:, 0], raw[:, 1], y)
+            measured = rows[list(ESTIMATOR_INPUTS)].to_numpy(float)
+            est = EmpiricalInverse.fit(rows.cycles.to_numpy(float), measured[:, 0],
+                                       measured[:, 1], y)
             return cls(kind, {"columns": np.asarray(need, np.int64),
                               "p2p_cubic": est.p2p_cubic, "kurtosis_cubic": est.kurtosis_cubic,
                               "wear_law": est.wear_law, "cycles_max": est.cycles_max,
@@ -162,12 +222,21 @@ class Candidate:
                               "kurtosis_tol": est.kurtosis_tol})
         raise ValueError(f"model.kind = {kind!r}: no such candidate; choose from {KINDS}")
 
+    @classmethod
+    def average(cls, members: list[Candidate]) -> Candidate:
+        """The equal-weight mean of fitted ``members`` (the ``average`` kind)."""
+        return cls("average", {"members": [{"kind": m.kind, "params": m.params}
+                                           for m in members]})
+
     def predict(self, x: np.ndarray, raw: np.ndarray | None = None) -> np.ndarray:
         """The wear of standardised rows ``x`` (``raw``: the same unscaled, which the
-        estimator reads), clipped at zero."""
+        estimator and the linear model's levels read), clipped at zero."""
         p, x = self.params, np.asarray(x, float)
         if self.kind == "linear":
-            out = p["intercept"] + x @ np.asarray(p["coef"], float)
+            out = p["intercept"] + _linear_rows(p, x, raw) @ np.asarray(p["coef"], float)
+        elif self.kind == "average":
+            out = np.mean([Candidate(m["kind"], m["params"]).predict(x, raw)
+                           for m in p["members"]], axis=0)
         elif self.kind == "monotone" and "x" in p:
             out = np.interp(x[:, 0], p["x"], p["y"])
         elif self.kind == "monotone":
@@ -247,11 +316,26 @@ def cross_validate(kind: str, x: np.ndarray, y: np.ndarray, groups: np.ndarray,
             oof[held] = network(fit_rows, held)
             continue
         m = Candidate.fit(kind, x[fit_rows], y[fit_rows], groups[fit_rows],
-                          None if rows is None else rows.iloc[fit_rows], inputs)
+                          None if rows is None else rows.iloc[fit_rows], inputs,
+                          None if raw is None else raw[fit_rows])
         models.append(m)
         oof[held] = m.predict(x[held], None if raw is None else raw[held])
     return CrossValidated(kind, None if kind == "network" else models, fold_of, oof,
                           group_error(oof, y, groups))
+
+
+def averaged(scored: dict[str, CrossValidated], y: np.ndarray, groups: np.ndarray
+             ) -> CrossValidated:
+    """The ``average``'s cross-validation from its members' (:data:`AVERAGED`, cross-validated
+    over the same folds): each fold's members averaged, the mean of their out-of-fold
+    readings, and its error (:func:`group_error`)."""
+    parts = [scored[k] for k in AVERAGED]
+    if any(not np.array_equal(parts[0].fold_of, c.fold_of) for c in parts[1:]):
+        raise ValueError("the average's members were cross-validated over different folds")
+    models = [Candidate.average(list(ms))
+              for ms in zip(*(c.fold_models for c in parts), strict=True)]
+    oof = np.mean([c.oof for c in parts], axis=0)
+    return CrossValidated("average", models, parts[0].fold_of, oof, group_error(oof, y, groups))
 
 
 def choose(scored: dict[str, CrossValidated], forced: str | None = None) -> tuple[str, str]:

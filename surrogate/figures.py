@@ -42,7 +42,8 @@ def parity_figure(true: np.ndarray, pred: np.ndarray, half: np.ndarray | None, t
 
 
 #: markers of the baselines in a parity plot
-_MARKERS = {"linear": "x", "estimator": "+", "monotone": "1", "network": "."}
+_MARKERS = {"linear": "x", "estimator": "+", "monotone": "1", "average": "2",
+            "network": "."}
 
 
 def add_baselines(ax, true: np.ndarray, readings: dict[str, np.ndarray]) -> None:

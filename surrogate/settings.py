@@ -90,8 +90,9 @@ class ModelConfig:
     trainable: str = "all"
     #: which model a run keeps: auto (on a table of your own, the least error of a grouped
     #: cross-validation over the training groups among the network, a linear model, a
-    #: monotone one and, where its inputs exist, the thesis's estimator; on the physics
-    #: dataset the network), or network, linear, monotone, estimator (surrogate.candidates)
+    #: monotone one, the average of those two and, where its inputs exist, the thesis's
+    #: estimator; on the physics dataset the network), or network, linear, monotone,
+    #: average, estimator (surrogate.candidates)
     kind: str = "auto"
     folds: int = 5  # GroupKFold folds of that cross-validation (at most one per group)
 
@@ -100,7 +101,7 @@ class ModelConfig:
 
     def check(self) -> None:
         """Raise ``ValueError`` naming the first setting outside its range."""
-        kinds = ("auto", "network", "linear", "monotone", "estimator")
+        kinds = ("auto", "network", "linear", "monotone", "average", "estimator")
         if self.kind not in kinds:
             raise ValueError(f"model.kind = {self.kind!r} must be one of {list(kinds)}")
         if isinstance(self.folds, bool) or not isinstance(self.folds, int) or self.folds < 2:

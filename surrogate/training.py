@@ -403,9 +403,10 @@ def select(job: TrainJob, dm: WearDataModule, network, out: Path) -> Choice:
     x, y, groups = dm.schema.scale(raw), rows[dm.target].to_numpy(float), gearboxes(pool)
     folds = candidates.group_folds(groups, int(cfg.model.get("folds", candidates.FOLDS)))
     why = candidates.applicable(dm.inputs, pool)
-    kinds = [k for k in candidates.KINDS[1:] if k not in why]
+    kinds = [k for k in candidates.KINDS[1:] if k not in why and k != "average"]
     scored = {k: candidates.cross_validate(k, x, y, groups, folds, pool, dm.inputs, raw)
               for k in kinds}
+    scored = insert_average(scored, candidates.averaged(scored, y, groups))
     if kind == "auto" and dm.table is not None:
         log.info("cross-validating the network over %d folds of the %d training groups",
                  len(folds), np.unique(groups).size)
@@ -415,13 +416,22 @@ def select(job: TrainJob, dm: WearDataModule, network, out: Path) -> Choice:
     if why:
         reason += "; not compared: " + "; ".join(f"{candidates.LABELS[k]} ({w})"
                                                   for k, w in why.items())
-    fitted = {k: candidates.Candidate.fit(k, x, y, groups, pool, dm.inputs) for k in kinds}
+    fitted = {k: candidates.Candidate.fit(k, x, y, groups, pool, dm.inputs, raw) for k in kinds}
+    fitted = insert_average(fitted, candidates.Candidate.average(
+        [fitted[k] for k in candidates.AVERAGED]))
     chosen = None
     if kept != "network":
         cv = scored[kept]
         chosen = Chosen(dm.schema, fitted[kept], cv.fold_models, cv.fold_of,
                         np.abs(y - cv.oof), groups, float(cfg.model.interval), reason)
     return Choice(kept, reason, scored, chosen, fitted, y, groups)
+
+
+def insert_average(by_kind: dict, average) -> dict:
+    """``by_kind`` (kind -> a candidate's figures or model) with the ``average`` in the
+    place :data:`surrogate.candidates.KINDS` gives it."""
+    by_kind = {**by_kind, "average": average}
+    return {k: by_kind[k] for k in sorted(by_kind, key=candidates.KINDS.index)}
 
 
 def inner_network(job: TrainJob, dm: WearDataModule, pool: pd.DataFrame, out: Path):
@@ -540,14 +550,14 @@ def report_test(surrogate: Surrogate, dm: WearDataModule, out: Path,
     """Held-out errors in physical units and interval coverage of the model kept
     (``surrogate``: the network, or the model :func:`select` chose), and beside it, on the same
     rows and target, those of every other model (:mod:`surrogate.baselines`): the network,
-    the linear and monotone models (fitted on all training groups where the run chose by
-    cross-validation, else on the training rows), the thesis's estimator where its inputs
-    exist and the median (null) model, and each one's interval coverage where it has one
-    (``test_<kind>_interval_coverage``: the network's split-conformal interval, the CV+ of
-    the kinds cross-validated). Writes ``test_predictions.csv`` (a user table's own
-    columns, else case, replicate and cycles; the true and predicted wear of every model) and
-    ``parity.png``; logs the figures, and one line where the network is not better than the
-    linear model."""
+    the linear and monotone models and their average (fitted on all training groups where
+    the run chose by cross-validation, else on the training rows), the thesis's estimator
+    where its inputs exist and the median (null) model, and each one's interval coverage
+    where it has one (``test_<kind>_interval_coverage``: the network's split-conformal
+    interval, the CV+ of the kinds cross-validated). Writes ``test_predictions.csv`` (a user
+    table's own columns, else case, replicate and cycles; the true and predicted wear of
+    every model) and ``parity.png``; logs the figures, and one line where the network is not
+    better than the linear model."""
     test, t, keys = dm.frames["test"], surrogate.schema.target, ["case", "replicate"]
     columns = list(dict.fromkeys([*surrogate.schema.columns, *keys]))
     pred = surrogate.predict(test[columns], gearbox=keys)
@@ -558,9 +568,12 @@ def report_test(surrogate: Surrogate, dm: WearDataModule, out: Path,
         fitted = choice.fitted
     else:
         train = dm.network_rows("train")
-        x = schema.scale(train[list(schema.inputs)].to_numpy(float))
+        raw_train = train[list(schema.inputs)].to_numpy(float)
+        x = schema.scale(raw_train)
         y, groups = train[t].to_numpy(float), gearboxes(dm.frames["train"])
-        fitted = {k: candidates.Candidate.fit(k, x, y, groups) for k in ("linear", "monotone")}
+        fitted = {k: candidates.Candidate.fit(k, x, y, groups, inputs=list(schema.inputs),
+                                              raw=raw_train) for k in candidates.AVERAGED}
+        fitted["average"] = candidates.Candidate.average(list(fitted.values()))
     readings.update({k: m.predict(schema.scale(raw_test), raw_test) for k, m in fitted.items()})
     cover = {}
     if choice is not None:  # each other candidate's CV+ interval over the same groups
