@@ -41,8 +41,8 @@ from hydra.experimental.callback import Callback
 from omegaconf import DictConfig, OmegaConf, open_dict, read_write
 
 from physics import interrupt
-from physics.files import WriteFailed
-from physics.params import OutOfScope
+from physics.files import WriteFailed, check_writable
+from physics.params import OutOfScope, check_case
 
 Plan = TypeVar("Plan")
 
@@ -110,9 +110,11 @@ class RunRecord(Callback):
     def on_run_start(self, config: DictConfig, **kwargs: Any) -> None:
         global _RUN_DIR
         _RUN_DIR = Path(str(config.hydra.run.dir))
+        check_run_folder(_RUN_DIR, "hydra.run.dir")
         _record_before(_RUN_DIR)
 
     def on_multirun_start(self, config: DictConfig, **kwargs: Any) -> None:
+        check_run_folder(Path(str(config.hydra.sweep.dir)), "hydra.sweep.dir")
         _record_before(Path(str(config.hydra.sweep.dir)))
         try:
             check_launcher(config)
@@ -145,6 +147,21 @@ class RunRecord(Callback):
         if summary is not None:
             print(f"error: {summary}", file=sys.stderr)
             raise SystemExit(1)
+
+
+def check_run_folder(folder: Path, key: str) -> None:
+    """End the app (one line, exit code 2) where its run folder ``folder`` (``key``:
+    ``hydra.run.dir``, or ``hydra.sweep.dir`` with ``-m``; under the working folder by default)
+    cannot be made, before Hydra makes it: from a read-only working folder Hydra's own attempt
+    ended in a PermissionError traceback. Called by :class:`RunRecord` for every app."""
+    try:
+        check_writable(folder, key)
+    except ValueError as err:
+        reason = str(err).removesuffix("; choose a folder you can write to")
+        print(f"error: {reason}: the run's folder is made there (working folder {Path.cwd()}); "
+              f"run from a folder you can write to, or give {key}=<such a folder>",
+              file=sys.stderr)
+        raise SystemExit(2) from None
 
 
 def _record_of(folder: Path) -> dict[Path, frozenset[str] | None] | None:
@@ -218,6 +235,7 @@ def run_command(cfg: DictConfig, prepare: Callable[[DictConfig], Plan],
         (folder / FAILED).unlink(missing_ok=True)  # a record of an earlier sweep in this folder
     try:
         check_keys(cfg)
+        check_case(cfg, _command_line_keys())
         plan = prepare(cfg)
     except ValueError as err:
         if job is None:
@@ -352,6 +370,17 @@ def _sweep_job() -> int | None:
         return None
 
 
+def _command_line_keys() -> list[str]:
+    """The overrides of this run's command line (``hydra.overrides.task``; none outside an
+    app)."""
+    try:
+        from hydra.core.hydra_config import HydraConfig
+
+        return [str(o) for o in HydraConfig.get().overrides.task]
+    except (ImportError, ValueError, AttributeError):
+        return []
+
+
 def _record_failure(folder: Path | None, why: str) -> None:
     if folder is not None:
         from physics.files import write_text
@@ -427,6 +456,7 @@ def check_sweep(config: DictConfig) -> None:
                 with read_write(task), open_dict(task):
                     del task["hydra"]
                 check_keys(task)
+                check_case(task, job.overrides)
                 if check is not None:
                     check(task)
             except ValueError as err:

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import os
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -180,10 +180,11 @@ def check_writable(path: str | os.PathLike, key: str) -> None:
     """Refuse (ValueError, one line) an output folder ``path`` that cannot be written, before
     any work: the nearest existing folder of its chain must be a folder and must take a file
     (tried with a temporary file that is removed at once: permission bits alone do not tell,
-    e.g. for root or on a read-only mount)."""
+    e.g. for root or on a read-only mount). The chain is that of the folder ``path`` names
+    (:func:`resolved`: ``a/../b`` is ``b``, whether ``a`` exists or not)."""
     import tempfile
 
-    path = Path(path).absolute()
+    path = resolved(path)
     existing = next(p for p in (path, *path.parents) if p.exists())
     if not existing.is_dir():
         raise ValueError(f"{key} = {str(path)!r}: {existing} is a file, not a folder; give a "
@@ -201,15 +202,18 @@ def check_fresh(path: str | os.PathLike, key: str, patterns: tuple[str, ...], ov
                 flag: str) -> None:
     """Refuse (ValueError, one line) an output folder ``path`` that already holds files of the
     kinds a run writes there (``patterns``, e.g. ``*.csv``): an earlier run's or the user's
-    own, which the run would replace unasked; ``overwrite`` (the user's ``flag``) lets it."""
-    folder = Path(path)
+    own, which the run would replace unasked; ``overwrite`` (the user's ``flag``) lets it.
+    The folder looked in is the one the writes reach (:func:`resolved`): ``new/../out`` is
+    ``out``, although ``new/`` does not exist."""
+    folder = resolved(path)
     if overwrite or not folder.is_dir():
         return
     found = sorted(p.name for pattern in patterns for p in folder.glob(pattern) if p.is_file())
     if found:
         more = f" and {len(found) - 1} more" if len(found) > 1 else ""
-        raise ValueError(f"{key} = {str(path)!r} already holds {found[0]}{more}, which this run "
-                         f"would replace; choose a new folder, or {flag} to replace them")
+        raise ValueError(f"{key} = {str(path)!r}{_spelled(path, folder)} already holds "
+                         f"{found[0]}{more}, which this run would replace; choose a new folder, "
+                         f"or {flag} to replace them")
 
 
 def check_inside(path: str | os.PathLike, root: str | os.PathLike, key: str) -> None:
@@ -219,6 +223,107 @@ def check_inside(path: str | os.PathLike, root: str | os.PathLike, key: str) -> 
     if p != r and r not in p.parents:
         raise ValueError(f"{key} puts {str(path)!r} at {p}, outside {r}; use a plain name "
                          "(letters, digits, '_', '-', '.'; no '..' or '/')")
+
+
+def resolved(path: str | os.PathLike) -> Path:
+    """The absolute path the system reaches by ``path``: links followed and each ``..`` taken
+    after the part before it (``os.path.realpath``). A part that does not exist yet is kept as
+    spelled, so ``new/../out`` is ``out`` (a writer that makes its parents makes ``new/`` and
+    then writes into ``out``)."""
+    return Path(os.path.realpath(Path(path).expanduser()))
+
+
+def _spelled(path: str | os.PathLike, real: Path) -> str:
+    """`` (that is REAL)`` where ``path`` is spelled otherwise than the folder it reaches."""
+    return "" if Path(path).absolute() == real else f" (that is {real})"
+
+
+def same_path(a: str | os.PathLike, b: str | os.PathLike) -> bool:
+    """Whether ``a`` and ``b`` name one file or folder: the same :func:`resolved` path, or,
+    both existing, the same file by device and inode (a hard link, a bind mount)."""
+    ra, rb = resolved(a), resolved(b)
+    if ra == rb:
+        return True
+    try:
+        return os.path.samefile(ra, rb)
+    except OSError:
+        return False
+
+
+def check_not_input(outputs: Iterable[str | os.PathLike], key: str,
+                    source: str | os.PathLike, source_key: str) -> None:
+    """Refuse (ValueError, one line) an output folder ``key`` one of whose files ``outputs``
+    is the input file ``source`` (the user's ``source_key``; :func:`same_path`): the run
+    would replace what it reads, whatever ``overwrite`` says."""
+    for out in outputs:
+        if same_path(out, source):
+            raise ValueError(f"{key}: the output {resolved(out)} would replace the input "
+                             f"{source_key} {source}, which this run reads; give {key} another "
+                             f"folder (or the {source_key} file another name)")
+
+
+def check_outside(out: str | os.PathLike, key: str, inputs: dict[str, str | os.PathLike]
+                  ) -> None:
+    """Refuse (ValueError, one line) an output folder ``out`` (the user's ``key``) that is an
+    input folder of ``inputs`` (``{its key: path}``), lies inside it, or directly holds an
+    input file (a link's target counts): its files would go among the inputs, or replace them,
+    whatever ``overwrite`` says. Paths are compared as :func:`resolved`."""
+    real = resolved(out)
+    for name, path in inputs.items():
+        source = resolved(path)
+        if source.is_dir():
+            clash = same_path(real, source) or source in real.parents
+            where = "is" if same_path(real, source) else "lies inside"
+            what = f"{where} the folder of {name} = {str(path)!r}"
+        else:
+            clash = same_path(source.parent, real)
+            what = f"holds {name} {source}"
+        if clash:
+            raise ValueError(f"{key} = {str(out)!r}{_spelled(out, real)} {what}, which this "
+                             f"run reads: its files would go among (or replace) what it "
+                             f"reads, whatever overwrite says; give {key} a folder apart "
+                             f"from {name}")
+
+
+def read_csv_table(path: str | os.PathLike, key: str, fix: str, columns: Iterable[str] = (),
+                   numeric: Iterable[str] = ()) -> pd.DataFrame:
+    """The CSV file ``path`` as a DataFrame, or a refusal (ValueError, one line naming ``key``,
+    the file, what is wrong and ``fix``): a path that is not a regular file, an empty file, a
+    file that is not UTF-8 text (binary, another encoding) or not read as CSV, a table without
+    the ``columns`` it needs, or a cell of the ``numeric`` columns that is not a finite number
+    (named by its row, counted from 1 after the header)."""
+    import numpy as np
+    import pandas as pd
+
+    path = Path(path)
+    what = file_problem(path)
+    if what is None:
+        try:
+            table = pd.read_csv(path, encoding="utf-8")
+        except pd.errors.EmptyDataError:
+            what = "is empty (no header, no rows)"
+        except UnicodeDecodeError as err:
+            what = f"is not UTF-8 text (byte {err.start}: binary, or another encoding)"
+        except pd.errors.ParserError as err:
+            what = f"is not read as CSV ({' '.join(str(err).split())})"
+        except OSError as err:
+            what = f"cannot be read ({err.strerror or type(err).__name__})"
+    if what is not None:
+        raise ValueError(f"{key} {path} {what}; {fix}")
+    columns, numeric = list(columns), list(numeric)
+    missing = [c for c in dict.fromkeys([*columns, *numeric]) if c not in table.columns]
+    if missing:
+        raise ValueError(f"{key} {path}: columns {missing} are missing; it needs "
+                         f"{list(dict.fromkeys([*columns, *numeric]))}; {fix}")
+    if table.empty:
+        raise ValueError(f"{key} {path} holds a header and no rows; {fix}")
+    for col in numeric:
+        values = pd.to_numeric(table[col], errors="coerce").to_numpy(dtype=float)
+        bad = np.flatnonzero(~np.isfinite(values))
+        if bad.size:
+            raise ValueError(f"{key} {path}: column {col} row {bad[0] + 1} is "
+                             f"{table[col].iloc[bad[0]]!r}, not a finite number; {fix}")
+    return table
 
 
 def existing_file(value: object, key: str, fix: str) -> Path:

@@ -523,12 +523,49 @@ def case_values(case: Any) -> dict[str, float]:
     return cases[key]
 
 
+def check_case(cfg: Any, given: Any = ()) -> None:
+    """Refuse (ValueError, one line) a ``case`` (1-5, thesis Table 11) beside a value of the
+    fields it sets (:data:`_CASE_FIELDS`: ``operating.n1_rpm``, ``operating.torque_Nm`` and the
+    lubricant's ``eta0_Pa_s``, ``alpha_m2_per_N``, ``limiting_shear_coeff``) that differs from
+    the case's: the case's would be used without a word. A value counts as given where its key
+    (``operating.torque_Nm``) or its group (``lubricant=pao``) is in ``given`` (the keys of the
+    command line: :func:`physics.command.run_command`), or where it differs from the field's
+    default (what a YAML choice, another group or a caller's mapping set). A config without
+    ``case``, or without these groups (``train.py``'s ``case``), passes."""
+    case = cfg.get("case") if hasattr(cfg, "get") else None
+    groups = [g for g in _CASE_FIELDS if hasattr(cfg, "get") and cfg.get(g) is not None]
+    if case is None or not groups:
+        return
+    values = case_values(case)
+    given = {str(k).split("=", 1)[0].lstrip("+~") for k in given}
+    for group in groups:
+        default = _PARTS[group]()
+        for name in _CASE_FIELDS[group]:
+            value = cfg[group].get(name) if hasattr(cfg[group], "get") else None
+            if value is None or name not in values:
+                continue
+            try:
+                same = float(value) == float(values[name])
+                changed = float(value) != float(getattr(default, name))
+            except (TypeError, ValueError):
+                continue  # not a number: the group's own check names it
+            key = f"{group}.{name}"
+            if not same and (changed or key in given or group in given):
+                own = (f"{key}" if group == "operating" else
+                       f"a lubricant of your own (lubricant=<choice> or {key})")
+                raise ValueError(
+                    f"case = {case} sets {key} = {values[name]:g} (thesis Table 11), and "
+                    f"{key} = {value:g} is given too: the case's value would be used without a "
+                    f"word; give either case={case} or {own}, not both")
+
+
 def scenario_from_config(cfg: Any) -> Scenario:
     """Build a :class:`Scenario` from a mapping (a Hydra/OmegaConf config or a plain dict).
 
     Only the groups present are read (``gear``, ``material``, ``lubricant``, ``tribology``,
-    ``operating``, ``solver``); a ``case`` key (1-5), if set, overrides the operating point and
-    the lubricant values that Table 11 lists.
+    ``operating``, ``solver``); a ``case`` key (1-5), if set, gives the operating point and
+    the lubricant values that Table 11 lists, and a value of these that differs from the case's
+    is refused (:func:`check_case`).
     """
     try:
         from omegaconf import OmegaConf
@@ -538,6 +575,7 @@ def scenario_from_config(cfg: Any) -> Scenario:
     except ImportError:  # pragma: no cover - omegaconf is a dependency
         pass
     cfg = dict(cfg)
+    check_case(cfg)
     case = case_values(cfg["case"]) if cfg.get("case") is not None else {}
     parts: dict[str, Any] = {}
     for key, cls in _PARTS.items():
@@ -545,3 +583,23 @@ def scenario_from_config(cfg: Any) -> Scenario:
         values.update({k: case[k] for k in _CASE_FIELDS.get(key, ()) if k in case})
         parts[key] = _build(cls, values, key)
     return Scenario(**parts)
+
+
+def scenario_for_case(cfg: Any, case: Any) -> Scenario:
+    """The scenario of ``cfg`` (a mapping, as :func:`scenario_from_config` reads) at operating
+    case ``case`` of Table 11: the values the case sets (:func:`check_case`) are the case's,
+    in place of the config's own; the rest is the config's (a study over the cases)."""
+    try:
+        from omegaconf import OmegaConf
+
+        is_config = OmegaConf.is_config(cfg)
+    except ImportError:  # pragma: no cover - omegaconf is a dependency
+        is_config = False
+    parts: dict[str, Any] = {}
+    for group in _PARTS:
+        if cfg.get(group) is None:
+            continue
+        values = (OmegaConf.to_container(cfg[group], resolve=True) if is_config
+                  else dict(cfg[group]))
+        parts[group] = {k: v for k, v in values.items() if k not in _CASE_FIELDS.get(group, ())}
+    return scenario_from_config({**parts, "case": case})

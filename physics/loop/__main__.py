@@ -40,7 +40,12 @@ from physics.loop.search.attribution import candidates_for
 from physics.loop.search.form_error import check_reference, form_reference
 from physics.loop.search.own_history import parse_history, split_history
 from physics.loop.search.own_history import source as history_source
-from physics.loop.table_loop import check_table, run_feature_table
+from physics.loop.table_loop import (
+    check_table,
+    parse_columns,
+    run_feature_table,
+    table_candidates,
+)
 from physics.params import (
     Scenario,
     scenario_from_config,
@@ -82,7 +87,8 @@ def prepare(cfg: DictConfig) -> LoopJob:
     data, scn = read_measurements(cfg.data, base)
     check_stated_once(cfg, data, base, _given())
     if isinstance(data, FeatureTable):  # what the loop cannot follow: refused before work
-        check_table(data, scn)
+        check_table(data, scn, _given())
+        table_candidates(parse_columns(data.frame)[0], scn, settings)
     history = parse_history(cfg.reference)
     reference = None
     if history is not None:  # the unit's own earliest records: left out of the analysis

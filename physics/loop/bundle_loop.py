@@ -123,6 +123,7 @@ import time
 
 import numpy as np
 
+from physics.arguments import argument
 from physics.loop.config import LoopSettings
 from physics.loop.effects import Effect
 from physics.loop.judge.verdict import closest, group_lines, judge, unexplained_entries
@@ -257,7 +258,12 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
     ``reference`` (:func:`physics.loop.search.form_error.form_reference`, a sister gearbox's
     records) the declared model's mean form error measured there is removed from the
     measured signatures first."""
-    settings = settings or LoopSettings()
+    argument(bundle, "run_loop(bundle)", Bundle, "a Bundle (physics.loop.read_bundle)")
+    argument(base, "run_loop(base)", Scenario, "a physics.params.Scenario")
+    settings = argument(settings, "run_loop(settings)", (LoopSettings, type(None)),
+                        "a LoopSettings or None (the defaults)") or LoopSettings()
+    argument(reference, "run_loop(reference)", (FormReference, type(None)),
+             "a FormReference (physics.loop.search.form_error.form_reference) or None")
     started = time.monotonic()
     check_usable(bundle, base, settings)  # refusals before work
     candidates, left_out = shown_candidates(

@@ -79,7 +79,13 @@ class LoopSettings:
             raise ValueError(f"loop.explore = {e!r} must be 0 or a power of 2 (a Sobol "
                              "sample keeps its balance only then); use e.g. 16 or 32")
         if self.candidates is not None:
-            object.__setattr__(self, "candidates", tuple(self.candidates))
+            given = self.candidates
+            if isinstance(given, str):  # one name: not its letters
+                given = (given,)
+            if not isinstance(given, list | tuple) or not all(isinstance(n, str) for n in given):
+                raise ValueError(f"loop.candidates = {given!r} must be a list of effect names "
+                                 f"(or one name); choose from {sorted(EFFECTS)}")
+            object.__setattr__(self, "candidates", tuple(given))
             unknown = sorted(set(self.candidates) - set(EFFECTS))
             if unknown or not self.candidates:
                 raise ValueError(f"loop.candidates = {list(self.candidates)}: {unknown or 'none'}"

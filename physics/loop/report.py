@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from physics.arguments import argument, path_argument
 from physics.files import atomic_write, pyplot
 from physics.loop.judge.verdict import summary_line, unexplained_figure
 from physics.signals.order_analysis import line_amplitudes
@@ -366,6 +367,9 @@ def _feature_trends(report: dict, out: Path) -> None:
 
 def write_report(report: LoopReport, out: Path, with_figures: bool = True) -> None:
     """report.json, report.md and (unless ``with_figures`` is false) the figures into ``out``."""
+    argument(report, "write_report(report)", LoopReport,
+             "a LoopReport (physics.loop.run_loop or run_feature_table)")
+    out = path_argument(out, "write_report(out)", "the report's folder")
     plain = report.to_dict()
     text = json.dumps(plain, indent=2, default=float)
     out.mkdir(parents=True, exist_ok=True)

@@ -1,14 +1,19 @@
 """The measured-data loop on a feature table (thesis Table 15, a rig's stage means): features
 against wear only.
 
-A feature table carries no signal, so the comparison is in the features themselves: for each
-row (a wear depth) the declared model is run at the worn state of that depth, its housing
-acceleration (or DTE) goes through the measurement chain with white noise, and the Table 13
-features of model and measurement are compared as log ratios. The worn state of a depth is the
-pair worn from new by the contact its worn flanks make to that depth of the deepest point of
-either active profile (:func:`physics.loop.measured.worn_states.table_models`), which follows
-the flanks to the tooth's tip thickness; a deeper table is refused before any work
-(:func:`~physics.loop.measured.worn_states.check_table_depths`). The dynamics take the
+A feature table carries no signal, so the comparison is in the features themselves. Its rows
+are wear states, not a time series: they are taken in order of wear (sorted stably, rows of one
+depth in the file's order), so that the first is the least worn and the last the most worn
+whatever the file's order. For each row (a wear depth) the declared model is run at the worn
+state of that depth, its housing acceleration (or DTE) goes through the measurement chain with
+white noise, and the Table 13 features of model and measurement are compared as log ratios.
+The worn state of a depth is the pair worn from new by the contact its worn flanks make to that
+depth of the deepest point of either active profile
+(:func:`physics.loop.measured.worn_states.table_models`), which follows the flanks towards the
+tooth's tip thickness: a depth at or beyond it is refused before any work
+(:func:`~physics.loop.measured.worn_states.check_table_depths`), a depth whose flanks leave the
+model's scope on the way (a tooth worn to its centre line) when the worn states are computed,
+before the fits, naming its row. The dynamics take the
 scenario's contact (``dynamics.flank_contact``): with ``exact`` the effects that act on the
 path's pairs alone (:data:`PATH_ONLY`) are not searched.
 
@@ -28,7 +33,14 @@ path's pairs alone (:data:`PATH_ONLY`) are not searched.
 3. **Report**: the same keys as the bundle loop; the error is the RMS log ratio of the
    features (natural log, so 0.1 is about 10 %), overall and per feature, with the mean
    relative error in percent, the rise of each feature from the first to the last row,
-   measured and modelled, and the nuisance values at a bound of their ranges.
+   measured and modelled (the most worn row's over the least worn's, the rows in order of
+   wear), and the nuisance values at a bound of their ranges.
+
+Refused before any work (:func:`check_table`): what the columns or cells do not allow, fewer
+than three distinct wear states, more than :data:`MAX_TABLE_ROWS` rows, a stated damping ratio
+or housing mass outside the range the calibration searches (:func:`check_stated_nuisance`), a
+depth the worn states cannot reach, and candidates none of which can show in the table's
+quantity (:func:`table_candidates`).
 """
 
 from __future__ import annotations
@@ -42,11 +54,18 @@ import numpy as np
 import pandas as pd
 from scipy import optimize
 
+from physics.arguments import argument
 from physics.dynamics.model import PairModel, simulate
 from physics.loop.config import LoopSettings
 from physics.loop.effects import EFFECTS, Effect
 from physics.loop.judge.adoption import holds, null_test
-from physics.loop.measured.bundle import MAX_ACCEL_RMS, MAX_DTE_MODULES, FeatureTable
+from physics.loop.measured.bundle import (
+    MAX_ACCEL_RMS,
+    MAX_DTE_MODULES,
+    STANDARD_GRAVITY,
+    FeatureTable,
+    check_feature_frame,
+)
 from physics.loop.measured.worn_states import check_table_depths, table_models
 from physics.loop.model.declared import (
     SCENARIO_DYNAMIC,
@@ -63,7 +82,7 @@ from physics.loop.model.simulation import CACHE_SIZE, SETTLE_DECAYS
 from physics.loop.report import LoopReport
 from physics.loop.search.attribution import candidates_for
 from physics.loop.threads import one_blas_thread
-from physics.params import Scenario
+from physics.params import Dynamics, Scenario
 from physics.signals.features import DIMENSIONAL, FEATURES, features
 from physics.signals.measurement import declared_chain, sensed
 
@@ -72,12 +91,25 @@ log = logging.getLogger(__name__)
 _COLUMN = re.compile(r"^(?P<feat>[a-z_]+?)(?:_(?P<scale>1e-?\d+)?_?(?P<unit>m_per_s2|m|g))?$")
 #: the quantity and the factor to SI of each unit suffix; ``g``: standard gravity (3rd CGPM,
 #: 1901; ISO 80000-3), the unit accelerometers are read in
-UNITS = {"m_per_s2": ("accel_m_s2", 1.0), "g": ("accel_m_s2", 9.80665), "m": ("dte_m", 1.0)}
+UNITS = {"m_per_s2": ("accel_m_s2", 1.0), "g": ("accel_m_s2", STANDARD_GRAVITY),
+         "m": ("dte_m", 1.0)}
 #: folds of the cross-validation over a table's rows: one row each (leave one out) up to this
 #: many rows, this many interleaved folds beyond (each spans the table's wear): K = 5 or 10 has
 #: less variance than leave-one-out at a K-th of the fits (Hastie, Tibshirani & Friedman, The
 #: Elements of Statistical Learning, 2nd ed., 2009, 7.10.1)
 TABLE_FOLDS = 5
+#: the most rows a feature table may have. Each row is one dynamic simulation of the declared
+#: model at every evaluation of every fit: the calibration, and for the null and each candidate
+#: a fit on all rows and one per fold (:data:`TABLE_FOLDS`), ``loop.max_nfev`` evaluations each;
+#: the time grows in proportion to the rows. The public rig's 36 stage means took 25 min on two
+#: cores (docs/loop.md), so 100 rows take about 70 min and 5000 would take days. A table of
+#: stage means (one row per wear state, the records of a state averaged) has a few to tens
+MAX_TABLE_ROWS = 100
+#: the nuisance parameters a table's calibration searches within their sources' ranges
+#: (:func:`~physics.loop.model.declared.physical_nuisance`) from the value the scenario states
+#: (``dynamics.*``): a stated value outside its range would be replaced by the range's bound
+#: without a word (``housing_mass_kg``: acceleration tables only, the DTE has no housing)
+STATED_NUISANCE = ("damping_ratio", "housing_mass_kg")
 #: effects that act on the contact of the path's pairs A and B alone
 #: (:mod:`physics.loop.effects`), not searched with the exact contact
 #: (``dynamics.flank_contact=exact``), whose tip corners touch off the path: what each would
@@ -96,8 +128,12 @@ def parse_columns(df: pd.DataFrame) -> tuple[str, dict[str, tuple[str, float]]]:
     """Quantity (``accel_m_s2`` or ``dte_m``) and column -> (feature, scale to SI) of a table.
 
     Columns are ``<feature>`` (dimensionless) or ``<feature>_[<scale>_]<unit>`` with unit
-    ``m_per_s2``, ``g`` or ``m`` (e.g. ``rms_m_per_s2``, ``rms_g``, ``peak_to_peak_1e-5_m``).
+    ``m_per_s2``, ``g`` or ``m`` (e.g. ``rms_m_per_s2``, ``rms_g``, ``peak_to_peak_1e-5_m``):
+    a dimensional feature (``rms``, ``peak_to_peak``) without its unit, or a dimensionless one
+    with a unit, is refused (docs/own-data.md: the dimensional ones carry their unit; read as
+    SI, a column in g beside one in m/s^2 would be compared in different units).
     """
+    argument(df, "the feature table", pd.DataFrame, "a pandas DataFrame")
     cols, quantities = {}, set()
     for c in df.columns:
         if c in ("wear_mm", "cycles", "cycles_1e6"):
@@ -106,6 +142,13 @@ def parse_columns(df: pd.DataFrame) -> tuple[str, dict[str, tuple[str, float]]]:
         if not m or m["feat"] not in FEATURES:
             raise ValueError(f"feature table column {c!r} is not a Table 13 feature "
                              f"{FEATURES} with an optional unit suffix (_m_per_s2, _g, _m)")
+        if m["feat"] in DIMENSIONAL and not m["unit"]:
+            raise ValueError(f"feature table column {c!r}: {m['feat']} is dimensional and "
+                             f"needs its unit as a suffix ({m['feat']}_m_per_s2, {m['feat']}_g "
+                             f"or {m['feat']}_m; docs/own-data.md); rename the column")
+        if m["feat"] not in DIMENSIONAL and (m["unit"] or m["scale"]):
+            raise ValueError(f"feature table column {c!r}: {m['feat']} is dimensionless and "
+                             f"takes no unit or scale; name the column {m['feat']!r}")
         quantity, si = UNITS[m["unit"]] if m["unit"] else (None, 1.0)
         cols[c] = (m["feat"], float(m["scale"] or 1.0) * si)
         if quantity:
@@ -134,16 +177,87 @@ class TableData:
     cache: dict = dataclasses.field(default_factory=dict)
 
 
-def check_table(table: FeatureTable, base: Scenario) -> None:
-    """Refuse, before any work, a table the loop cannot judge or follow: its columns, fewer
-    than three rows, a depth the worn states cannot reach
-    (:func:`~physics.loop.measured.worn_states.check_table_depths`)."""
-    quantity, cols = parse_columns(table.frame)
-    check_feature_values(table, quantity, cols, base.gear.module_mm)
-    if len(table.frame) < 3:
-        raise ValueError(f"feature table: {len(table.frame)} rows; the cross-validation needs "
-                         "at least 3 wear states")
-    check_table_depths(base, table.frame.wear_mm.to_numpy(float))
+def check_table(table: FeatureTable, base: Scenario, given: set[str] | None = None) -> None:
+    """Refuse, before any work, a table the loop cannot judge or follow: its columns and
+    cells (:func:`~physics.loop.measured.bundle.check_feature_frame`, :func:`parse_columns`,
+    :func:`check_feature_values`), fewer than three distinct wear states, more than
+    :data:`MAX_TABLE_ROWS` rows, a stated nuisance outside its range
+    (:func:`check_stated_nuisance`; ``given``: the keys the command line sets), a depth the
+    worn states cannot reach (:func:`~physics.loop.measured.worn_states.check_table_depths`)."""
+    argument(table, "check_table(table)", FeatureTable, "a FeatureTable")
+    argument(base, "check_table(base)", Scenario, "a physics.params.Scenario")
+    where = f"feature table {table.path}" if table.path is not None else "feature table"
+    frame = check_feature_frame(table.frame, where)
+    quantity, cols = parse_columns(frame)
+    check_feature_values(dataclasses.replace(table, frame=frame), quantity, cols,
+                         base.gear.module_mm)
+    wear = frame.wear_mm.to_numpy(float)
+    states = np.unique(wear)
+    if states.size < 3:
+        shown = ", ".join(f"{w:g}" for w in states)
+        raise ValueError(f"{where}: {len(frame)} row(s) of {states.size} distinct wear "
+                         f"state(s) (wear_mm {shown}); the cross-validation over the rows "
+                         "needs at least 3 distinct wear states: add rows of other depths")
+    if len(frame) > MAX_TABLE_ROWS:
+        raise ValueError(f"{where}: {len(frame):,} rows, above the {MAX_TABLE_ROWS} the loop "
+                         "takes: each row is one dynamic simulation at every step of every "
+                         "fit (the public rig's 36 rows took 25 min on two cores, so this table "
+                         f"would take about {len(frame) * 25 / 36 / 60:.2g} h); average the rows "
+                         "of each wear state (stage means) or give every n-th row")
+    check_stated_nuisance(base, quantity, given)
+    check_table_depths(base, wear)
+
+
+def check_stated_nuisance(base: Scenario, quantity: str, given: set[str] | None = None
+                          ) -> None:
+    """Refuse a stated ``dynamics.damping_ratio`` or ``dynamics.housing_mass_kg``
+    (:data:`STATED_NUISANCE`: set on the command line, ``given``, or other than the schema's
+    default) outside the range the table's calibration searches for this pair
+    (:func:`~physics.loop.model.declared.physical_nuisance`): the fit would start at the
+    range's bound and report the value it found, not the stated one, without a word. The
+    default housing mass (20 kg, a small housing) is a starting point, not a statement about
+    this pair: it is not refused."""
+    ranges = physical_nuisance(base)
+    default = Dynamics()
+    for name in STATED_NUISANCE:
+        if name == "housing_mass_kg" and quantity != "accel_m_s2":
+            continue
+        value = getattr(base.dynamics, name)
+        stated = value != getattr(default, name) or f"dynamics.{name}" in (given or ())
+        lo, hi, _ = ranges[name]
+        if stated and not lo <= value <= hi:
+            unit, source = (("kg", "the datasets' 10-40 kg of small housings, times the cube "
+                             "of this pair's centre distance over the thesis pair's")
+                            if name == "housing_mass_kg" else
+                            ("of critical", "what Kasuba & Evans (1981) report for spur "
+                             "meshes"))
+            raise ValueError(f"dynamics.{name} = {value:g} lies outside {lo:.3g}-{hi:.3g} "
+                             f"{unit}, the range a feature table's calibration searches for "
+                             f"this pair ({source}); it would be replaced by the range's bound "
+                             "without a word: state a value inside, or leave it out (it is "
+                             "calibrated)")
+
+
+def table_candidates(quantity: str, base: Scenario, settings: LoopSettings
+                     ) -> tuple[list[tuple[Effect, dict]], dict[str, str]]:
+    """The (effect, option) candidates searched on a table of ``quantity`` and those left out
+    with the reason (:data:`PATH_ONLY` with the exact contact); none searched is refused,
+    naming each candidate and why it cannot show."""
+    exact = base.dynamics.flank_contact == "exact"
+    searched = [(e, o) for e, o in candidates_for({quantity}, settings)
+                if not (exact and e.name in PATH_ONLY)]
+    not_searched = ({n: f"with dynamics.flank_contact=exact {why}" for n, why in
+                     PATH_ONLY.items() if quantity in EFFECTS[n].quantities}
+                    if exact else {})
+    if not searched:  # each left out by the exact contact (candidates_for: by the quantity)
+        names = settings.candidates or tuple(EFFECTS)
+        left = [n for n, e in EFFECTS.items() if n not in PATH_ONLY and quantity in e.quantities]
+        raise ValueError(f"loop.candidates = {list(names)}: none is searched on this table ("
+                         + "; ".join(f"{n}: {why}" for n, why in not_searched.items()
+                                     if n in names)
+                         + f"); add candidates the exact contact leaves in ({', '.join(left)}), "
+                         "or set dynamics.flank_contact=path")
+    return searched, not_searched
 
 
 def check_feature_values(table: FeatureTable, quantity: str, cols: dict[str, tuple[str, float]],
@@ -166,8 +280,9 @@ def check_feature_values(table: FeatureTable, quantity: str, cols: dict[str, tup
             top = math.inf if feat == "peak_to_peak" and quantity == "accel_m_s2" else top
             bad = (si <= 0) | (si > top)
             rule = (f"must be positive and at most {top:.3g} {unit}" + (
-                " (~1000 g RMS, beyond any gearbox housing's vibration: ISO 20816; not in "
-                "m/s^2? raw ADC counts, mm/s^2)" if quantity == "accel_m_s2" else
+                " (500 g RMS, beyond any gearbox housing's vibration and any industrial "
+                "accelerometer's range; not in m/s^2? raw ADC counts, mm/s^2)"
+                if quantity == "accel_m_s2" else
                 f" (a tenth of the module, {module_mm:g} mm: beyond any tooth deflection, "
                 "profile error and backlash; not in m? um or mm given as m)"))
         else:
@@ -197,14 +312,22 @@ def check_feature_values(table: FeatureTable, quantity: str, cols: dict[str, tup
 
 
 def prepare_table(table: FeatureTable, base: Scenario, settings: LoopSettings) -> TableData:
+    """The table checked (:func:`check_table`), its rows in order of wear (sorted stably: the
+    rows are wear states, and the rise is from the least to the most worn), its features in
+    SI units and the declared model of each row's worn state."""
     check_table(table, base)
-    quantity, cols = parse_columns(table.frame)
-    df = table.frame
+    df = check_feature_frame(table.frame)
+    quantity, cols = parse_columns(df)
+    order = np.argsort(df.wear_mm.to_numpy(float), kind="stable")
+    if np.any(order != np.arange(len(order))):
+        log.info("feature table: its rows are taken in order of wear_mm (the file's rows %s)",
+                 ", ".join(str(i + 1) for i in order))
+    df = df.iloc[order]
     wear = df.wear_mm.to_numpy(float)
     measured = np.column_stack([df[c].to_numpy(float) * s for c, (_, s) in cols.items()])
     return TableData(quantity, wear, measured, [f for f, _ in cols.values()],
-                     table_models(base, wear), base, settings, physical_nuisance(base),
-                     table.torque_unknown)
+                     table_models(base, wear, rows=order + 1), base, settings,
+                     physical_nuisance(base), table.torque_unknown)
 
 
 def responses(td: TableData, rows: np.ndarray, nuisance: dict, eff: Effect | None,
@@ -301,14 +424,23 @@ def _noise_bounds(td: TableData) -> tuple[str, float, float, bool]:
 def run_feature_table(table: FeatureTable | pd.DataFrame, base: Scenario,
                       settings: LoopSettings | None = None) -> LoopReport:
     """The loop on a feature table (a data frame: no ``gear.yaml`` or ``operating.yaml`` beside
-    it, the torque the configured one); returns its report."""
-    settings = settings or LoopSettings()
+    it, the torque the configured one; checked as a file's, :func:`check_table`); returns its
+    report. Its rows are taken in order of wear (module doc)."""
+    argument(table, "run_feature_table(table)", (FeatureTable, pd.DataFrame),
+             "a FeatureTable (physics.loop.read_measurements) or a pandas DataFrame of wear_mm "
+             "and features")
+    argument(base, "run_feature_table(base)", Scenario, "a physics.params.Scenario")
+    settings = argument(settings, "run_feature_table(settings)", (LoopSettings, type(None)),
+                        "a LoopSettings or None (the defaults)") or LoopSettings()
     if isinstance(table, pd.DataFrame):
-        table = FeatureTable(None, table, {})
-    candidates_for(set(), settings)  # refuses unknown names before any work
+        table = FeatureTable(None, check_feature_frame(table), {})
+    # refused before any work: unknown names, none that can show in the table's quantity
+    searched, not_searched = table_candidates(parse_columns(check_feature_frame(table.frame))[0],
+                                              base, settings)
     td = prepare_table(table, base, settings)
+    log.info("feature table: %d rows, %d candidates; each fit simulates every row", len(td.wear),
+             len(searched))
     rows = np.arange(len(td.wear))
-    exact = base.dynamics.flank_contact == "exact"
     start = declared_nuisance(base) | {"noise": _noise_bounds(td)[2] * 0.2}
     gain = ([("housing_mass_kg", *td.bounds["housing_mass_kg"])] if td.quantity != "dte_m"
             else [])
@@ -338,12 +470,12 @@ def run_feature_table(table: FeatureTable | pd.DataFrame, base: Scenario,
                 "heldout_by_feature": np.sqrt(np.mean(held**2, axis=0))}
 
     null = judge(None, {})
-    searched = [(e, o) for e, o in candidates_for({td.quantity}, settings)
-                if not (exact and e.name in PATH_ONLY)]
-    not_searched = ({n: f"with dynamics.flank_contact=exact {why}" for n, why in
-                     PATH_ONLY.items() if td.quantity in EFFECTS[n].quantities}
-                    if exact else {})
-    ranking = [judge(e, o) for e, o in searched]
+    log.info("feature table: the declared model judged (held-out %.3f)", null["heldout"])
+    ranking = []
+    for k, (e, o) in enumerate(searched):
+        ranking.append(judge(e, o))
+        log.info("feature table: candidate %d of %d, %s%s judged (held-out %.3f)", k + 1,
+                 len(searched), e.name, f" {o}" if o else "", ranking[-1]["heldout"])
     ranking.sort(key=lambda c: c["heldout"])
     best = ranking[0]
     checks = null_test(best["heldout"], null["heldout"], best["bic"] - null["bic"],

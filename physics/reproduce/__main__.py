@@ -12,7 +12,7 @@ import hydra
 from omegaconf import DictConfig
 
 from physics.command import entry, register_schema, run_command
-from physics.reproduce.thesis import ReproduceConfig, prepare, run
+from physics.reproduce.thesis import ReproduceConfig, interrupted_note, prepare, run
 
 register_schema("reproduce_schema", ReproduceConfig)
 
@@ -20,8 +20,7 @@ register_schema("reproduce_schema", ReproduceConfig)
 @hydra.main(version_base="1.3", config_path="pkg://gearwear_conf.reproduce",
             config_name="reproduce")
 def task(cfg: DictConfig) -> None:
-    run_command(cfg, prepare, run, kept=lambda plan: f"the tables written so far are in "
-                f"{plan.out}; run the command again to compute them all")
+    run_command(cfg, prepare, run, kept=interrupted_note)
 
 
 main = entry(task, check=prepare)

@@ -24,8 +24,10 @@ import pandas as pd
 
 from physics.dynamics.model import EXACT_PHASES, build_model, simulate
 from physics.dynamics.teeth import per_tooth_model
+from physics.files import read_csv_table
 from physics.gear.stiffness import mesh_stiffness
 from physics.params import Scenario
+from physics.reference import THESIS_TABLES
 from physics.signals.features import features
 from physics.signals.indicators import indicators
 from physics.signals.measurement import housing_acceleration
@@ -43,12 +45,38 @@ REVOLUTIONS = 10
 MEASURED_TABLE = "table15_measured_acceleration_features.csv"
 
 
+def thesis_tables_fix(key: str = "thesis_tables") -> str:
+    """What to give instead of a thesis tables folder that lacks a table the run reads."""
+    return (f"give {key} the folder of the thesis's tables (those shipped: {THESIS_TABLES}), "
+            f"or {key}=null to leave out the measured rises and the check of the thesis's "
+            "estimator")
+
+
+def measured_table(folder: Path, key: str = "thesis_tables") -> pd.DataFrame:
+    """The thesis's Table 15 (:data:`MEASURED_TABLE` in ``folder``), checked: a UTF-8 CSV with
+    ``wear_mm`` and the columns of :data:`FEATURES`, finite numbers, and a new-gear row
+    (``wear_mm`` 0) whose features are not 0 (each rise is over it); else a ValueError naming
+    ``key``, the file and the fix."""
+    fix = thesis_tables_fix(key)
+    path = Path(folder) / MEASURED_TABLE
+    table = read_csv_table(path, f"{key}: Table 15", fix, numeric=["wear_mm", *FEATURES.values()])
+    new = table.loc[table["wear_mm"] == 0]
+    if new.empty:
+        raise ValueError(f"{key}: Table 15 {path} has no new-gear row (wear_mm = 0), which "
+                         f"each measured rise is over; {fix}")
+    zero = [c for c in FEATURES.values() if new[c].iloc[0] == 0]
+    if zero:
+        raise ValueError(f"{key}: Table 15 {path}: the new-gear row's {zero[0]} is 0, which no "
+                         f"rise can be taken over; {fix}")
+    return table
+
+
 def measured_rises(folder: Path | None) -> pd.DataFrame | None:
     """Table 15's features over its new-gear row, from the thesis's tables folder (None: not
-    given)."""
+    given; the table checked by :func:`measured_table`)."""
     if folder is None:
         return None
-    table = pd.read_csv(folder / MEASURED_TABLE)
+    table = measured_table(folder)
     new = table.loc[table["wear_mm"] == 0].iloc[0]
     return pd.DataFrame({"wear_mm": table["wear_mm"],
                          **{f: table[c] / new[c] for f, c in FEATURES.items()}})

@@ -41,6 +41,7 @@ install_at_start(__name__)  # Ctrl-C and SIGTERM handled from here on, during th
 
 import argparse
 import dataclasses
+import math
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -50,7 +51,19 @@ import pandas as pd
 from scipy import stats
 
 from physics.dynamics.model import EXACT_PHASES, PairModel, build_model, simulate
-from physics.files import check_fresh, check_writable, pyplot, save_figure, write_csv, write_text
+from physics.files import (
+    check_fresh,
+    check_not_input,
+    check_writable,
+    pyplot,
+    read_csv_table,
+    resolved,
+    save_figure,
+    write_csv,
+    write_text,
+)
+from physics.gear.stiffness import mesh_stiffness
+from physics.gear.tooth import involute_angle
 from physics.params import Scenario
 from physics.reference import RIG_RECORDS
 from physics.tribology.contact_wear import simulate_contact_wear
@@ -67,17 +80,55 @@ RISE_AT_MM = (0.4, 0.9)
 COLUMNS = ("stage", "wear_mm", "acc_rms_g", "stage_order")
 
 
-def read_rig_table(path: Path) -> pd.DataFrame:
-    """The rig's records: one row per record with ``stage``, ``wear_mm`` and ``acc_rms_g``;
-    a ``ValueError`` naming what is missing."""
-    table = pd.read_csv(path)
-    missing = [c for c in COLUMNS if c not in table.columns]
-    if missing:
-        raise ValueError(f"rig table {path}: columns {missing} are missing; it needs "
-                         f"{list(COLUMNS)}, one row per record")
-    if not (table["wear_mm"] == 0).any():
-        raise ValueError(f"rig table {path}: no stage of wear_mm = 0 (the new gear every "
+#: a rise of the summary is read at a stage this close to its depth of ``RISE_AT_MM`` [mm]
+#: (the rig's stages lie 0.01-0.05 mm apart), else it is left empty
+RISE_TOLERANCE_MM = 0.025
+#: what the command writes into ``--out``
+OUTPUT_FILES = ("rig_comparison.csv", "rig_summary.csv", "rig_comparison.png",
+                "rig_loop_table/rig_stage_means.csv", "rig_loop_table/gear.yaml",
+                "rig_loop_table/operating.yaml")
+
+
+def tip_thickness_mm(scn: Scenario) -> float:
+    """The thinner tooth's thickness at its tip circle along its drive flank's normal [mm]:
+    ``2 r_a psi_a cos(alpha_a)``, ``psi_a`` the involute's angle from the tooth's centre line
+    at the tip (:func:`physics.gear.tooth.involute_angle`) and ``alpha_a`` the pressure angle
+    there (the normal of an involute is tangent to the base circle, at ``alpha_a`` to the tip
+    circle's tangent). A drive flank worn that deep along its normal leaves no tip, so the
+    contact-driven wear (:func:`worn_states`) cannot reach it."""
+    geom = mesh_stiffness(scn.gear, scn.material).geometry
+    g = scn.gear
+    out = []
+    for z, rb, ra in ((g.z1, geom.rb1, geom.ra1), (g.z2, geom.rb2, geom.ra2)):
+        psi, alpha_a = involute_angle(z, math.radians(g.pressure_angle_deg), rb, ra)
+        out.append(2 * ra * float(psi) * math.cos(float(alpha_a)) * 1e3)
+    return min(out)
+
+
+def read_rig_table(path: Path, key: str = "rig table") -> pd.DataFrame:
+    """The rig's records: one row per record with ``stage``, ``stage_order``, ``wear_mm`` and
+    ``acc_rms_g``, checked before any work; a ``ValueError`` naming ``key`` (the command's
+    ``--table``), the file and what is wrong: not a UTF-8 CSV
+    (:func:`physics.files.read_csv_table`), a column missing, a value not a finite number, a
+    negative depth, no new-gear stage (``wear_mm`` 0), or a depth the rig pair's teeth do not
+    have (at or beyond their tip thickness, :func:`tip_thickness_mm`: a table in um read as
+    mm)."""
+    fix = f"give the rig's records table ({', '.join(COLUMNS)}; one row per record)"
+    table = read_csv_table(path, key, fix, columns=COLUMNS,
+                           numeric=("wear_mm", "acc_rms_g", "stage_order"))
+    wear = table["wear_mm"].to_numpy(dtype=float)
+    if (wear < 0).any():
+        raise ValueError(f"{key} {path}: wear_mm = {wear.min():g} is negative; give each "
+                         "stage's wear depth in mm, 0 for the new gear")
+    if not (wear == 0).any():
+        raise ValueError(f"{key} {path}: no stage of wear_mm = 0 (the new gear every "
                          "column is divided by)")
+    tip = tip_thickness_mm(rig_scenario(TORQUES_NM[0]))
+    if wear.max() >= tip:
+        raise ValueError(f"{key} {path}: wear_mm = {wear.max():g} mm reaches the {tip:.3g} mm "
+                         "the rig pair's thinner tooth is thick at its tip (along its flank's "
+                         "normal): a flank worn that deep has no tip left to mesh; leave out "
+                         "the deeper stages, or check that wear_mm is in mm (not um)")
     return table
 
 
@@ -152,6 +203,25 @@ def model_rms(torque_Nm: float, depths_mm: np.ndarray) -> dict[str, np.ndarray]:
     return out
 
 
+def rise_stage(depths: np.ndarray, at: float) -> int | None:
+    """The stage (position in ``depths`` [mm]) nearest ``at`` [mm], if it lies within
+    :data:`RISE_TOLERANCE_MM` of it; else None (no stage of the table stands for that depth)."""
+    i = int(np.argmin(np.abs(depths - at)))
+    return i if abs(depths[i] - at) <= RISE_TOLERANCE_MM else None
+
+
+def unread_rises(depths: np.ndarray) -> str | None:
+    """A line naming the depths of :data:`RISE_AT_MM` no stage of ``depths`` stands for (their
+    rises are left empty in the summary), None if each has one."""
+    missing = [at for at in RISE_AT_MM if rise_stage(depths, at) is None]
+    if not missing:
+        return None
+    shown = " and ".join(f"{at:g} mm" for at in missing)
+    return (f"no stage of the table lies within {RISE_TOLERANCE_MM:g} mm of {shown} (its "
+            f"stages reach {depths.min():g}-{depths.max():g} mm): the summary's rises there "
+            "are left empty")
+
+
 def rig_comparison(table: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
     """One row per stage (``wear_mm``, ``rms_measured``, ``rms_model`` and one column per
     torque and contact) and the summary per contact and torque (rank correlation, rises at
@@ -170,11 +240,12 @@ def rig_comparison(table: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
             row = {"contact": contact, "torque_Nm": torque,
                    "rank_correlation": stats.spearmanr(means["rms_measured"], col).statistic}
             for at in RISE_AT_MM:
-                i = int(np.argmin(np.abs(depths - at)))
-                row[f"rise_measured_{at:g}mm"] = means["rms_measured"].iloc[i]
-                row[f"rise_model_{at:g}mm"] = col.iloc[i]
-                row[f"model_over_measured_{at:g}mm"] = (col.iloc[i]
-                                                        / means["rms_measured"].iloc[i])
+                i = rise_stage(depths, at)
+                measured = np.nan if i is None else means["rms_measured"].iloc[i]
+                model = np.nan if i is None else col.iloc[i]
+                row[f"rise_measured_{at:g}mm"] = measured
+                row[f"rise_model_{at:g}mm"] = model
+                row[f"model_over_measured_{at:g}mm"] = model / measured
             rows.append(row)
     return means, pd.DataFrame(rows)
 
@@ -227,18 +298,23 @@ def main(argv: Sequence[str] | None = None) -> int:
               "(stage, stage_order, wear_mm, acc_rms_g)", file=sys.stderr)
         return 2
     try:
-        table = read_rig_table(args.table)
+        table = read_rig_table(args.table, "--table")
         check_writable(args.out, "--out")
+        check_not_input([resolved(args.out) / name for name in OUTPUT_FILES], "--out",
+                        args.table, "--table")
         check_fresh(args.out, "--out", ("rig_*.csv", "rig_*.png", "rig_loop_table/*"),
                     args.overwrite, "--overwrite")
     except ValueError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
     note(lambda: "nothing is written before the comparison is complete; run the command again")
-    return guard(lambda: _run(table, args.out))
+    return guard(lambda: _run(table, resolved(args.out)))
 
 
 def _run(table: pd.DataFrame, out: Path) -> int:
+    unread = unread_rises(stage_means(table)["wear_mm"].to_numpy(dtype=float))
+    if unread is not None:
+        print(f"note: {unread}", file=sys.stderr)
     stages, summary = rig_comparison(table)
     write_csv(stages, out / "rig_comparison.csv")
     write_csv(summary, out / "rig_summary.csv")

@@ -49,7 +49,16 @@ from physics.dynamics.evolution import (
 )
 from physics.dynamics.model import build_model, simulate
 from physics.estimators.empirical_inverse import EmpiricalInverse, accuracy
-from physics.files import check_fresh, check_writable, sha256_file, write_csv, write_text
+from physics.files import (
+    check_fresh,
+    check_outside,
+    check_writable,
+    read_csv_table,
+    resolved,
+    sha256_file,
+    write_csv,
+    write_text,
+)
 from physics.gear.contact import reduced_modulus
 from physics.gear.geometry import MeshGeometry
 from physics.gear.load_sharing import pair_loads
@@ -61,11 +70,17 @@ from physics.params import (
     Scenario,
     config_choices,
     config_file,
+    scenario_for_case,
     scenario_from_config,
 )
 from physics.reference import THESIS_TABLES
 from physics.reproduce import plots
-from physics.reproduce.localised import table15_model
+from physics.reproduce.localised import (
+    MEASURED_TABLE,
+    measured_table,
+    table15_model,
+    thesis_tables_fix,
+)
 from physics.scope import check_record, check_scope
 from physics.signals.features import features
 from physics.tribology.asperity_table import check_scenario
@@ -292,9 +307,8 @@ def evolution_tables(cfg: DictConfig, cases: list[int], cycles: np.ndarray, fit_
     operating point and lubricant values of Table 11.
     """
     curves, fits = [], {}
-    base = OmegaConf.to_container(cfg, resolve=False)
     for case in cases:
-        scn = scenario_from_config({**base, "case": case})
+        scn = scenario_for_case(cfg, case)
         root, _ = root_wear_evolution(scn, cycles, dynamic=True)
         curves.append(pd.DataFrame({"case": case, "cycles": cycles, "root_wear_mm": root * 1e3}))
         fits[case] = pd.DataFrame([
@@ -405,15 +419,23 @@ def _lubricant_from_group(name: str) -> Lubricant:
     return scenario_from_config({"lubricant": values}).lubricant
 
 
+#: the thesis's Table 14 in ``thesis_tables``, and the columns the check of its estimator reads
+THESIS_TABLE14 = "table14_dte_features_case3.csv"
+TABLE14_COLUMNS = ("wear_mm", "peak_to_peak_1e-5_m", "kurtosis")
+
+
 def _thesis_table14(folder: str | None) -> Path | None:
-    """The thesis's Table 14 CSV in ``folder`` (``thesis_tables=``), checked before any work."""
+    """The thesis's Table 14 CSV in ``folder`` (``thesis_tables=``), checked before any work
+    with every other table of the folder the run reads (Table 15: :func:`measured_table`):
+    present, UTF-8 CSV, the columns read, finite numbers."""
     if folder is None:
         return None
-    path = Path(folder) / "table14_dte_features_case3.csv"
+    path = Path(folder) / THESIS_TABLE14
+    fix = thesis_tables_fix()
     if not path.is_file():
-        raise ValueError(f"thesis_tables = {folder!r} holds no table14_dte_features_case3.csv; "
-                         f"give the folder of the thesis's tables (default {THESIS_TABLES}) "
-                         "or null to skip the check of the thesis's own estimator")
+        raise ValueError(f"thesis_tables = {folder!r} holds no {THESIS_TABLE14}; {fix}")
+    read_csv_table(path, "thesis_tables: Table 14", fix, numeric=TABLE14_COLUMNS)
+    measured_table(Path(folder))
     return path
 
 
@@ -476,6 +498,7 @@ class ReproducePlan:
     thesis14: Path | None
     out: Path
     record: Path | None = None  # where the tables' hashes are recorded (record_hashes=true)
+    run_folder: Path | None = None  # the Hydra run's folder (a new one each run)
 
 
 def _positive(name: str, values: list[float], whole: bool = False) -> None:
@@ -573,7 +596,12 @@ def prepare(cfg: DictConfig) -> ReproducePlan:
     model's scope (:func:`physics.scope.check_scope`)."""
     record = _hash_record(cfg)
     check_writable(cfg.out_dir, "out_dir")
-    check_fresh(cfg.out_dir, "out_dir", ("*.csv", "*.png"), cfg.overwrite, "overwrite=true")
+    check_fresh(cfg.out_dir, "out_dir", OUTPUTS, cfg.overwrite, "overwrite=true")
+    thesis14 = _thesis_table14(cfg.thesis_tables)
+    if thesis14 is not None:
+        check_outside(cfg.out_dir, "out_dir", {
+            "thesis_tables": cfg.thesis_tables, "the thesis's Table 14": thesis14,
+            "the thesis's Table 15": thesis14.parent / MEASURED_TABLE})
     scn = check_record(scenario_from_config(cfg))
     lubs = {lub.name: lub for lub in map(_lubricant_from_group, cfg.lubricants)}
     st, ev = cfg.stiffness, cfg.evolution
@@ -607,14 +635,84 @@ def prepare(cfg: DictConfig) -> ReproducePlan:
     if not 0 < ev.fit_until <= ev.cycles_max or ev.points < 5:
         raise ValueError(f"evolution: fit_until = {ev.fit_until} must lie in (0, cycles_max = "
                          f"{ev.cycles_max}] and points = {ev.points} must be >= 5")
+    _check_fit_grid(int(ev.points), float(ev.fit_until), float(ev.cycles_max))
     if st.positions < 10 or min(st.fem_refines, default=1) <= 0 or st.fem_refine <= 0:
         raise ValueError(f"stiffness: positions = {st.positions} must be >= 10 and the FE "
                          "refinements > 0")
-    base = OmegaConf.to_container(cfg, resolve=True)
     for case in ev.cases:
-        check_scenario(check_record(scenario_from_config({**base, "case": case})))
-    return ReproducePlan(cfg, scn, lubs, _thesis_table14(cfg.thesis_tables), Path(cfg.out_dir),
-                         record)
+        check_scenario(check_record(scenario_for_case(cfg, case)))
+    return ReproducePlan(cfg, scn, lubs, thesis14, resolved(cfg.out_dir), record,
+                         _hydra_run_folder())
+
+
+#: the kinds of file a run writes into out_dir (an earlier run's are refused without overwrite)
+OUTPUTS = ("*.csv", "*.png")
+#: the points of the evolution grid Table 12's fits need at N <= fit_until and beyond it
+#: (:func:`physics.dynamics.evolution.fit_evolution_models`)
+FIT_POINTS, JUDGED_POINTS = 5, 2
+
+
+def evolution_grid(points: int, cycles_max: float) -> np.ndarray:
+    """The cycle grid of the evolution curves and Table 12's fits."""
+    return np.linspace(0.0, cycles_max, points)
+
+
+def _check_fit_grid(points: int, fit_until: float, cycles_max: float) -> None:
+    """Refuse (ValueError, one line) an evolution grid on which Table 12's fits cannot run:
+    fewer than :data:`FIT_POINTS` points at ``N <= fit_until`` or fewer than
+    :data:`JUDGED_POINTS` beyond it; the message names the grid and the points that would do."""
+    def counts(n: int) -> tuple[int, int]:
+        grid = evolution_grid(n, cycles_max)
+        return int((grid <= fit_until).sum()), int((grid > fit_until).sum())
+
+    def enough(n: int) -> bool:
+        fit, judged = counts(n)
+        return fit >= FIT_POINTS and judged >= JUDGED_POINTS
+
+    if enough(points):
+        return
+    fit, judged = counts(points)
+    # the grid's share beyond fit_until is about 1 - fit_until / cycles_max: the first grid
+    # that holds the points needed lies near the count that share asks for
+    share = 1.0 - fit_until / cycles_max
+    start = max(points, int(max(FIT_POINTS / (1.0 - share), JUDGED_POINTS / share)) - 2
+                if share > 0 else points)
+    found = next((n for n in range(start, start + 50) if enough(n)), None) if share > 1e-4 else None
+    fix = (f"give evolution.points={found} or more, or move evolution.fit_until"
+           if found is not None else "lower evolution.fit_until below evolution.cycles_max")
+    raise ValueError(f"evolution.points = {points} (a grid from 0 to evolution.cycles_max = "
+                     f"{cycles_max:g}) puts {fit} cycle counts at N <= evolution.fit_until = "
+                     f"{fit_until:g} and {judged} beyond it; Table 12's fits need >= "
+                     f"{FIT_POINTS} and >= {JUDGED_POINTS}: {fix}")
+
+
+def _hydra_run_folder() -> Path | None:
+    """This Hydra run's folder, resolved (None outside a Hydra app)."""
+    from hydra.core.hydra_config import HydraConfig
+
+    try:
+        return resolved(HydraConfig.get().runtime.output_dir)
+    except (ValueError, AttributeError):
+        return None
+
+
+def interrupted_note(plan: ReproducePlan) -> str:
+    """What an interrupted reproduction kept and how to compute the rest, truly: the folder is
+    named only where it exists; a rerun into the same folder needs ``overwrite=true`` once it
+    holds tables (:func:`physics.files.check_fresh`), while a run into its own new Hydra folder
+    (the default ``out_dir``) does not."""
+    out = plan.out
+    written = (sorted(p.name for pattern in OUTPUTS for p in out.glob(pattern) if p.is_file())
+               if out.is_dir() else [])
+    if not written:
+        return "no table was written yet; run the command again"
+    where = f"{len(written)} table(s) and figure(s) written so far are in {out}"
+    if plan.run_folder is not None and out == plan.run_folder:
+        return f"{where}; run the command again to compute them all (in a new run folder)"
+    if plan.cfg.overwrite:
+        return f"{where}; run the same command again (with its overwrite=true) to compute them all"
+    return (f"{where}; run the command again with overwrite=true to compute them all (without "
+            f"it, out_dir={out} is refused, as it holds these files)")
 
 
 def reproduce(cfg: DictConfig) -> dict[str, pd.DataFrame]:
@@ -649,7 +747,7 @@ def run(plan: ReproducePlan) -> dict[str, pd.DataFrame]:
     tables["table09_dynamics_vs_wear"] = table_dynamics_vs_wear({n: states[n] for n in t9})
     tables["table10_dynamic_vs_quasistatic"] = table_dynamic_vs_quasistatic(scn, dynamic)
     tables["dte"] = dte_frame(states, [t9[0], t9[-1]])
-    grid = np.linspace(0.0, float(dyn_cfg.cycles_max), int(dyn_cfg.points))
+    grid = evolution_grid(int(dyn_cfg.points), float(dyn_cfg.cycles_max))
     tables["wear_evolution"], fits = evolution_tables(
         cfg, [int(c) for c in dyn_cfg.cases], grid, float(dyn_cfg.fit_until))
     for case, df in fits.items():

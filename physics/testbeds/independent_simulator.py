@@ -120,7 +120,7 @@ import numpy as np
 import pandas as pd
 from scipy import signal
 
-from physics.loop.measured.bundle import write_bundle
+from physics.loop.measured.bundle import check_bundle_target, write_bundle
 
 QUANTITIES = ("dte_m", "accel_m_s2")
 STEEL_E = 206e9  # Pa, ISO 6336-1 steel reference modulus
@@ -823,7 +823,12 @@ def make_independent_bundle(
     Returns the bundle's path and the truth: the effect (canonical name), its values, the
     pair's parameters, the seed, and ``effect_to_noise_db``, the power the effect adds to the
     records against the noise's (``None`` without an effect).
+
+    A ``path`` that holds anything but an earlier bundle is refused before any work
+    (:func:`~physics.loop.measured.bundle.check_bundle_target`); an earlier bundle there is
+    replaced.
     """
+    path = check_bundle_target(path)
     pair = IndependentPair() if pair is None else pair
     if not isinstance(pair, IndependentPair):
         raise _bad("pair", type(pair).__name__, "must be an IndependentPair")

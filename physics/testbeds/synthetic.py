@@ -19,7 +19,7 @@ import pandas as pd
 
 from physics.dynamics.model import simulate
 from physics.loop.effects import effect
-from physics.loop.measured.bundle import write_bundle
+from physics.loop.measured.bundle import check_bundle_target, write_bundle
 from physics.loop.measured.records import shaft_rates
 from physics.loop.measured.worn_states import mesh_stiffness, worn_models
 from physics.loop.model.declared import declared_modes, declared_nuisance, modes_of, with_nuisance
@@ -36,7 +36,11 @@ def make_bundle(path: str | Path, base: Scenario, effect_name: str | None, seed:
     ``{"order": 2.6}`` makes a torque ripple at a non-integer shaft order, which no candidate
     of the library has. ``onset`` (a share of the records' life, 0-1): the effect appears
     during the bundle's life, in the records of at least ``onset * cycles_max`` cycles only
-    (the earlier ones are clean; the truth's ``with_effect`` lists which carry it)."""
+    (the earlier ones are clean; the truth's ``with_effect`` lists which carry it). A ``path``
+    that holds anything but an earlier bundle is refused before any work
+    (:func:`~physics.loop.measured.bundle.check_bundle_target`); an earlier bundle there is
+    replaced."""
+    path = check_bundle_target(path)
     if onset is not None and not 0.0 < onset <= 1.0:
         raise ValueError(f"onset = {onset!r} must be a share of the life in (0, 1]; e.g. 0.3 "
                          "leaves the first 30 % of the records' cycles clean")

@@ -96,8 +96,10 @@ def test_a_run_that_leaves_the_scope_ends_there_and_serves_every_deeper_need(scn
     assert records_history(scn, within) is h
     grid = wear_grid_cycles(h, 1.9e6, 4)  # 1.2 times 2.8 um lies beyond the reach
     np.testing.assert_allclose([h.root_at(c) for c in grid], [0.0, 1e-3, 2e-3, 3e-3])
-    for deep, what in (({"cycles": [np.nan], "wear_mm": [0.9]}, "below 0.9 mm"),
+    for deep, what in (({"cycles": [np.nan], "wear_mm": [0.9]},
+                        "the 0.9 mm of the most worn record"),
                        ({"cycles": [3e6], "wear_mm": [np.nan]}, r"records at 3e\+06 cycles")):
         with pytest.raises(OutOfScope, match=what):
             records_history(scn, pd.DataFrame(deep))
-    assert len(runs) == 1
+    # the run once, and once the coarse run that refuses records far beyond its reach
+    assert len(runs) == 2 and runs[1][0].solver.update_um == worn_states.PROBE_SOLVER["update_um"]

@@ -58,7 +58,7 @@ def test_cycles_far_beyond_the_coarse_reach_are_refused_by_name(runs):
 def test_a_record_within_the_margin_goes_on_to_the_run_itself(runs):
     """0.24 mm is within 1.25 times the coarse reach: the solver's own run decides (and here,
     leaving scope at 0.2 mm, refuses it)."""
-    with pytest.raises(OutOfScope, match="reaches only 0.2 mm"):
+    with pytest.raises(OutOfScope, match=r"reaches only 0\.2 mm"):
         ws.records_history(Scenario(), _rows([0.0, 0.24], [np.nan, np.nan]))
     assert runs == [ws.PROBE_SOLVER["update_um"], Scenario().solver.update_um]
 

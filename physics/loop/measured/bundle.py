@@ -4,7 +4,9 @@ A bundle is a folder with ``manifest.csv`` (one row per record), ``signals/<reco
 optionally ``gear.yaml`` (overrides of ``conf/physics/gear``). :func:`read_bundle` refuses a
 bundle that breaks a rule with one message naming the record and the rule, before anything is
 computed;
-:func:`write_bundle` writes a complete bundle or nothing (a temporary folder renamed into place).
+:func:`write_bundle` writes a complete bundle or nothing (a temporary folder renamed into place)
+and replaces an earlier bundle only, never a folder holding anything else
+(:func:`check_bundle_target`).
 A feature table (a CSV with ``wear_mm`` and feature columns, like thesis Table 15) is the other
 accepted form (:func:`read_feature_table`), with an optional ``gear.yaml`` and ``operating.yaml``
 beside it (:class:`FeatureTable`).
@@ -13,10 +15,12 @@ beside it (:class:`FeatureTable`).
 from __future__ import annotations
 
 import dataclasses
+import logging
 import os
 import re
 import shutil
 import tempfile
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -26,10 +30,13 @@ import yaml
 from omegaconf import OmegaConf
 from omegaconf.errors import OmegaConfBaseException
 
+from physics.arguments import argument, path_argument
 from physics.files import file_problem
 from physics.params import GearPair, Operating, Scenario
 from physics.scope import check_scope
 from physics.tribology.asperity_table import check_scenario
+
+log = logging.getLogger(__name__)
 
 REQUIRED = ("record", "quantity", "fs_hz", "n1_rpm", "torque_Nm", "wear_mm", "cycles", "split")
 QUANTITIES = ("dte_m", "accel_m_s2")
@@ -53,13 +60,18 @@ MAX_RECORDS_BYTES = 2 * 1024**3
 #: long before (its relative standard error is 1 / sqrt(2 (n - 1))); the model simulates one
 #: segment a record whatever its length
 MAX_RECORD_SAMPLES = 2**24
-#: the largest RMS (about the mean) a housing acceleration [m/s^2] can have. Vibration
-#: severity (ISO 20816-1 and -3, formerly ISO 10816) stops a machine at tens of mm/s RMS of
-#: housing velocity (zone D); acceleration is velocity times 2 pi f, so 0.1 m/s RMS at the
-#: highest mesh harmonics of a gearbox (~10 kHz) is 6e3 m/s^2; industrial accelerometers
-#: (IEPE, 10-100 mV/g) saturate at 50-500 g (5e2-5e3 m/s^2). 1e4 m/s^2 (~1000 g) RMS is beyond
-#: any running gearbox's housing: a record above is not in m/s^2 (raw ADC counts, mm/s^2)
-MAX_ACCEL_RMS = 1e4
+#: standard gravity [m/s^2] (3rd CGPM, 1901; ISO 80000-3), the unit accelerometers are read in
+STANDARD_GRAVITY = 9.80665
+#: the largest RMS (about the mean) a housing acceleration [m/s^2] can have: 500 g. An IEPE
+#: (ICP) accelerometer's output swings at most +-5 V about its bias (PCB Piezotronics, "ICP &
+#: charge accelerometers" fundamentals: full-scale output +-5 V), so at the least sensitive
+#: industrial grade, 10 mV/g (the usual 100 mV/g gives +-50 g), it saturates at +-500 g; a
+#: record's RMS never exceeds its largest |sample|, so no record of such a sensor has an RMS
+#: above 500 g. A running gearbox's housing is far below: vibration severity (ISO 20816-1 and
+#: -3, formerly ISO 10816) stops a machine at tens of mm/s RMS of housing velocity over
+#: 10-1000 Hz (zone D; 0.1 m/s at 1 kHz is 6e2 m/s^2). A record above is not in m/s^2
+#: (mm/s^2 are 1e-3 m/s^2; raw ADC counts)
+MAX_ACCEL_RMS = 500 * STANDARD_GRAVITY
 #: the largest |DTE| [m], as a share of the module: the DTE along the line of action is the
 #: tooth pair's elastic deflection (its mean: ~1e-5 m at rated load, a tooth that deflected a
 #: good share of its module would break), its profile and pitch errors (ISO 1328-1's coarsest
@@ -109,7 +121,9 @@ def read_bundle(path: str | Path, gear: GearPair | None = None) -> Bundle:
     """Read and validate a bundle; ``gear`` is the configured pair, to which the bundle's
     ``gear.yaml`` applies its overrides (its ``z1`` sets the sampling-rate rule fs >= 4 x the
     third mesh harmonic). ``Bundle.gear`` holds the overrides."""
-    path = Path(path)
+    path = path_argument(path, "read_bundle(path)", "a bundle folder")
+    gear = argument(gear, "read_bundle(gear)", (GearPair, type(None)),
+                    "a GearPair or None (the configured pair)")
     gear = gear if gear is not None else GearPair()
     if not path.is_dir():
         raise ValueError(f"bundle {path}: no such folder (see docs/own-data.md)")
@@ -161,10 +175,11 @@ def check_values(path: Path, rec: str, quantity: str, x: np.ndarray, module_mm: 
         rms = float(np.std(x))
         if rms > MAX_ACCEL_RMS:
             raise _fail(path, rec, f"accel_m_s2 of RMS {rms:.3g} m/s^2 lies above "
-                                   f"{MAX_ACCEL_RMS:g} m/s^2 (~1000 g), beyond any gearbox "
-                                   "housing's vibration (ISO 20816 stops a machine at tens of "
-                                   "mm/s; accelerometers saturate at 50-500 g): the signal is "
-                                   "not in m/s^2 (mm/s^2 are 1e-3 m/s^2; raw ADC counts?)")
+                                   f"{MAX_ACCEL_RMS:.4g} m/s^2 (500 g), beyond any gearbox "
+                                   "housing's vibration and any industrial accelerometer's "
+                                   "range (IEPE sensors saturate at 50-500 g; ISO 20816 stops a "
+                                   "machine at tens of mm/s): the signal is not in m/s^2 "
+                                   "(mm/s^2 are 1e-3 m/s^2; raw ADC counts?)")
     else:
         peak, limit = max(abs(lo), abs(hi)), MAX_DTE_MODULES * module_mm * 1e-3
         if peak > limit:
@@ -407,7 +422,9 @@ def read_measurements(path: str | Path, base: Scenario
     the bundle's gear overrides (a table's: those of the ``gear.yaml`` and ``operating.yaml``
     beside it); every record's scenario is checked against the model's scope. Refuses a bad
     input before any work."""
-    path = Path(path)
+    path = path_argument(path, "read_measurements(path)",
+                         "a bundle folder or a feature-table .csv file")
+    argument(base, "read_measurements(base)", Scenario, "a physics.params.Scenario")
     if path.is_dir():
         bundle = read_bundle(path, base.gear)
         scn = dataclasses.replace(base, gear=dataclasses.replace(base.gear, **bundle.gear))
@@ -435,31 +452,132 @@ def read_measurements(path: str | Path, base: Scenario
                      f"file{why}; see docs/own-data.md")
 
 
+#: what a bundle folder holds besides its ``signals/*.npy``, as :func:`write_bundle` and the
+#: bundle makers (:mod:`physics.testbeds`: ``make_bundle``, ``make_independent_bundle``) write
+#: it: a folder that holds these alone, or nothing, is an earlier bundle, which
+#: :func:`write_bundle` replaces
+BUNDLE_FILES = ("manifest.csv", "gear.yaml")
+
+
+def _not_bundle(path: Path) -> list[str]:
+    """The entries of the folder ``path`` that no bundle has (:data:`BUNDLE_FILES`,
+    ``signals/*.npy``; a link is never a bundle's), as names relative to ``path``."""
+    out = []
+    for entry in sorted(path.iterdir()):
+        if entry.is_symlink():
+            out.append(entry.name)
+        elif entry.name in BUNDLE_FILES and entry.is_file():
+            continue
+        elif entry.name == "signals" and entry.is_dir():
+            out += [f"signals/{e.name}" for e in sorted(entry.iterdir())
+                    if e.is_symlink() or not (e.is_file() and e.suffix == ".npy")]
+        else:
+            out.append(entry.name + ("/" if entry.is_dir() else ""))
+    return out
+
+
+def check_bundle_target(path: str | Path) -> Path:
+    """``path`` as a bundle's folder that :func:`write_bundle` may write, else a refusal
+    (ValueError, one line naming the folder and the fix): an existing file or link, a parent
+    that is a file, or a folder that holds anything an earlier bundle does not
+    (:data:`BUNDLE_FILES`, ``signals/*.npy``): a user's folder, whose files replacing it would
+    delete. A new folder, an empty one or an earlier bundle passes. The bundle makers call it
+    before their work."""
+    path = path_argument(path, "write_bundle(path)", "a new folder or an earlier bundle")
+    if path.is_symlink():
+        raise ValueError(f"write_bundle: {path} is a link (to {os.readlink(path)}), which "
+                         "replacing would remove; give a new folder's path, or the folder "
+                         "it points to")
+    if path.exists() and not path.is_dir():
+        raise ValueError(f"write_bundle: {path} is a file, not a folder; give a new folder's "
+                         "path for the bundle (the file is left as it is)")
+    if not path.exists():
+        above = next((p for p in path.absolute().parents if p.exists()), None)
+        if above is not None and not above.is_dir():
+            raise ValueError(f"write_bundle: {path}: {above} is a file, not a folder; give a "
+                             "path in a folder")
+        return path
+    foreign = _not_bundle(path)
+    if foreign:
+        more = f" and {len(foreign) - 1} more" if len(foreign) > 1 else ""
+        raise ValueError(f"write_bundle: {path} holds {foreign[0]}{more}, which no bundle has "
+                         f"(a bundle holds {', '.join(BUNDLE_FILES)} and signals/*.npy): "
+                         "replacing the folder would delete it; give a new folder's path, or "
+                         f"move {foreign[0]} out of {path} first")
+    return path
+
+
+def _remove_bundle(folder: Path) -> None:
+    """Remove an earlier bundle set aside by :func:`write_bundle`, its own files alone; a
+    folder that something else came into since is kept (and said so)."""
+    try:
+        for name in BUNDLE_FILES:
+            (folder / name).unlink(missing_ok=True)
+        if (folder / "signals").is_dir():
+            for f in (folder / "signals").glob("*.npy"):
+                f.unlink()
+            (folder / "signals").rmdir()
+        folder.rmdir()
+    except OSError as err:
+        log.warning("the earlier bundle replaced by write_bundle is kept in %s (%s): remove it "
+                    "once you have checked it", folder, err.strerror or err)
+
+
 def write_bundle(path: str | Path, manifest: pd.DataFrame, signals: dict[str, np.ndarray],
                  gear: dict | None = None) -> Path:
-    """Write a complete bundle at ``path`` (replacing one there) or nothing. Its folders and
-    files get the usual permissions (0o755 / 0o644 under the usual umask), not the temporary
-    folder's 0o700: a bundle is shared with the group that reads it."""
-    path = Path(path)
+    """Write a complete bundle at ``path`` or nothing, refused before anything is written
+    where ``path`` is not a new folder, an empty one or an earlier bundle
+    (:func:`check_bundle_target`: a user's folder is never deleted). An earlier bundle is
+    replaced: set aside, the new one renamed into place, then its files removed (or put back
+    if the rename fails). Its folders and files get the usual permissions (0o755 / 0o644
+    under the usual umask), not the temporary folder's 0o700: a bundle is shared with the
+    group that reads it."""
+    path = check_bundle_target(path)
+    argument(manifest, "write_bundle(manifest)", pd.DataFrame,
+             "a pandas DataFrame, one row per record (docs/own-data.md)")
+    argument(signals, "write_bundle(signals)", Mapping,
+             "a mapping of record names to 1-D arrays of samples")
+    argument(gear, "write_bundle(gear)", (Mapping, type(None)),
+             "a mapping of gear.yaml keys to values, or None")
+    arrays = {}
+    for name, x in signals.items():
+        if not isinstance(name, str) or not _NAME.match(name):
+            raise ValueError(f"write_bundle: record name {name!r} must use letters, digits, "
+                             "'_' and '-' only (it names the file signals/<record>.npy)")
+        try:
+            arrays[name] = np.asarray(x, float)
+        except (TypeError, ValueError) as err:
+            raise ValueError(f"write_bundle: record {name!r}: its signal is not an array of "
+                             f"numbers ({err})") from None
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.", dir=path.parent))
     umask = os.umask(0)
     os.umask(umask)
+    aside = None
     try:
         (tmp / "signals").mkdir()
         manifest.to_csv(tmp / "manifest.csv", index=False)
-        for name, x in signals.items():
-            np.save(tmp / "signals" / f"{name}.npy", np.asarray(x, float))
+        for name, x in arrays.items():
+            np.save(tmp / "signals" / f"{name}.npy", x)
         if gear:
-            (tmp / "gear.yaml").write_text(yaml.safe_dump(gear))
+            (tmp / "gear.yaml").write_text(yaml.safe_dump(dict(gear)))
         for p in (tmp, *tmp.rglob("*")):
             os.chmod(p, (0o777 if p.is_dir() else 0o666) & ~umask)
         if path.exists():
-            shutil.rmtree(path)
+            check_bundle_target(path)  # nothing of the user's came in while it was written
+            aside = Path(tempfile.mkdtemp(prefix=f".{path.name}.old.", dir=path.parent))
+            os.replace(path, aside)  # onto the empty folder made for it
         os.replace(tmp, path)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
+        if aside is not None:
+            if not path.exists() and any(aside.iterdir()):
+                os.replace(aside, path)  # the earlier bundle back in place
+            else:
+                aside.rmdir()
         raise
+    if aside is not None:
+        _remove_bundle(aside)
     return path
 
 
@@ -474,28 +592,54 @@ def check_not_own_reference(data: str | Path, reference: str | Path) -> None:
 
 def read_feature_table(path: str | Path) -> pd.DataFrame:
     """A feature table: ``wear_mm`` plus feature columns (units in the names, as Table 15);
-    a bad cell is reported with its row and column."""
-    path = Path(path)
+    a repeated column or a bad cell is reported with its row and column
+    (:func:`check_feature_frame`)."""
+    path = path_argument(path, "read_feature_table(path)", "a feature-table .csv file")
+    what = file_problem(path)
+    if what is not None:
+        raise ValueError(f"feature table {path} {what}; give a .csv file (docs/own-data.md)")
     try:
+        header = pd.read_csv(path, header=None, nrows=1, dtype=str, keep_default_na=False)
         df = pd.read_csv(path)
     except (pd.errors.EmptyDataError, pd.errors.ParserError, UnicodeDecodeError) as err:
         raise ValueError(f"feature table {path}: not a readable CSV table ({err})") from None
+    names = [str(c).strip() for c in header.iloc[0]]  # as written: pandas renames repeats
+    if len(names) == df.shape[1]:
+        df.columns = names
+    return check_feature_frame(df, f"feature table {path}")
+
+
+def check_feature_frame(df: pd.DataFrame, where: str = "feature table") -> pd.DataFrame:
+    """``df`` with every cell a number, checked (one line starting with ``where``, naming the
+    row, counted from 1 as in the file, the column and the rule): a repeated column name, no
+    ``wear_mm`` or no feature column or no row, a cell that is not a finite number, a wear
+    outside [0, 10] mm. A table given as a data frame goes through the same checks as one
+    read from a file."""
+    argument(df, f"{where}", pd.DataFrame, "a pandas DataFrame of wear_mm and features")
+    repeated = sorted({str(c) for c in df.columns[df.columns.duplicated()]})
+    if repeated:
+        raise ValueError(f"{where}: repeated column {repeated[0]!r}"
+                         + (f" (and {repeated[1:]})" if len(repeated) > 1 else "")
+                         + "; each feature takes one column: remove or rename the repeat")
     if "wear_mm" not in df.columns or df.shape[1] < 2 or df.empty:
-        raise ValueError(f"feature table {path}: needs a wear_mm column, feature columns and "
-                         "at least one row")
+        raise ValueError(f"{where}: needs a wear_mm column, feature columns and at least one "
+                         "row")
+    df = df.copy()
     for col in df.columns:
         values = pd.to_numeric(df[col], errors="coerce")
         bad = ~np.isfinite(values.to_numpy(float))
         if bad.any():
             row = int(np.argmax(bad))
-            raise ValueError(f"feature table {path}: row {row + 1}, column {col!r}: "
-                             f"{df[col].iloc[row]!r} is not a finite number")
+            cell = df[col].iloc[row]
+            shown = repr(cell) if isinstance(cell, str) else (
+                "empty (NaN)" if pd.isna(cell) else str(cell))
+            raise ValueError(f"{where}: row {row + 1}, column {col!r}: {shown} is not a "
+                             "finite number")
         df[col] = values
     wear = df["wear_mm"].to_numpy(float)
     out = (wear < 0) | (wear > 10)
     if out.any():
         row = int(np.argmax(out))
-        raise ValueError(f"feature table {path}: row {row + 1}, column 'wear_mm' = "
-                         f"{wear[row]:g} lies outside [0, 10] mm, what a wear depth can be; give "
-                         "it in mm")
-    return df
+        raise ValueError(f"{where}: row {row + 1}, column 'wear_mm' = {wear[row]:g} lies "
+                         "outside [0, 10] mm, what a wear depth can be; give it in mm")
+    return df.reset_index(drop=True)

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from physics.arguments import argument
 from physics.loop.config import LoopSettings
 from physics.loop.effects import Effect, Param
 from physics.loop.measured.bundle import Bundle, FeatureTable
@@ -44,6 +45,9 @@ def check_usable(bundle: Bundle, base: Scenario, settings: LoopSettings) -> None
     one), a record shorter than two segments (their scatter is the comparison's noise), a
     constant segment (a sensor that dropped out: its statistics are undefined), or a split
     without a train and a test record."""
+    argument(bundle, "check_usable(bundle)", Bundle, "a Bundle (physics.loop.read_bundle)")
+    argument(base, "check_usable(base)", Scenario, "a physics.params.Scenario")
+    argument(settings, "check_usable(settings)", LoopSettings, "a LoopSettings")
     man = bundle.manifest
     seg = settings.segment_s
     gear = dataclasses.replace(base.gear, **bundle.gear)
@@ -120,6 +124,10 @@ def shown_candidates(candidates: list[tuple[Effect, dict]], bundle: Bundle, base
     a gear run-out's sidebands resolved in an analysis segment (:data:`RESOLVED_BINS` bins of
     ``1 / loop.segment_s`` from their neighbour) at the slowest record's speed."""
     man = bundle.manifest
+    if not candidates:
+        raise ValueError(f"bundle {bundle.path}: no candidate effects to search in its "
+                         f"{sorted(set(man.quantity))} records; give loop.candidates that act "
+                         "on them")
     z1, z2 = (bundle.gear.get(k, getattr(base.gear, k)) for k in ("z1", "z2"))
     f1 = float(man.n1_rpm.min()) / 60
     resolved = RESOLVED_BINS / settings.segment_s
@@ -147,10 +155,11 @@ def shown_candidates(candidates: list[tuple[Effect, dict]], bundle: Bundle, base
             continue
         kept.append((eff, option))
     if not kept:
+        longer = any("not resolved" in why for why in dropped.values())
         raise ValueError(f"bundle {bundle.path}: none of the candidates "
                          f"{sorted({e.name for e, _ in candidates})} can show in these records "
                          f"({'; '.join(f'{k}: {v}' for k, v in dropped.items())}); widen "
-                         "loop.candidates or lengthen loop.segment_s")
+                         "loop.candidates" + (" or lengthen loop.segment_s" if longer else ""))
     return kept, dropped
 
 

@@ -261,11 +261,12 @@ def check_table_depths(scn: Scenario, wear_mm: np.ndarray) -> None:
     tip = tip_thickness_mm(scn)
     deep = wear_mm >= tip
     if deep.any():
-        raise OutOfScope(f"feature table: wear_mm = {float(wear_mm[deep].max()):g} mm reaches "
-                         f"the {tip:.3g} mm the thinner tooth is thick at its tip (along its "
-                         f"flank's normal): a flank worn that deep has no tip left to mesh; "
-                         f"the loop follows the flanks to below {tip:.3g} mm: leave out the "
-                         "deeper rows, or check that wear_mm is in mm")
+        row = int(np.argmax(wear_mm)) + 1  # the deepest, counted from 1 as in the file
+        raise OutOfScope(f"feature table: row {row}: wear_mm = {float(wear_mm[deep].max()):g} "
+                         f"mm reaches the {tip:.3g} mm the thinner tooth is thick at its tip "
+                         "(along its flank's normal): a flank worn that deep has no tip left to "
+                         f"mesh; the loop follows the flanks to below {tip:.3g} mm: leave out "
+                         "the deeper rows, or check that wear_mm is in mm")
     if wear_mm.max() <= 0:
         return
     ms = mesh_stiffness(scn.gear, scn.material)
@@ -280,9 +281,29 @@ def check_table_depths(scn: Scenario, wear_mm: np.ndarray) -> None:
                          "law, tribology.regime=dry") from None
 
 
-def table_models(scn: Scenario, wear_mm: np.ndarray) -> list[PairModel]:
+def table_models(scn: Scenario, wear_mm: np.ndarray, rows: np.ndarray | None = None
+                 ) -> list[PairModel]:
     """The declared models of a feature table's rows: the pair worn from new by the contact its
     worn flanks make to each row's depth (the deepest point of either active profile), with
-    the scenario's contact in the dynamics (``dynamics.flank_contact``)."""
-    s, states = contact_states(scn, wear_mm)
-    return contact_models(scn, scn.dynamics.flank_contact, s, states)
+    the scenario's contact in the dynamics (``dynamics.flank_contact``).
+
+    How deep the contact-driven wear follows the flanks before they leave the model's scope
+    (a tooth worn to its centre line somewhere on the flank) is known only by running it, to
+    the deepest row: where it leaves the scope first, the refusal (:class:`OutOfScope`, one
+    line) names that row (``rows``: the rows' numbers in the file, counted from 1; by default
+    their order here) and its depth."""
+    wear_mm = np.asarray(wear_mm, float)
+    try:
+        s, states = contact_states(scn, wear_mm)
+        return contact_models(scn, scn.dynamics.flank_contact, s, states)
+    except OutOfScope as err:
+        rows = np.arange(1, wear_mm.size + 1) if rows is None else np.asarray(rows)
+        i = int(np.argmax(wear_mm))
+        shallower = wear_mm[wear_mm < wear_mm[i]]
+        keep = (f"; the next deepest row is at {float(shallower.max()):g} mm"
+                if shallower.size else "")
+        raise OutOfScope(f"feature table: row {int(rows[i])} (wear_mm = {wear_mm[i]:g} mm, the "
+                         "deepest) lies beyond what the contact-driven wear follows at this "
+                         "operating point: on the way there the worn flanks leave the model's "
+                         f"scope ({' '.join(str(err).split())}); leave out the deepest "
+                         f"row(s){keep}, and run again") from None

@@ -134,14 +134,24 @@ def lowest_fits(ranking: list[Candidate], earlier: Sequence[Candidate]) -> list[
 
 def candidates_for(quantities: set[str], settings: LoopSettings) -> list[tuple[Effect, dict]]:
     """(effect, option) pairs to try: the library's (or ``settings.candidates``) effects that can
-    show in the records' quantities."""
+    show in the records' quantities (none given: only the names are checked). Refused: an
+    unknown name, and candidates none of which acts on the records' quantities (named, each
+    with the quantities it acts on)."""
     names = settings.candidates if settings.candidates is not None else tuple(EFFECTS)
     unknown = sorted(set(names) - set(EFFECTS))
     if unknown:
         raise ValueError(f"loop.candidates: {unknown} not in the effect library; choose from "
                          f"{sorted(EFFECTS)}")
-    return [(EFFECTS[n], o) for n in names if quantities & set(EFFECTS[n].quantities)
-            for o in EFFECTS[n].options]
+    out = [(EFFECTS[n], o) for n in names if quantities & set(EFFECTS[n].quantities)
+           for o in EFFECTS[n].options]
+    if quantities and not out:
+        acting = sorted(n for n, e in EFFECTS.items() if quantities & set(e.quantities))
+        raise ValueError(f"loop.candidates = {list(names)}: none acts on the data's "
+                         f"{sorted(quantities)} ("
+                         + "; ".join(f"{n} acts on {list(EFFECTS[n].quantities)} only"
+                                     for n in names)
+                         + f"); choose from those that do: {acting}")
+    return out
 
 
 @dataclass
