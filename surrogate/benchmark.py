@@ -154,8 +154,10 @@ def gearbox_keys(test: pd.DataFrame) -> list[str]:
 
 
 def network_columns(schema: FeatureSchema, test: pd.DataFrame) -> pd.DataFrame:
-    """The columns of ``test`` a network reads: its inputs and the gearbox keys."""
-    return test[list(dict.fromkeys([*schema.columns, *gearbox_keys(test)]))]
+    """The columns of ``test`` a network reads: its inputs, its operating point (checked) and
+    the gearbox keys."""
+    have = [c for c in schema.checked_columns if c in test.columns]
+    return test[list(dict.fromkeys([*have, *gearbox_keys(test)]))]
 
 
 def referenced(test: pd.DataFrame, wear: np.ndarray, target: str) -> tuple[float, float]:
@@ -781,7 +783,7 @@ def main(argv: list[str] | None = None) -> None:
                              "22 min on 2 cores)")
     parser.add_argument("--figures", type=Path, default=None, metavar="DIR",
                         help="with --real-rig-only or --one-rig-only: also copy the tables "
-                             "it writes into DIR (docs/figures: the tables docs/surrogate.md "
+                             "it writes into DIR (docs/figures: the tables docs/benchmark.md "
                              "quotes, checked by tests/surrogate/test_doc_figures.py)")
     parser.add_argument("--narrow-ranges", action="store_true",
                         help="instead: case-3 networks of the default nuisance ranges, of "

@@ -35,7 +35,7 @@ from physics.dataset.generation import (
 )
 from physics.dataset.generation import units as dataset_units
 from physics.params import Scenario, operating_cases
-from surrogate.inputs import CONDITIONS, SENSORS, input_columns
+from surrogate.inputs import CONDITIONS, SENSORS, input_columns, operating_columns
 from surrogate.schema import (
     FeatureSchema,
     first_rows,
@@ -191,6 +191,9 @@ class WearDataModule(L.LightningDataModule):
         self.source = self.dataset if table is None else str(table)  # named in errors
         self.units = dataset_units()
         self.group = self.group_by = None
+        #: the columns that state the rows' operating point without being inputs
+        #: (:func:`~surrogate.inputs.operating_columns`), whose training range the model keeps
+        self.operating: list[str] = []
         self.test_codes = self.val_codes = None
         self.cv, self.fold_label = cv, None
         self.folds: list[int] = []
@@ -265,8 +268,9 @@ class WearDataModule(L.LightningDataModule):
         needed = [*self.sources, self.target]
         self.units = with_vector_units(table_units(table, columns, units, needed), self.vectors)
         self.group, self.group_by = group, group_by or group
+        self.operating = operating_columns(raw, self.units, self.inputs, [self.target])
         self.table = user_rows(raw, table, group, needed, self.target, self.units, group_by,
-                               tuple(vector_columns(self.vectors)))
+                               tuple(vector_columns(self.vectors)), tuple(self.operating))
         self.cases = [0]
         self.labels = raw[[c for c in raw.columns if c not in needed]]
         if self.baseline:  # before the split: its refusal names the rule, not the counts
@@ -346,8 +350,11 @@ class WearDataModule(L.LightningDataModule):
             return
         parts = self.split() if self.table is not None else self.split_dataset()
         self.frames = calibration_split(parts, self.seed)
+        if self.table is None:  # the dataset's operating point, where it is not an input
+            self.operating = [c for c in CONDITIONS if c not in self.inputs]
         self.schema = FeatureSchema.fit(self.network_rows("train"), self.inputs, self.units,
-                                        self.target, self.baseline, self.vectors)
+                                        self.target, self.baseline, self.vectors,
+                                        tuple(self.operating))
 
     def split_dataset(self) -> dict[str, pd.DataFrame]:
         """The train/val/test rows of the physics dataset (built if missing) of the trained

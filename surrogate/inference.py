@@ -8,7 +8,7 @@ and the :class:`~surrogate.novelty.Novelty` (training rows and threshold); it is
 Predictions run in ONNX Runtime (:func:`onnx_session`): the input scaling, the five members and
 their mixture as one graph, built from the loaded weights on first use. On this machine it runs
 at 3.1-3.8 times torch's batch rate on two threads and a seventh of its single-row latency
-(``bench/bench_surrogate.py``, docs/surrogate.md, Training and inference time);
+(``bench/bench_surrogate.py``, docs/benchmark.md, Training and inference time);
 :func:`torch_predict` is the same computation in torch, the reference the tests and the
 benchmark hold it to.
 """
@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import copy
 import io
+import logging
 import math
 import warnings
 from collections.abc import Sequence
@@ -40,6 +41,8 @@ from surrogate.schema import FeatureSchema
 
 if TYPE_CHECKING:  # the training module imports Lightning, which inference does without
     from surrogate.model import WearRegressor
+
+log = logging.getLogger(__name__)
 
 # 2: with the conformal interval scale; 3: with the novelty (normalised conformal interval)
 FORMAT = "gearwear-wear-surrogate-3"
@@ -325,7 +328,7 @@ class Surrogate:
         """Mean and standard deviation of wear for an unscaled input matrix (no checks).
 
         Batches of 16384 rows keep the members' activations in the cache (faster than batches
-        of 131072); the rates and what else was tried: docs/surrogate.md, Training and
+        of 131072); the rates and what else was tried: docs/benchmark.md, Training and
         inference time."""
         xs = np.ascontiguousarray(x, np.float32)
         if xs.ndim != 2 or xs.shape[1] != len(self.schema.inputs):
@@ -362,9 +365,12 @@ class Surrogate:
         :func:`~surrogate.novelty.difficulty`; clipped at 0), ``novelty`` (the row's score,
         :class:`~surrogate.novelty.Novelty`: above 1 farther from the training rows than a
         row of a new gearbox like the validation ones lies with 95 % probability) and
-        ``out_of_range``, the flag: a novelty above 1 or an
-        input outside the training range widened by 5 % (:meth:`FeatureSchema.in_envelope`):
-        the reading is an extrapolation.
+        ``out_of_range``, the flag: a novelty above 1, an
+        input outside the training range widened by 5 % (:meth:`FeatureSchema.in_envelope`),
+        or an operating point (a speed or torque column of the training table that is not an
+        input) outside the training one (:meth:`FeatureSchema.operating_outside`; one line in
+        the log says so, or that the input lacks such a column): the reading is an
+        extrapolation.
         """
         if not isinstance(df, pd.DataFrame):
             raise TypeError(f"df = {type(df).__name__}: predict reads a pandas DataFrame with "
@@ -379,6 +385,10 @@ class Surrogate:
             raise ValueError(f"the model gives a non-finite wear for row {int(np.argmax(bad))} "
                              f"({int(bad.sum())} of {len(bad)} rows); nothing is written")
         score, flagged = self.flags(x)
+        flagged = flagged | self.schema.operating_outside(df)[0]
+        line = self.schema.operating_line(df)
+        if line:
+            log.warning(line)
         lower, upper = self.bounds(x, mean, std, score)
         t = self.schema.target
         return pd.DataFrame({f"{t}_pred": np.maximum(mean, 0.0), f"{t}_std": std,

@@ -27,6 +27,38 @@ DEFAULT_INPUTS = [f"{q}_{f}" for q in SENSORS for f in INVARIANT[q]]
 #: the operating point's columns, inputs beside the features with ``data.operating_point``
 #: (as measured, never read against the baseline record)
 CONDITIONS = ["n1_rpm", "torque_Nm"]
+#: units of a column that states the operating point a row was measured at (a shaft speed, a
+#: torque), as :mod:`surrogate.tables` normalises them
+OPERATING_UNITS = ("r/min", "rev/s", "N m")
+#: words of a column's name (split at ``_``, any case) that state the operating point where its
+#: unit is not given (``speed``, ``speed_rps``, ``rpm``, ``load_Nm``)
+OPERATING_WORDS = ("speed", "rpm", "rps", "torque", "load")
+
+
+def operating_columns(frame, units: dict[str, str], inputs: list[str], skip=()) -> list[str]:
+    """The columns of a training table ``frame`` that state the operating point its rows were
+    measured at without being inputs: :data:`CONDITIONS`, a column in one of
+    :data:`OPERATING_UNITS` (``units``) or named with one of :data:`OPERATING_WORDS`, numeric
+    and finite in every row; not an input and not in ``skip`` (the target). A split by speed
+    (``data.group_by=speed``) keeps it too: its test groups are what the range must flag. A
+    model records their training range and flags a row read outside it
+    (:meth:`surrogate.schema.FeatureSchema.operating_outside`): with the operating point not
+    among its inputs, it cannot tell a reading at another speed from one at another wear."""
+    import numpy as np
+    import pandas as pd
+
+    out = []
+    for col in frame.columns:
+        name = str(col)
+        words = {w.lower() for w in name.split("_")}
+        stated = (name in CONDITIONS or units.get(name) in OPERATING_UNITS
+                  or bool(words & set(OPERATING_WORDS)))
+        if not stated or name in inputs or name in skip:
+            continue
+        values = pd.to_numeric(frame[col], errors="coerce").to_numpy(float)
+        if values.size and np.isfinite(values).all():
+            out.append(name)
+    return out
 
 
 #: the baseline reading's default inputs: the DTE's mesh lines 1-6, each a complex amplitude

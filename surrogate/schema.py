@@ -16,6 +16,9 @@ from physics.signals.order_analysis import VECTOR_PARTS
 SCHEMA_VERSION = 2
 #: a value this many times outside the training envelope (or its inverse) means a wrong unit
 UNIT_FACTOR = 30.0
+#: an operating point within this share of the training one (of its range, or of its value
+#: where it did not vary) counts as the training one: a shaft speed held to 5 %
+OPERATING_MARGIN = 0.05
 
 
 @dataclass(frozen=True)
@@ -38,26 +41,44 @@ class FeatureSchema:
     #: the inputs that are complex lines, given as two columns ``<name>_re`` and ``<name>_im``
     #: and read as their magnitude (:func:`vector_magnitudes`)
     vectors: tuple[str, ...] = ()
+    #: the training table's columns that state its operating point without being inputs (a
+    #: shaft speed, a torque: :func:`surrogate.inputs.operating_columns`) and their range over
+    #: the training rows; a row read outside it is flagged (:meth:`operating_outside`)
+    operating: tuple[str, ...] = ()
+    operating_low: tuple[float, ...] = ()
+    operating_high: tuple[float, ...] = ()
 
     @property
     def columns(self) -> list[str]:
         """The columns an input table must hold: the inputs, each vector as its two parts."""
         return source_columns(self.inputs, self.vectors)
 
+    @property
+    def checked_columns(self) -> list[str]:
+        """The columns a reading uses: :attr:`columns`, and the operating point's
+        (:attr:`operating`: checked against the training one, not read by the model)."""
+        return list(dict.fromkeys([*self.columns, *self.operating]))
+
     @classmethod
     def fit(cls, train: pd.DataFrame, inputs: list[str], units: dict[str, str],
             target: str, baseline: tuple[str, ...] = (),
-            vectors: tuple[str, ...] = ()) -> FeatureSchema:
+            vectors: tuple[str, ...] = (), operating: tuple[str, ...] = ()) -> FeatureSchema:
         """The schema of a network trained on ``train`` (with ``baseline``: the rows as
-        :func:`baseline_changes` gives them, so the scaling and envelope are of the changes)."""
+        :func:`baseline_changes` gives them, so the scaling and envelope are of the changes);
+        ``operating``: the columns of ``train`` that state its operating point (those it
+        holds are recorded with their range)."""
         x = train[inputs].to_numpy(float)
         std = x.std(axis=0)
         std = np.where(std > 0, std, 1.0)  # a constant input (one case's lubricant) stays 0
+        operating = tuple(c for c in operating if c in train.columns and c not in inputs)
+        op = train[list(operating)].to_numpy(float)
         return cls(tuple(inputs), tuple(units[c] for c in inputs), target, units[target],
                    tuple(x.mean(axis=0).tolist()), tuple(std.tolist()),
                    tuple(x.min(axis=0).tolist()), tuple(x.max(axis=0).tolist()),
                    float(train[target].std()) or 1.0, baseline=tuple(baseline),
-                   vectors=tuple(vectors))
+                   vectors=tuple(vectors), operating=operating,
+                   operating_low=tuple(op.min(axis=0).tolist()) if operating else (),
+                   operating_high=tuple(op.max(axis=0).tolist()) if operating else ())
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -88,6 +109,13 @@ class FeatureSchema:
         if bad:
             raise ValueError(f"its input scaling of {bad} is not finite or has a deviation of "
                              "zero (std)")
+        n_op = len(self.operating)
+        if len(self.operating_low) != n_op or len(self.operating_high) != n_op or not (
+                np.isfinite([*self.operating_low, *self.operating_high]).all()
+                and all(lo <= hi for lo, hi in zip(self.operating_low, self.operating_high,
+                                                   strict=True))):
+            raise ValueError(f"its operating range of {list(self.operating)} is not one finite "
+                             "low <= high pair per column")
         if not (math.isfinite(self.target_scale) and self.target_scale > 0):
             raise ValueError(f"its target scale {self.target_scale!r} is not a finite number "
                              "above zero")
@@ -181,6 +209,54 @@ class FeatureSchema:
                 f"times the training range [{self.low[j]:.3g}, {self.high[j]:.3g}] "
                 f"{self.units[j]}: a unit or transcription error; repair or drop the row")
         return x
+
+    def operating_outside(self, df: pd.DataFrame, margin: float = OPERATING_MARGIN
+                          ) -> tuple[np.ndarray, list[str], list[str]]:
+        """The rows of ``df`` read at an operating point the model was not trained at: a value
+        of one of :attr:`operating` outside its training range widened by ``margin`` of the
+        range or of the value's size, whichever is larger (a rig trained at 15 rev/s alone
+        reads 15 +- 0.75). Returns that mask, the operating columns named in it (flagged rows'
+        columns first), and the operating columns ``df`` lacks (its rows are read unchecked:
+        the caller says so). A value that is not a finite number counts as outside."""
+        outside = np.zeros(len(df), bool)
+        missing = [c for c in self.operating if c not in df.columns]
+        named = []
+        for c, lo, hi in zip(self.operating, self.operating_low, self.operating_high,
+                             strict=True):
+            if c in missing:
+                continue
+            v = pd.to_numeric(df[c], errors="coerce").to_numpy(float)
+            pad = margin * max(hi - lo, abs(lo), abs(hi))
+            off = ~((v >= lo - pad) & (v <= hi + pad))
+            if off.any():
+                named.append(c)
+            outside |= off
+        return outside, named, missing
+
+    def operating_line(self, df: pd.DataFrame) -> str | None:
+        """One line on the operating point of ``df`` where a user must hear of it: rows read
+        outside the training one (:meth:`operating_outside`), or operating columns ``df``
+        lacks; None where neither."""
+        outside, named, missing = self.operating_outside(df)
+        parts = []
+        trained = {c: (lo, hi) for c, lo, hi in zip(self.operating, self.operating_low,
+                                                     self.operating_high, strict=True)}
+
+        def span(c: str) -> str:
+            lo, hi = trained[c]
+            return f"{c} {lo:.4g}" if lo == hi else f"{c} {lo:.4g}-{hi:.4g}"
+
+        if outside.any():
+            parts.append(f"{int(outside.sum())} of {len(df)} rows were measured at an "
+                         f"operating point the model was not trained at "
+                         f"({', '.join(span(c) for c in named)} in training): they are "
+                         "flagged (out_of_range), their readings are not to be trusted")
+        if missing:
+            parts.append(f"the model was trained at {', '.join(span(c) for c in missing)}, "
+                         f"and the input has no column {', '.join(missing)}: its rows' "
+                         "operating point is not checked (add the column to have rows at "
+                         "another one flagged)")
+        return "; ".join(parts) if parts else None
 
     def in_envelope(self, x: np.ndarray, margin: float = 0.05) -> np.ndarray:
         """True for rows whose every input lies in the training range widened by ``margin``."""

@@ -258,14 +258,17 @@ ESTIMATOR_COLUMNS = ("dte_peak_to_peak", "dte_kurtosis")
 
 def user_rows(df: pd.DataFrame, path: str | Path, group: str | None, needed: list[str],
               target: str | None = None, units: dict[str, str] | None = None,
-              group_by: str | None = None, line_parts: tuple[str, ...] = ()) -> pd.DataFrame:
+              group_by: str | None = None, line_parts: tuple[str, ...] = (),
+              operating: tuple[str, ...] = ()) -> pd.DataFrame:
     """A user's table (renamed) as the data module's rows: the ``needed`` columns as numbers,
     ``case`` 0, ``replicate`` the index of each trajectory in sorted order (a value of
     ``group``, or with ``group_by`` another column, a pair of the two), ``split_group`` the
     index of the row's ``group_by`` value in sorted order (of ``group`` without one), ``row``
     the row of the table, ``cycles`` where given (else NaN) and the estimator's features where
-    given (:data:`ESTIMATOR_COLUMNS`). Checked by :func:`check_user_table` first (``line_parts``
-    as it takes them); the rows of each trajectory are read in the table's order."""
+    given (:data:`ESTIMATOR_COLUMNS`) and the ``operating`` columns (the operating point, as
+    numbers: :func:`~surrogate.inputs.operating_columns`). Checked by
+    :func:`check_user_table` first (``line_parts`` as it takes them); the rows of each
+    trajectory are read in the table's order."""
     path = Path(path)
     for option, col in (("data.group", group), ("data.group_by", group_by)):
         if col is not None and col not in df.columns:
@@ -293,7 +296,7 @@ def user_rows(df: pd.DataFrame, path: str | Path, group: str | None, needed: lis
     out["row"] = np.arange(len(df))
     out["cycles"] = (df["cycles"].astype(float) if "cycles" in df.columns and "cycles"
                      not in needed else np.nan)
-    for name in ESTIMATOR_COLUMNS:
-        if name in df.columns and name not in needed:
+    for name in (*ESTIMATOR_COLUMNS, *operating):
+        if name in df.columns and name not in out.columns:
             out[name] = pd.to_numeric(df[name], errors="coerce").to_numpy(float)
     return out

@@ -449,7 +449,8 @@ def inner_network(job: TrainJob, dm: WearDataModule, pool: pd.DataFrame, out: Pa
         inner.cv, inner.folds = None, []
         inner.frames = calibration_split(parts, dm.seed)
         inner.schema = FeatureSchema.fit(inner.network_rows("train"), dm.inputs, dm.units,
-                                         dm.target, dm.baseline, dm.vectors)
+                                         dm.target, dm.baseline, dm.vectors,
+                                         tuple(dm.operating))
         fold_cfg = copy.deepcopy(job.cfg)
         fold_cfg.paths.output_dir = str(out / "selection" / f"network_fold{k}")
         L.seed_everything(job.cfg.seed, workers=True)
@@ -559,7 +560,8 @@ def report_test(surrogate: Surrogate, dm: WearDataModule, out: Path,
     every model) and ``parity.png``; logs the figures, and one line where the network is not
     better than the linear model."""
     test, t, keys = dm.frames["test"], surrogate.schema.target, ["case", "replicate"]
-    columns = list(dict.fromkeys([*surrogate.schema.columns, *keys]))
+    have = [c for c in surrogate.schema.checked_columns if c in test.columns]
+    columns = list(dict.fromkeys([*have, *keys]))
     pred = surrogate.predict(test[columns], gearbox=keys)
     schema = surrogate.schema
     raw_test = dm.network_rows("test")[list(schema.inputs)].to_numpy(float)

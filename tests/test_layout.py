@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import ast
 import importlib
+import re
 import tomllib
 from graphlib import CycleError, TopologicalSorter
 from pathlib import Path
@@ -210,3 +211,24 @@ def test_prediction_starts_without_lightning():
             f"{name} imports Lightning")
         parents = {".".join(i.split(".")[:k]) for i in found for k in range(1, i.count(".") + 1)}
         todo += [i for i in found | parents if i in known]
+
+
+#: the longest a page of docs/ and the README may be (a reference, not a notebook)
+DOC_LINES, README_LINES = 450, 150
+
+
+def test_docs_are_reference_pages_of_bounded_length_whose_links_resolve():
+    """Every page of docs/ at most 450 lines and the README at most 150; every relative link
+    of theirs names a file of the repository."""
+    pages = sorted((ROOT / "docs").glob("*.md"))
+    assert pages
+    long = {p.name: n for p in pages if (n := len(p.read_text().splitlines())) > DOC_LINES}
+    assert not long, f"docs pages above {DOC_LINES} lines: {long}"
+    readme = ROOT / "README.md"
+    assert len(readme.read_text().splitlines()) <= README_LINES
+    broken = []
+    for page in [readme, *pages]:
+        for target in re.findall(r"\]\(([^)#\s]+)(?:#[^)]*)?\)", page.read_text()):
+            if "://" not in target and not (page.parent / target).exists():
+                broken.append(f"{page.name}: {target}")
+    assert not broken, f"links to files that do not exist: {broken}"

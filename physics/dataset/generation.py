@@ -156,7 +156,7 @@ class NuisanceRanges:
       sinusoid alone leaves the same for every gearbox.
 
     What training over these spans costs on gearboxes inside narrow ranges, and buys beyond
-    them: docs/surrogate.md (Training ranges).
+    them: docs/benchmark.md (Training ranges).
     """
 
     speed_pct: float = bounded(10.0, 0.0, 50.0, closed=True)

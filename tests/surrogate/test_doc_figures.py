@@ -1,4 +1,4 @@
-"""The figures docs/surrogate.md quotes for the real rig and the one-rig table are those of the
+"""The figures docs/benchmark.md quotes for the real rig and the one-rig table are those of the
 tables the benchmark writes, stored in docs/figures/ (``python -m surrogate.benchmark
 --real-rig-only --figures docs/figures``; ``--one-rig-only --figures docs/figures``): a table
 of the doc is read cell by cell and each number compared with its file's value at the digits
@@ -14,17 +14,17 @@ import pandas as pd
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-DOC = ROOT / "docs" / "surrogate.md"
+DOC = ROOT / "docs" / "benchmark.md"
 FIGURES = ROOT / "docs" / "figures"
 NUMBER = re.compile(r"^\**(-?\d+(?:\.\d+)?)\**$")
 
 
 def section(title: str) -> str:
-    """The text of the doc's ``### title`` section, up to the next heading."""
+    """The text of the doc's ``## title`` section, up to the next heading."""
     text = DOC.read_text()
-    start = text.index(f"### {title}\n")
-    end = re.search(r"\n#{2,3} ", text[start + 4:])
-    return text[start:start + 4 + end.start()] if end else text[start:]
+    start = text.index(f"## {title}\n")
+    end = re.search(r"\n#{2,3} ", text[start + 3:])
+    return text[start:start + 3 + end.start()] if end else text[start:]
 
 
 def tables(text: str) -> list[list[list[str]]]:
@@ -46,7 +46,7 @@ def table_with(text: str, first: str) -> list[list[str]]:
     for t in tables(text):
         if t[0][0] == first:
             return t
-    raise AssertionError(f"docs/surrogate.md: no table headed {first!r} in its section; "
+    raise AssertionError(f"docs/benchmark.md: no table headed {first!r} in its section; "
                          f"regenerate it from {FIGURES}")
 
 
@@ -121,7 +121,7 @@ def test_the_real_rig_text_names_the_stages_its_interval_misses():
     for stage, row in missed.iterrows():
         records = round((1 - row.test_interval_coverage) * row.test_rows)
         said = f"{records} of {stage}'s {row.test_rows} records"
-        assert said in text, f"docs/surrogate.md's real-rig text does not say {said!r}"
+        assert said in text, f"docs/benchmark.md's real-rig text does not say {said!r}"
     assert len(missed) == 1, (f"the kept model's interval misses {sorted(missed.index)} "
                               "(real_rig_stages.csv): name each in the real-rig text")
     healthy = 1 - stages.loc["Healthy", "test_interval_coverage"]
@@ -145,7 +145,7 @@ def test_the_real_rig_text_splits_the_error_as_its_table_does():
                  f"add {kept[falling].sum() / len(kept):.1f} points",
                  f"the other {len(rest)} stages are read to {rest.mean():.1f} %",
                  f"picked knowing the answer, reads {best.mean():.1f} %"):
-        assert said in text, f"docs/surrogate.md's real-rig text does not say {said!r}"
+        assert said in text, f"docs/benchmark.md's real-rig text does not say {said!r}"
 
 
 #: the one-rig table: doc column -> one_rig.csv column

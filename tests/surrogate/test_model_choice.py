@@ -237,7 +237,7 @@ def test_the_real_rig_every_stage_left_out_reads_within_12_pct_and_covers():
     left out in turn and each fold choosing among them by ``GroupKFold`` over its 35 training
     stages as :func:`surrogate.training.select` does: the kept models' mean relative error over
     the 35 worn stages at most 12 %, their 95 % CV+ intervals covering at least 0.90 of the
-    530 records (docs/surrogate.md, The real rig, where the run's own figures stand)."""
+    530 records (docs/benchmark.md, The real rig, where the run's own figures stand)."""
     from physics.reference import RIG_RECORDS
 
     rig = pd.read_csv(RIG_RECORDS)
