@@ -143,8 +143,8 @@ def _given() -> set[str]:
 
 def execute(job: LoopJob) -> None:
     """Run the loop and write its report. Ctrl-C or SIGTERM (a batch system's time limit;
-    :mod:`physics.interrupt` raises both as KeyboardInterrupt) in the second round keeps the
-    first round's report, marked partial."""
+    :mod:`physics.interrupt` raises both as KeyboardInterrupt) keeps what was computed by then
+    (:func:`~physics.loop.bundle_loop.run_loop`), marked partial."""
     if isinstance(job.data, Bundle):
         reference = None
         if job.reference is not None:
@@ -167,8 +167,8 @@ def execute(job: LoopJob) -> None:
 @hydra.main(version_base="1.3", config_path="pkg://gearwear_conf.loop", config_name="loop")
 def task(cfg: DictConfig) -> None:
     run_command(cfg, prepare, execute,
-                kept=lambda job: (f"a partial report of the first round is kept in {job.out} "
-                                  "(report.json: partial)"
+                kept=lambda job: (f"a partial report is kept in {job.out} (report.json: "
+                                  "partial: what was computed before the stop)"
                                   if (job.out / "report.json").is_file() else
                                   "nothing is kept (the loop writes its report after its first "
                                   "round); run the command again"))

@@ -207,7 +207,8 @@ def assumed(bundle: Bundle, base: Scenario, nuisance: dict) -> dict:
 
 
 def best_null_round(rec: Records, nuisance: dict, free_nuisance: list[str],
-                    candidates: list[tuple[Effect, dict]], progress: bool = False
+                    candidates: list[tuple[Effect, dict]], progress: bool = False,
+                    deadline: float | None = None
                     ) -> tuple[Round, dict, Records, list[str], bool]:
     """The first round judged against the declared model's best fit: where the declared model
     refitted from an adopted candidate's nuisance (:func:`~physics.loop.search.fit.recalibrated`)
@@ -216,13 +217,15 @@ def best_null_round(rec: Records, nuisance: dict, free_nuisance: list[str],
     (:func:`~physics.loop.search.attribution.lowest_fits`), at most
     :data:`~physics.loop.search.fit.MAX_RECALIBRATIONS` times. Returns the round, the calibration it
     was judged against, the records with that calibration's discrepancy, the candidates whose
-    nuisance moved the calibration, and whether the cap left a better fit unused."""
+    nuisance moved the calibration, and whether the cap left a better fit unused. Past
+    ``deadline`` the next candidate raises :class:`TimeLimit` (:func:`first_round_partial`)."""
     refits: list[str] = []
     earlier: list[Candidate] = []
     while True:
         judged = with_discrepancy(rec, nuisance)
         first = attribute(rec, judged, None, {}, nuisance, free_nuisance, candidates,
-                          Reader("the declared model", nuisance), progress, earlier=earlier)
+                          Reader("the declared model", nuisance), progress, deadline,
+                          earlier=earlier)
         better = (recalibrated(rec, nuisance, first.best.nuisance, free_nuisance)
                   if first.adopted else None)
         if better is None or len(refits) == MAX_RECALIBRATIONS:
@@ -251,6 +254,49 @@ def calibrated_on(held: bool, refits: list[str], capped: bool) -> str:
     return text
 
 
+def stopped_by(stop: BaseException, settings: LoopSettings) -> dict:
+    """The report's ``partial`` entries of a stop: why (the time limit or an interrupt)."""
+    return {"stopped": (f"time limit of {settings.time_limit_s:g} s"
+                        if isinstance(stop, TimeLimit) else "interrupted"),
+            "interrupted": isinstance(stop, KeyboardInterrupt)}
+
+
+def first_round_partial(bundle: Bundle, rec: Records, settings: LoopSettings,
+                        stop: BaseException, nuisance: dict | None, left_out: dict
+                        ) -> LoopReport:
+    """The report of a run stopped in its first round (``stop``: the time limit or an
+    interrupt): what was computed by then, nothing more (no simulation runs after a stop).
+    The calibration where it was finished (else none), and the candidates screened or
+    refined by then with their train residual sums (``stop.candidates``, from
+    :func:`~physics.loop.search.attribution.attribute`); no candidate was judged, so no
+    effect is named and no held-out error is given: ``verdict`` is ``not_judged``."""
+    done = [{"effect": c.name, "option": c.option,
+             "parameters": {k: v for k, v in c.values.items() if k not in c.option},
+             "nuisance": c.nuisance, "refined": c.refined, "train_rss": c.train_rss}
+            for c in sorted(getattr(stop, "candidates", []), key=lambda c: c.train_rss)]
+    missing = ("the calibration was not finished: no candidate was searched" if nuisance is None
+               else f"{len(done)} candidates were fitted on the train records and none judged"
+               " on the held-out ones: no effect is named")
+    return LoopReport(
+        verdict="not_judged", unexplained=None, mode="bundle",
+        partial={**stopped_by(stop, settings), "after_round": 0, "missing": missing},
+        chosen_effect=None, chosen_option=None, chosen_parameters=None,
+        error_before=None, error_after=None,
+        error_unit="not computed: the run stopped before any held-out comparison",
+        feature_error_before_pct=None, feature_error_after_pct=None,
+        wear_error_before_pct=None, wear_error_after_pct=None,
+        calibration=dict(nuisance or {}),
+        calibrated_on=("the train records" if nuisance is not None
+                       else "not calibrated: stopped during the calibration"),
+        nuisance_after=dict(nuisance or {}), null_bic=None, ranking=done,
+        decision_rule={"min_gain": settings.min_gain, "min_delta_bic": settings.min_delta_bic,
+                       "false_add_rate": settings.false_add_rate,
+                       "max_wear_loss": settings.max_wear_loss},
+        details={"not_searched": left_out,
+                 "train_records": [bundle.records[i] for i in rec.train],
+                 "test_records": [bundle.records[i] for i in rec.test]})
+
+
 @one_blas_thread
 def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = None,
              progress: bool = False, reference: FormReference | None = None) -> LoopReport:
@@ -274,19 +320,23 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
     rec = prepare(bundle, base, settings)
     if reference is not None:
         rec = reference.subtracted(rec)
-    if reference is not None and reference.same_unit:
-        rec, nuisance, free_nuisance = held(rec, reference.calibration)
-    else:
-        nuisance, free_nuisance = calibrate(rec, start)
-    first, nuisance, judged, refits, capped = best_null_round(rec, nuisance, free_nuisance,
-                                                              candidates, progress)
+    deadline = started + settings.time_limit_s if settings.time_limit_s else None
+    nuisance = None
+    try:
+        if reference is not None and reference.same_unit:
+            rec, nuisance, free_nuisance = held(rec, reference.calibration)
+        else:
+            nuisance, free_nuisance = calibrate(rec, start)
+        first, nuisance, judged, refits, capped = best_null_round(
+            rec, nuisance, free_nuisance, candidates, progress, deadline)
+    except (TimeLimit, KeyboardInterrupt) as stop:  # what the first round computed, kept
+        return first_round_partial(bundle, rec, settings, stop, nuisance, left_out)
     declared = Reader("the declared model", nuisance)
     base_test = first.base_test  # the calibrated declared model's
     rounds = [first]
     eff = first.effects[first.best.name]
     more = second_candidates(eff, first.best.values, candidates) if first.adopted else []
     partial = None
-    deadline = started + settings.time_limit_s if settings.time_limit_s else None
     try:
         if more and deadline is not None and time.monotonic() > deadline:
             raise TimeLimit
@@ -294,9 +344,7 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
             rounds.append(attribute(rec, judged, eff, first.best.values, first.best.nuisance,
                                     free_nuisance, more, first.reader, progress, deadline))
     except (TimeLimit, KeyboardInterrupt) as stop:
-        partial = {"stopped": (f"time limit of {settings.time_limit_s:g} s"
-                               if isinstance(stop, TimeLimit) else "interrupted"),
-                   "after_round": 1, "interrupted": isinstance(stop, KeyboardInterrupt),
+        partial = {**stopped_by(stop, settings), "after_round": 1,
                    "missing": f"the greedy second round on {first.best.name} was not "
                               "finished: a second effect was not searched"}
     last = next((r for r in reversed(rounds) if r.adopted), None)

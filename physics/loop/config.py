@@ -62,8 +62,9 @@ class LoopSettings:
     # the project's own it absorbs a friction, leaves a tooth defect's error above half and lets the
     # greedy second round stack a spurious effect (docs/loop.md)
     model_form: bool = False
-    # seconds of work after which the greedy second round stops and the report of the first
-    # round is written, marked partial (0: no limit; the first round always runs to its end)
+    # seconds of work after which the loop stops at its next candidate and writes what it has
+    # computed, marked partial: in the second round the first round's report, in the first the
+    # calibration and the candidates fitted by then (verdict not_judged); 0: no limit
     time_limit_s: float = bounded(0.0, 0.0, 1e7, "seconds; 0 for no limit", closed=True)
     # where no effect is named: each candidate's detection limit, the smallest size the rule
     # would name on these records (physics.loop.search.detection; a few simulations per candidate)

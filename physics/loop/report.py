@@ -92,7 +92,8 @@ class LoopReport:
     decision_rule: dict
     details: dict = field(default_factory=dict)
     signals: Any = field(default=None, repr=False, compare=False)
-    # "effect", "unexplained_residual" or "none" (:func:`physics.loop.judge.verdict.verdict`); where
+    # "effect", "unexplained_residual", "none" or, stopped in the first round, "not_judged"
+    # (:data:`physics.loop.judge.verdict.VERDICTS`); where
     # the residual is unexplained, its groups, entries, lines and the closest candidates
     verdict: str | None = None
     unexplained: dict | None = None
@@ -111,7 +112,32 @@ class LoopReport:
         return self.to_dict()[key]
 
 
+def first_round_markdown(r: dict) -> str:
+    """report.md of a run stopped in its first round: why, the calibration if finished, the
+    candidates fitted by then (train residual sum, the lower the better), nothing judged."""
+    p = r["partial"]
+    lines = ["# Measured-data loop", "",
+             f"**Partial report:** the run stopped ({p['stopped']}) in its first round; "
+             f"{p['missing']}. Run it again, with a longer loop.time_limit_s if one was set, "
+             "for a verdict.", ""]
+    cal = ", ".join(f"{k} = {v:.4g}" for k, v in r["calibration"].items())
+    lines.append(f"Calibrated nuisance parameters ({r['calibrated_on']}): {cal or 'none'}.")
+    if r["ranking"]:
+        lines += ["", "## Candidates fitted on the train records (not judged)", "",
+                  "| effect | option | fit | train residual sum | parameters |",
+                  "|---|---|---|---|---|"]
+        for c in r["ranking"]:
+            par = ", ".join(f"{k}={v:.3g}" for k, v in c["parameters"].items()
+                            if isinstance(v, float))
+            lines.append(f"| {c['effect']} | {c['option'] or ''} | "
+                         f"{'refined' if c['refined'] else 'screened'} | "
+                         f"{c['train_rss']:.4g} | {par} |")
+    return "\n".join(lines) + "\n"
+
+
 def markdown(r: dict) -> str:
+    if (r.get("partial") or {}).get("after_round") == 0:
+        return first_round_markdown(r)
     lines = ["# Measured-data loop", ""]
     if r.get("partial"):
         p = r["partial"]
@@ -375,5 +401,5 @@ def write_report(report: LoopReport, out: Path, with_figures: bool = True) -> No
     out.mkdir(parents=True, exist_ok=True)
     atomic_write(out / "report.json", lambda p: p.write_text(text + "\n"))
     atomic_write(out / "report.md", lambda p: p.write_text(markdown(plain)))
-    if with_figures:
+    if with_figures and report.signals is not None:  # a first round stopped has none
         figures(report, out)

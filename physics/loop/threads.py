@@ -96,15 +96,22 @@ def each(fn: Callable[[T], R], items: Sequence[T], desc: str, progress: bool = F
     """``[fn(x) for x in items]``, the items on parallel threads (:func:`parallel_threads`,
     each thread's kernel calls on one numba thread), in the items' order. An item not started
     by ``deadline`` raises :class:`TimeLimit`; an error (or an interrupt in the calling
-    thread) cancels the items not started and waits for the running ones."""
+    thread) cancels the items not started and waits for the running ones. A stop
+    (:class:`TimeLimit` or KeyboardInterrupt) carries the results of the items finished by
+    then as its ``finished`` (index, result) pairs: what was computed is not lost."""
     workers = min(len(items), parallel_threads())
     bar = tqdm(total=len(items), desc=desc, disable=not progress)
     if workers <= 1:
         out = []
-        for x in in_time(items, deadline):
-            out.append(fn(x))
-            bar.update()
-        bar.close()
+        try:
+            for x in in_time(items, deadline):
+                out.append(fn(x))
+                bar.update()
+        except (TimeLimit, KeyboardInterrupt) as stop:
+            stop.finished = list(enumerate(out))
+            raise
+        finally:
+            bar.close()
         return out
 
     def run(x: T) -> R:
@@ -120,8 +127,11 @@ def each(fn: Callable[[T], R], items: Sequence[T], desc: str, progress: bool = F
             for f in as_completed(futures):
                 f.result()
                 bar.update()
-        except BaseException:
+        except BaseException as err:
             for f in futures:
                 f.cancel()
+            if isinstance(err, TimeLimit | KeyboardInterrupt):
+                err.finished = [(i, f.result()) for i, f in enumerate(futures)
+                                if f.done() and not f.cancelled() and f.exception() is None]
             raise
         return [f.result() for f in futures]

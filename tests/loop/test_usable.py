@@ -18,7 +18,9 @@ from physics.loop import EFFECTS, LoopSettings, check_usable, read_bundle, run_l
 from physics.loop.measured.records import group_label
 from physics.loop.measured.usable import shown_candidates
 from physics.loop.report import write_report
+from physics.loop.search import attribution
 from physics.loop.search.attribution import candidates_for
+from physics.loop.threads import TimeLimit
 from physics.params import scenario_from_config
 from physics.testbeds import make_bundle
 
@@ -122,9 +124,22 @@ def public_like(tmp_path_factory):
 
 
 def test_a_public_like_bundle_runs_to_the_end_and_stops_after_round_one(public_like,
-                                                                        tmp_path):
+                                                                        tmp_path, monkeypatch):
+    """The time limit passes in the second round (its attribution raises it): the first
+    round's report, marked partial."""
     bundle, scn, _ = public_like
-    report = run_loop(bundle, scn, dataclasses.replace(SETTINGS, time_limit_s=1e-6))
+    real = bundle_loop.attribute
+    calls = []
+
+    def attribute(*args, **kwargs):
+        calls.append(1)
+        if len(calls) > 1:
+            raise TimeLimit
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(bundle_loop, "attribute", attribute)
+    report = run_loop(bundle, scn, dataclasses.replace(SETTINGS, time_limit_s=600.0))
+    assert len(calls) == 2
     assert report["verdict"] == "effect" and report["chosen_effect"] == "transfer_path"
     assert report["chosen_parameters"]["fn_hz"] < 0.45 * FS
     assert report["partial"]["stopped"].startswith("time limit")
@@ -159,3 +174,44 @@ def test_an_interrupt_after_round_one_keeps_its_report(public_like, monkeypatch)
                                  "interrupted": True,
                                  "missing": report["partial"]["missing"]}
     assert report["chosen_effect"] == "transfer_path"
+
+
+@pytest.mark.parametrize("stop", ["interrupt", "time_limit"])
+def test_a_stop_in_the_first_round_keeps_the_calibration_and_the_candidates_fitted(
+        public_like, monkeypatch, tmp_path, stop):
+    """Ctrl-C after two candidates were screened, or a time limit already passed when the
+    screening starts: a report marked partial after round 0 with the calibration and the
+    candidates fitted by then (none judged, no effect named, no held-out error made up),
+    written as report.json and report.md; nothing more is simulated after the stop."""
+    bundle, scn, _ = public_like
+    settings = dataclasses.replace(SETTINGS, candidates=None)
+    real, screened = attribution.screen_effect, []
+
+    def screen_effect(*args, **kwargs):
+        if stop == "interrupt" and len(screened) >= 2:
+            raise KeyboardInterrupt
+        out = real(*args, **kwargs)
+        screened.append(out)
+        return out
+
+    monkeypatch.setattr(attribution, "screen_effect", screen_effect)
+    if stop == "time_limit":
+        settings = dataclasses.replace(settings, time_limit_s=1e-6)
+    report = run_loop(bundle, scn, settings)
+    p = report["partial"]
+    assert p["after_round"] == 0 and p["interrupted"] == (stop == "interrupt")
+    assert p["stopped"] == ("interrupted" if stop == "interrupt" else "time limit of 1e-06 s")
+    assert report["verdict"] == "not_judged" and report["chosen_effect"] is None
+    assert report["error_before"] is None and report["null_bic"] is None
+    assert set(report["calibration"]) >= {"housing_mass_kg", "torque_factor"}
+    fitted = {(c["effect"], str(c["option"])) for c in report["ranking"]}
+    assert fitted == {(c.name, str(c.option)) for c in screened}
+    assert len(fitted) == (2 if stop == "interrupt" else 0)
+    assert all(not c["refined"] and c["train_rss"] > 0 for c in report["ranking"])
+    write_report(report, tmp_path / "run")
+    saved = json.loads((tmp_path / "run" / "report.json").read_text())
+    assert saved["partial"]["after_round"] == 0 and saved["verdict"] == "not_judged"
+    md = (tmp_path / "run" / "report.md").read_text()
+    assert "in its first round" in md and "Calibrated nuisance parameters (the train" in md
+    assert ("Candidates fitted on the train records" in md) == (stop == "interrupt")
+    assert not list((tmp_path / "run").glob("*.png"))  # no figure of what was not computed

@@ -37,7 +37,9 @@ from physics.loop.measured.records import Records, by_group, shaft_rates
 from physics.loop.model.comparison import residuals_db
 from physics.signals.order_analysis import band_edges, line_frequencies
 
-VERDICTS = ("effect", "unexplained_residual", "none")
+#: what a loop can say; ``not_judged``: the run stopped in its first round, before any
+#: candidate was judged (:func:`physics.loop.bundle_loop.first_round_partial`)
+VERDICTS = ("effect", "unexplained_residual", "none", "not_judged")
 #: candidates reported as closest beside an unexplained residual
 CLOSEST = 3
 

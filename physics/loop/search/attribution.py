@@ -28,7 +28,7 @@ from physics.loop.model.discrepancy import discrepancy_allowance
 from physics.loop.model.simulation import model_signals
 from physics.loop.search.fit import Candidate, screen_effect, search
 from physics.loop.search.wear_reading import Reader, WearScore, reads_wear, wear_score
-from physics.loop.threads import each
+from physics.loop.threads import TimeLimit, each
 
 log = logging.getLogger(__name__)
 
@@ -227,12 +227,21 @@ def attribute(rec: Records, judged: Records, declared: Effect | None, declared_v
     null_bic = bic(float(np.sum(null_res**2)), n_train, 0)
     before = rms(residuals(judged, rec.test, base_test))
     effects = {eff.name: eff for eff, _ in candidates}
-    ranking = each(lambda c: screen_effect(rec, *c, nuisance), candidates, "screening",
-                   progress, deadline)
+    try:
+        ranking = each(lambda c: screen_effect(rec, *c, nuisance), candidates, "screening",
+                       progress, deadline)
+    except (TimeLimit, KeyboardInterrupt) as stop:  # the candidates screened by then
+        stop.candidates = [c for _, c in getattr(stop, "finished", [])]
+        raise
     ranking.sort(key=lambda c: c.train_rss)
     top = settings.refine
-    ranking[:top] = each(lambda c: search(rec, effects[c.name], c, free_nuisance),
-                         ranking[:top], "refining", progress, deadline)
+    try:
+        ranking[:top] = each(lambda c: search(rec, effects[c.name], c, free_nuisance),
+                             ranking[:top], "refining", progress, deadline)
+    except (TimeLimit, KeyboardInterrupt) as stop:  # the refined ones in place of their screens
+        done = dict(getattr(stop, "finished", []))
+        stop.candidates = [done.get(i, c) for i, c in enumerate(ranking)]
+        raise
     ranking = lowest_fits(ranking, earlier)
     directions = free_directions(rec, nuisance, declared, declared_values, free_nuisance)
 
@@ -248,7 +257,11 @@ def attribute(rec: Records, judged: Records, declared: Effect | None, declared_v
             judged, rec.test, base_test, test, effects[c.name].judged_in())
         c.bic = bic(c.train_rss, n_train, c.n_params)
 
-    each(scored, ranking, "judging")
+    try:
+        each(scored, ranking, "judging")
+    except (TimeLimit, KeyboardInterrupt) as stop:  # fitted, not all judged
+        stop.candidates = ranking
+        raise
     for c in ranking:
         log.info("%s %s: held-out %.2f (baseline %.2f), own entries %.2f -> %.2f, explained "
                  "%s, dBIC %.1f, separable %.2f%s", c.name, c.option, c.heldout, before,
