@@ -98,3 +98,40 @@ def test_main_job_quote():
              f"covers {m['test_interval_coverage']:.1f} of the held-out readings")
     assert quote in readme_row("Main job, case 3")
 
+
+
+def test_inference_bench_quotes():
+    """The surrogate's inference figures of the README and docs/benchmark.md, from the run
+    ``python bench/bench_surrogate.py --out docs/figures/bench_surrogate.json`` kept."""
+    import json
+
+    b = json.loads((FIGURES / "bench_surrogate.json").read_text())
+    assert (f"{b['over_estimator']:.0f} times the thesis's estimator in the same run "
+            f"({b['batch_rows_per_s'] / 1e6:.1f}e6 rows/s); {b['one_row_us']:.0f} us for one "
+            "row") in readme_row("Surrogate inference on two cores")
+    doc = (ROOT / "docs" / "benchmark.md").read_text()
+    for quote in (f"{b['batch_rows_per_s'] / 1e6:.1f}e6 rows/s on two threads, "
+                  f"{b['one_thread_rows_per_s'] / 1e6:.1f}e6 on one: {b['over_estimator']:.0f} "
+                  f"times the estimator, {b['batch_rows_per_s'] / b['torch_rows_per_s']:.1f} "
+                  "times torch",
+                  f"| the same in torch | {b['torch_rows_per_s'] / 1e6:.1f}e6 rows/s |",
+                  f"| the thesis's estimator | {b['estimator_rows_per_s'] / 1e4:.1f}e4 rows/s |",
+                  f"| {b['predict_rows_per_s'] / 1e6:.2f}e6 rows/s |",
+                  f"| {b['one_row_us']:.0f} us (torch {b['torch_one_row_us']:.0f} us)",
+                  "through `Surrogate.predict` "
+                  f"{b['one_reading_through_predict_us'] / 1e3:.0f} ms"):
+        assert quote in doc, f"docs/benchmark.md does not quote {quote!r}"
+
+
+def test_loop_time_quotes():
+    """The loop's time of the README and docs/loop.md, from the run ``python bench/bench_loop.py
+    --generator independent --timing-only`` kept in docs/figures/loop/loop_timing.json."""
+    import json
+
+    t = json.loads((FIGURES / "loop" / "loop_timing.json").read_text())
+    assert t["generator"] == "independent" and t["records"] == 12 and not t["reference"]
+    said = f"{t['wall_s']:.0f} s on two cores ({t['cpu_s']:.0f} s of CPU; target: 30 s"
+    assert said in readme_row("Loop time")
+    assert ("not met" in readme_row("Loop time")) == (t["wall_s"] > 30)
+    doc = " ".join((ROOT / "docs" / "loop.md").read_text().split())
+    assert f"takes {t['wall_s']:.0f} s ({t['cpu_s']:.0f} s of CPU, 2 cores; target 30 s" in doc
