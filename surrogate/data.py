@@ -35,7 +35,13 @@ from physics.dataset.generation import (
 )
 from physics.dataset.generation import units as dataset_units
 from physics.params import Scenario, operating_cases
-from surrogate.inputs import CONDITIONS, SENSORS, input_columns, operating_columns
+from surrogate.inputs import (
+    CONDITIONS,
+    SENSORS,
+    input_columns,
+    operating_columns,
+    stating_operating,
+)
 from surrogate.schema import (
     FeatureSchema,
     first_rows,
@@ -269,6 +275,12 @@ class WearDataModule(L.LightningDataModule):
         self.units = with_vector_units(table_units(table, columns, units, needed), self.vectors)
         self.group, self.group_by = group, group_by or group
         self.operating = operating_columns(raw, self.units, self.inputs, [self.target])
+        unchecked = [c for c in stating_operating(raw, self.units, self.inputs, [self.target])
+                     if c not in self.operating]
+        if unchecked:
+            log.warning("column(s) %s of %s state the operating point but are not a number in "
+                        "every row: the model cannot check a reading's operating point against "
+                        "them (give the speed or torque as numbers)", unchecked, table)
         self.table = user_rows(raw, table, group, needed, self.target, self.units, group_by,
                                tuple(vector_columns(self.vectors)), tuple(self.operating))
         self.cases = [0]

@@ -5,6 +5,9 @@ absolutely or against each gearbox's baseline record, with or without the operat
 
 from __future__ import annotations
 
+import numpy as np
+import pandas as pd
+
 from physics.signals.order_analysis import LINE_ORDERS, MESH_ORDERS
 
 #: the sensors a user may have: DTE (``dte_*`` features) and housing acceleration (``acc_*``)
@@ -44,19 +47,22 @@ def operating_columns(frame, units: dict[str, str], inputs: list[str], skip=()) 
     model records their training range and flags a row read outside it
     (:meth:`surrogate.schema.FeatureSchema.operating_outside`): with the operating point not
     among its inputs, it cannot tell a reading at another speed from one at another wear."""
-    import numpy as np
-    import pandas as pd
 
+    return [c for c in stating_operating(frame, units, inputs, skip)
+            if np.isfinite(pd.to_numeric(frame[c], errors="coerce").to_numpy(float)).all()]
+
+
+def stating_operating(frame, units: dict[str, str], inputs: list[str], skip=()) -> list[str]:
+    """The columns of ``frame`` that by name or unit state the operating point (module
+    :func:`operating_columns`), whatever their values; those not a finite number in every row
+    cannot be checked, and a run says so."""
     out = []
     for col in frame.columns:
         name = str(col)
         words = {w.lower() for w in name.split("_")}
         stated = (name in CONDITIONS or units.get(name) in OPERATING_UNITS
                   or bool(words & set(OPERATING_WORDS)))
-        if not stated or name in inputs or name in skip:
-            continue
-        values = pd.to_numeric(frame[col], errors="coerce").to_numpy(float)
-        if values.size and np.isfinite(values).all():
+        if stated and name not in inputs and name not in skip:
             out.append(name)
     return out
 

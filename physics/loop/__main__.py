@@ -160,6 +160,10 @@ def execute(job: LoopJob) -> None:
     write_report(report, job.out)
     if report.partial and report.partial["interrupted"]:
         raise KeyboardInterrupt  # after the partial report: run_command ends the run
+    if report.error_before is None:  # stopped by loop.time_limit_s in the first round
+        log.warning("the time limit of %g s passed in the first round: %s; the partial report "
+                    "is in %s", job.settings.time_limit_s, report.partial["missing"], job.out)
+        return
     log.info("chosen effect: %s; held-out error %.3f -> %.3f; report in %s",
              report.chosen_effect, report.error_before, report.error_after, job.out)
 

@@ -215,3 +215,25 @@ def test_a_stop_in_the_first_round_keeps_the_calibration_and_the_candidates_fitt
     assert "in its first round" in md and "Calibrated nuisance parameters (the train" in md
     assert ("Candidates fitted on the train records" in md) == (stop == "interrupt")
     assert not list((tmp_path / "run").glob("*.png"))  # no figure of what was not computed
+
+
+def test_the_app_stopped_by_its_time_limit_in_the_first_round_writes_the_partial_report(
+        public_like, tmp_path):
+    """``loop.time_limit_s`` already passed when the screening starts: exit 0, one line
+    saying what is kept, report.json and report.md of the first round's calibration, no
+    traceback and no figure."""
+    bundle, _, _ = public_like
+    run = subprocess.run([sys.executable, "-m", "physics.loop", f"data={bundle.path}",
+                          "loop.time_limit_s=1e-6", "loop.max_nfev=4", "loop.explore=4",
+                          "loop.candidates=[transfer_path,friction]", "progress=false",
+                          f"hydra.run.dir={tmp_path / 'run'}"],
+                         cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr[-2000:]
+    said = run.stdout + run.stderr  # the log goes to the console and the run folder
+    assert "Traceback" not in said
+    assert "the time limit of 1e-06 s passed in the first round" in said
+    saved = json.loads((tmp_path / "run" / "report.json").read_text())
+    assert saved["partial"]["after_round"] == 0 and saved["verdict"] == "not_judged"
+    assert saved["calibration"] and saved["ranking"] == []
+    assert "in its first round" in (tmp_path / "run" / "report.md").read_text()
+    assert not list((tmp_path / "run").glob("*.png"))

@@ -105,3 +105,28 @@ def test_the_real_rig_read_at_another_speed_is_flagged_in_every_row(rig_model, c
         unstated = model.predict(rig.drop(columns="speed_rps"))
     assert np.array_equal(unstated.out_of_range, at15.out_of_range)
     assert any("no column speed_rps" in r.getMessage() for r in caplog.records)
+
+
+def test_an_operating_column_that_is_not_a_number_is_said_unchecked(tmp_path, caplog):
+    """A speed written as text ("15 rps") or with a gap cannot be checked: not kept, and the
+    run says so before training."""
+    from surrogate.training import prepare
+
+    frame = pd.DataFrame({"speed": ["15 rps", "15 rps"], "torque_Nm": [100.0, np.nan],
+                          "n1_rpm": [900.0, 900.0]})
+    assert operating_columns(frame, {}, []) == ["n1_rpm"]
+    rig = pd.read_csv(RIG_RECORDS).assign(speed="15 rps")
+    rig.to_csv(tmp_path / "rig.csv", index=False)
+    settings.register()
+    with initialize_config_module("gearwear_conf.train", version_base="1.3"):
+        cfg = compose("train", overrides=[
+            f"paths.root_dir={tmp_path}", f"paths.output_dir={tmp_path / 'run'}",
+            f"data.dataset={tmp_path / 'unused.parquet'}", f"data.table={tmp_path / 'rig.csv'}",
+            "data.inputs=[acc_rms_g,fm_energy]", "data.target=wear_mm",
+            "data.units={acc_rms_g: g, fm_energy: '1', wear_mm: mm}", "data.group=stage",
+            "data.val_replicates=4", "data.test_replicates=4", "logger=csv"])
+    with caplog.at_level(logging.WARNING, logger="surrogate.data"):
+        job = prepare(cfg)
+    assert job.data.operating == []
+    assert any("['speed']" in r.getMessage() and "not a number in every row" in r.getMessage()
+               for r in caplog.records)
