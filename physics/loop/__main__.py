@@ -42,6 +42,7 @@ from physics.loop.search.own_history import parse_history, split_history
 from physics.loop.search.own_history import source as history_source
 from physics.loop.table_loop import (
     check_table,
+    check_table_settings,
     parse_columns,
     run_feature_table,
     table_candidates,
@@ -87,6 +88,7 @@ def prepare(cfg: DictConfig) -> LoopJob:
     data, scn = read_measurements(cfg.data, base)
     check_stated_once(cfg, data, base, _given())
     if isinstance(data, FeatureTable):  # what the loop cannot follow: refused before work
+        check_table_settings(_given())
         check_table(data, scn, _given())
         table_candidates(parse_columns(data.frame)[0], scn, settings)
     history = parse_history(cfg.reference)

@@ -110,6 +110,25 @@ MAX_TABLE_ROWS = 100
 #: (``dynamics.*``): a stated value outside its range would be replaced by the range's bound
 #: without a word (``housing_mass_kg``: acceleration tables only, the DTE has no housing)
 STATED_NUISANCE = ("damping_ratio", "housing_mass_kg")
+#: the loop's settings a feature table's run does not use (they steer the bundle loop's
+#: records, its staged search, its model discrepancy, its wear reader and its time limit): one
+#: given for a table is refused (:func:`check_table_settings`), not ignored without a word
+BUNDLE_SETTINGS = ("test_fraction", "wear_grid", "refine", "explore", "starts", "floor_db",
+                   "discrepancy_prior", "false_add_rate", "max_wear_loss", "model_form",
+                   "time_limit_s", "detection_limits")
+
+
+def check_table_settings(given: set[str]) -> None:
+    """Refuse (ValueError, one line) ``loop.*`` settings of :data:`BUNDLE_SETTINGS` among the
+    keys ``given`` on the command line for a feature table: its run would not use them."""
+    unused = [k for k in given if k.startswith("loop.") and k[5:] in BUNDLE_SETTINGS]
+    if unused:
+        raise ValueError(f"{', '.join(sorted(unused))}: a feature table's run does not use "
+                         f"{'this setting' if len(unused) == 1 else 'these settings'} (they "
+                         "steer the loop on a bundle of records); leave "
+                         f"{'it' if len(unused) == 1 else 'them'} out (docs/loop.md)")
+
+
 #: effects that act on the contact of the path's pairs A and B alone
 #: (:mod:`physics.loop.effects`), not searched with the exact contact
 #: (``dynamics.flank_contact=exact``), whose tip corners touch off the path: what each would

@@ -328,3 +328,17 @@ def test_acceptance_a_table_of_thousands_of_rows_is_refused_before_work():
         L.run_feature_table(frame, SCN)
     assert (f"feature table: 5,000 rows, above the {MAX_TABLE_ROWS} the loop takes: each row is "
             "one dynamic simulation") in one_line(err)
+
+
+def test_settings_a_feature_table_does_not_use_are_refused_not_ignored():
+    """loop.time_limit_s, loop.refine, ... steer the bundle loop; given for a feature table
+    they are named in one line (the table loop's own, loop.max_nfev or loop.seed, pass)."""
+    from physics.loop.table_loop import BUNDLE_SETTINGS, check_table_settings
+
+    check_table_settings({"loop.max_nfev", "loop.seed", "loop.candidates", "data"})
+    with pytest.raises(ValueError, match=r"^loop.time_limit_s: a feature table's run does not "
+                                         r"use this setting"):
+        check_table_settings({"loop.time_limit_s", "loop.seed"})
+    with pytest.raises(ValueError, match=r"loop.explore, loop.refine: .* these settings"):
+        check_table_settings({"loop.refine", "loop.explore"})
+    assert set(BUNDLE_SETTINGS) < {f.name for f in dataclasses.fields(LoopSettings)}
