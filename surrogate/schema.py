@@ -110,10 +110,12 @@ class FeatureSchema:
             raise ValueError(f"its input scaling of {bad} is not finite or has a deviation of "
                              "zero (std)")
         n_op = len(self.operating)
-        if len(self.operating_low) != n_op or len(self.operating_high) != n_op or not (
-                np.isfinite([*self.operating_low, *self.operating_high]).all()
-                and all(lo <= hi for lo, hi in zip(self.operating_low, self.operating_high,
-                                                   strict=True))):
+        try:
+            ends = np.array([self.operating_low, self.operating_high], float).reshape(2, -1)
+        except (TypeError, ValueError):  # not numbers, or of two lengths
+            ends = np.full((2, n_op + 1), np.nan)
+        if not all(isinstance(c, str) for c in self.operating) or ends.shape[1] != n_op or not (
+                np.isfinite(ends).all() and (ends[0] <= ends[1]).all()):
             raise ValueError(f"its operating range of {list(self.operating)} is not one finite "
                              "low <= high pair per column")
         if not (math.isfinite(self.target_scale) and self.target_scale > 0):
@@ -239,6 +241,15 @@ class FeatureSchema:
         lacks; None where neither."""
         outside, named, missing = self.operating_outside(df)
         parts = []
+        given = [c for c in self.operating if c in df.columns]
+        blank = np.zeros(len(df), bool)
+        for c in given:
+            blank |= ~np.isfinite(pd.to_numeric(df[c], errors="coerce").to_numpy(float))
+        if blank.any():
+            parts.append(f"{int(blank.sum())} of {len(df)} rows give no number for "
+                         f"{', '.join(given)}: flagged (out_of_range), their operating point "
+                         "unknown")
+            outside = outside & ~blank
         trained = {c: (lo, hi) for c, lo, hi in zip(self.operating, self.operating_low,
                                                      self.operating_high, strict=True)}
 

@@ -237,3 +237,19 @@ def test_the_app_stopped_by_its_time_limit_in_the_first_round_writes_the_partial
     assert saved["calibration"] and saved["ranking"] == []
     assert "in its first round" in (tmp_path / "run" / "report.md").read_text()
     assert not list((tmp_path / "run").glob("*.png"))
+
+
+def test_a_stop_during_the_calibration_keeps_no_calibration_and_says_so(public_like,
+                                                                        monkeypatch):
+    bundle, scn, _ = public_like
+
+    def calibrate(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(bundle_loop, "calibrate", calibrate)
+    report = run_loop(bundle, scn, SETTINGS)
+    assert report["partial"]["after_round"] == 0 and report["partial"]["interrupted"]
+    assert report["partial"]["missing"] == ("the calibration was not finished: no candidate "
+                                            "was searched")
+    assert report["calibration"] == {} and report["ranking"] == []
+    assert report["calibrated_on"].startswith("not calibrated")

@@ -50,7 +50,8 @@ def test_a_row_outside_the_training_operating_point_is_flagged_by_hand():
     assert s.operating_outside(rows)[0][4] and s.operating_outside(rows)[1] == ["speed",
                                                                                 "torque_Nm"]
     line = s.operating_line(rows)
-    assert "4 of 7 rows" in line and "speed 15, torque_Nm 100-200 in training" in line
+    assert "3 of 7 rows were measured" in line and "speed 15, torque_Nm 100-200 in training" in line
+    assert "1 of 7 rows give no number for speed, torque_Nm" in line
     outside, _, missing = s.operating_outside(rows.drop(columns="speed"))
     assert missing == ["speed"] and outside.sum() == 1
     assert "no column speed" in s.operating_line(rows.drop(columns="speed"))
@@ -58,10 +59,14 @@ def test_a_row_outside_the_training_operating_point_is_flagged_by_hand():
 
 
 def test_the_operating_range_survives_the_file_and_is_checked_on_load():
+    """The range round-trips; a file without it (an older model) checks nothing; a range of
+    another length, reversed, not finite or not numbers is refused."""
     s = schema((15.0, 100.0), (15.0, 200.0))
     assert FeatureSchema.from_dict(s.to_dict()) == s
+    older = {k: v for k, v in s.to_dict().items() if not k.startswith("operating")}
+    assert FeatureSchema.from_dict(older).operating == ()
     for low, high in (((15.0,), (15.0, 200.0)), ((16.0, 100.0), (15.0, 200.0)),
-                      ((np.nan, 100.0), (15.0, 200.0))):
+                      ((np.nan, 100.0), (15.0, 200.0)), (("a", 100.0), (15.0, 200.0))):
         with pytest.raises(ValueError, match="operating range"):
             FeatureSchema.from_dict({**s.to_dict(), "operating_low": list(low),
                                      "operating_high": list(high)})
