@@ -55,6 +55,22 @@ class MeshGeometry:
         return self.s_end - self.s_start
 
     @property
+    def tip_thickness(self) -> float:
+        """The thinner tooth's thickness at its tip circle along its drive flank's normal [m]:
+        ``2 r_a psi_a cos(alpha_a)``, ``psi_a`` the involute's angle from the tooth's centre
+        line at the tip (:func:`physics.gear.tooth.involute_angle`) and ``alpha_a`` the pressure
+        angle there (the normal of an involute is tangent to the base circle, at ``alpha_a`` to
+        the tip circle's tangent). A drive flank worn that deep along its normal leaves no
+        tip."""
+        from physics.gear.tooth import involute_angle
+
+        g, out = self.gear, []
+        for z, rb, ra in ((g.z1, self.rb1, self.ra1), (g.z2, self.rb2, self.ra2)):
+            psi, alpha_a = involute_angle(z, math.radians(g.pressure_angle_deg), rb, ra)
+            out.append(2 * ra * float(psi) * math.cos(float(alpha_a)))
+        return min(out)
+
+    @property
     def contact_ratio(self) -> float:
         return self.path_length / self.base_pitch
 

@@ -18,8 +18,8 @@ import hydra
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, OmegaConf
 
+from physics.command import check_run_folder as command_check_run_folder
 from physics.command import entry, register_schema, run_command
-from physics.files import check_writable
 from physics.loop.bundle_loop import run_loop
 from physics.loop.config import LoopConfig, LoopSettings
 from physics.loop.measured.bundle import (
@@ -199,14 +199,7 @@ def check_run_folder(argv: list[str]) -> None:
         "logs/loop/multiruns/${now:}" if sweep else "logs/loop/runs/${now:}")
     parts = Path(spec).parts
     fixed = Path(*parts[:next((i for i, p in enumerate(parts) if "${" in p), len(parts))] or ".")
-    try:
-        check_writable(fixed, key)
-    except ValueError as err:
-        reason = str(err).removesuffix("; choose a folder you can write to")
-        print(f"error: {reason}: the run's folder is made there (working folder {Path.cwd()}); "
-              f"run from a folder you can write to, or give {key}=<such a folder>",
-              file=sys.stderr)
-        raise SystemExit(2) from None
+    command_check_run_folder(fixed, key)
 
 
 def main():

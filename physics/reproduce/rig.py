@@ -41,7 +41,6 @@ install_at_start(__name__)  # Ctrl-C and SIGTERM handled from here on, during th
 
 import argparse
 import dataclasses
-import math
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -63,7 +62,6 @@ from physics.files import (
     write_text,
 )
 from physics.gear.stiffness import mesh_stiffness
-from physics.gear.tooth import involute_angle
 from physics.params import Scenario
 from physics.reference import RIG_RECORDS
 from physics.tribology.contact_wear import simulate_contact_wear
@@ -89,29 +87,14 @@ OUTPUT_FILES = ("rig_comparison.csv", "rig_summary.csv", "rig_comparison.png",
                 "rig_loop_table/operating.yaml")
 
 
-def tip_thickness_mm(scn: Scenario) -> float:
-    """The thinner tooth's thickness at its tip circle along its drive flank's normal [mm]:
-    ``2 r_a psi_a cos(alpha_a)``, ``psi_a`` the involute's angle from the tooth's centre line
-    at the tip (:func:`physics.gear.tooth.involute_angle`) and ``alpha_a`` the pressure angle
-    there (the normal of an involute is tangent to the base circle, at ``alpha_a`` to the tip
-    circle's tangent). A drive flank worn that deep along its normal leaves no tip, so the
-    contact-driven wear (:func:`worn_states`) cannot reach it."""
-    geom = mesh_stiffness(scn.gear, scn.material).geometry
-    g = scn.gear
-    out = []
-    for z, rb, ra in ((g.z1, geom.rb1, geom.ra1), (g.z2, geom.rb2, geom.ra2)):
-        psi, alpha_a = involute_angle(z, math.radians(g.pressure_angle_deg), rb, ra)
-        out.append(2 * ra * float(psi) * math.cos(float(alpha_a)) * 1e3)
-    return min(out)
-
-
 def read_rig_table(path: Path, key: str = "rig table") -> pd.DataFrame:
     """The rig's records: one row per record with ``stage``, ``stage_order``, ``wear_mm`` and
     ``acc_rms_g``, checked before any work; a ``ValueError`` naming ``key`` (the command's
     ``--table``), the file and what is wrong: not a UTF-8 CSV
     (:func:`physics.files.read_csv_table`), a column missing, a value not a finite number, a
     negative depth, no new-gear stage (``wear_mm`` 0), or a depth the rig pair's teeth do not
-    have (at or beyond their tip thickness, :func:`tip_thickness_mm`: a table in um read as
+    have (at or beyond their tip thickness,
+    :attr:`~physics.gear.geometry.MeshGeometry.tip_thickness`: a table in um read as
     mm)."""
     fix = f"give the rig's records table ({', '.join(COLUMNS)}; one row per record)"
     table = read_csv_table(path, key, fix, columns=COLUMNS,
@@ -123,7 +106,8 @@ def read_rig_table(path: Path, key: str = "rig table") -> pd.DataFrame:
     if not (wear == 0).any():
         raise ValueError(f"{key} {path}: no stage of wear_mm = 0 (the new gear every "
                          "column is divided by)")
-    tip = tip_thickness_mm(rig_scenario(TORQUES_NM[0]))
+    scn = rig_scenario(TORQUES_NM[0])
+    tip = mesh_stiffness(scn.gear, scn.material).geometry.tip_thickness * 1e3
     if wear.max() >= tip:
         raise ValueError(f"{key} {path}: wear_mm = {wear.max():g} mm reaches the {tip:.3g} mm "
                          "the rig pair's thinner tooth is thick at its tip (along its flank's "

@@ -72,6 +72,19 @@ def test_the_operating_range_survives_the_file_and_is_checked_on_load():
                                      "operating_high": list(high)})
 
 
+def rig_cfg(tmp, *overrides: str):
+    """A run on the public rig's records written to ``tmp / rig.csv``: wear from the RMS and
+    the FM energy, every stage but eight training."""
+    settings.register()
+    with initialize_config_module("gearwear_conf.train", version_base="1.3"):
+        return compose("train", overrides=[
+            f"paths.root_dir={tmp}", f"paths.output_dir={tmp / 'run'}",
+            f"data.dataset={tmp / 'unused.parquet'}", f"data.table={tmp / 'rig.csv'}",
+            "data.inputs=[acc_rms_g,fm_energy]", "data.target=wear_mm",
+            "data.units={acc_rms_g: g, fm_energy: '1', wear_mm: mm}", "data.group=stage",
+            "data.val_replicates=4", "data.test_replicates=4", "logger=csv", *overrides])
+
+
 @pytest.fixture(scope="module")
 def rig_model(tmp_path_factory):
     """A linear model of the public rig's records (its RMS and FM energy; every stage but
@@ -79,17 +92,8 @@ def rig_model(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("rig_speed")
     rig = pd.read_csv(RIG_RECORDS).assign(speed_rps=15.0)
     rig.to_csv(tmp / "rig.csv", index=False)
-    settings.register()
-    with initialize_config_module("gearwear_conf.train", version_base="1.3"):
-        cfg = compose("train", overrides=[
-            f"paths.root_dir={tmp}", f"paths.output_dir={tmp / 'run'}",
-            f"data.dataset={tmp / 'unused.parquet'}", f"data.table={tmp / 'rig.csv'}",
-            "data.inputs=[acc_rms_g,fm_energy]", "data.target=wear_mm",
-            "data.units={acc_rms_g: g, fm_energy: '1', wear_mm: mm}", "data.group=stage",
-            "data.val_replicates=4", "data.test_replicates=4", "model.kind=linear",
-            "trainer.enable_progress_bar=false", "trainer.max_epochs=2",
-            "trainer.min_epochs=1", "model.members=2", "logger=csv"])
-    train(cfg)
+    train(rig_cfg(tmp, "model.kind=linear", "trainer.enable_progress_bar=false",
+                  "trainer.max_epochs=2", "trainer.min_epochs=1", "model.members=2"))
     return Surrogate.load(tmp / "run" / "wear_surrogate.pt"), rig
 
 
@@ -122,16 +126,8 @@ def test_an_operating_column_that_is_not_a_number_is_said_unchecked(tmp_path, ca
     assert operating_columns(frame, {}, []) == ["n1_rpm"]
     rig = pd.read_csv(RIG_RECORDS).assign(speed="15 rps")
     rig.to_csv(tmp_path / "rig.csv", index=False)
-    settings.register()
-    with initialize_config_module("gearwear_conf.train", version_base="1.3"):
-        cfg = compose("train", overrides=[
-            f"paths.root_dir={tmp_path}", f"paths.output_dir={tmp_path / 'run'}",
-            f"data.dataset={tmp_path / 'unused.parquet'}", f"data.table={tmp_path / 'rig.csv'}",
-            "data.inputs=[acc_rms_g,fm_energy]", "data.target=wear_mm",
-            "data.units={acc_rms_g: g, fm_energy: '1', wear_mm: mm}", "data.group=stage",
-            "data.val_replicates=4", "data.test_replicates=4", "logger=csv"])
     with caplog.at_level(logging.WARNING, logger="surrogate.data"):
-        job = prepare(cfg)
+        job = prepare(rig_cfg(tmp_path))
     assert job.data.operating == []
     assert any("['speed']" in r.getMessage() and "not a number in every row" in r.getMessage()
                for r in caplog.records)

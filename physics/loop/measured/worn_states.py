@@ -13,7 +13,6 @@ micrometres."""
 from __future__ import annotations
 
 import dataclasses
-import math
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -24,7 +23,6 @@ import pandas as pd
 from physics.dynamics.evolution import simulate_dynamic_wear
 from physics.dynamics.model import PairModel, build_model
 from physics.gear.stiffness import MeshStiffness, mesh_stiffness
-from physics.gear.tooth import involute_angle
 from physics.params import OutOfScope, Scenario
 from physics.reproduce.rig import worn_models as contact_models
 from physics.reproduce.rig import worn_states as contact_states
@@ -239,18 +237,10 @@ def worn_models(scn: Scenario, ms: MeshStiffness, cycles: list[float],
 
 
 def tip_thickness_mm(scn: Scenario) -> float:
-    """The thinner tooth's thickness at its tip circle along its drive flank's normal [mm]:
-    ``2 r_a psi_a cos(alpha_a)``, ``psi_a`` the involute's angle from the tooth's centre line
-    at the tip (:func:`physics.gear.tooth.involute_angle`) and ``alpha_a`` the pressure angle
-    there (the normal of an involute is tangent to the base circle, at ``alpha_a`` to the tip
-    circle's tangent). A drive flank worn that deep along its normal leaves no tip."""
-    geom = mesh_stiffness(scn.gear, scn.material).geometry
-    g = scn.gear
-    out = []
-    for z, rb, ra in ((g.z1, geom.rb1, geom.ra1), (g.z2, geom.rb2, geom.ra2)):
-        psi, alpha_a = involute_angle(z, math.radians(g.pressure_angle_deg), rb, ra)
-        out.append(2 * ra * float(psi) * math.cos(float(alpha_a)) * 1e3)
-    return min(out)
+    """The thinner tooth's thickness at its tip along its drive flank's normal [mm]
+    (:attr:`physics.gear.geometry.MeshGeometry.tip_thickness`): the contact-driven wear cannot
+    follow a flank that deep."""
+    return mesh_stiffness(scn.gear, scn.material).geometry.tip_thickness * 1e3
 
 
 def check_table_depths(scn: Scenario, wear_mm: np.ndarray) -> None:
