@@ -69,7 +69,10 @@ stages, the acceleration RMS and one other feature, trained at one speed and tes
 with stages left out, and cross-validated leaving each stage out in turn, beside the linear model
 and the estimator (:func:`one_rig`; its table ``one_rig_table.csv``); and ``real_rig.csv``
 (``real_rig_stages.csv``): the public rig's measured table left out one stage at a time, every
-model's figures side by side (:func:`real_rig`; ``--real-rig-only`` runs this part alone).
+model's figures side by side (:func:`real_rig`; ``--real-rig-only`` runs this part alone). Apart,
+``--few-labels-only`` writes ``few_labels.csv``: the rig read from its healthy and three labelled
+stages, the physics model's curves calibrated on them beside the same calibration without
+physics and a straight line (:mod:`surrogate.few_labels`).
 """
 
 from __future__ import annotations
@@ -94,13 +97,13 @@ from hydra.utils import instantiate
 from physics.dataset.generation import NuisanceRanges
 from physics.dynamics.model_form import FACTORS
 from physics.estimators.empirical_inverse import EmpiricalInverse, wear_errors
-from physics.files import atomic_write, existing_file, pyplot
+from physics.files import atomic_write, existing_file, pyplot, read_csv_table
 from physics.params import Dynamics
 from physics.reference import RIG_RECORDS
 from physics.signals.features import features
 from physics.signals.order_analysis import mesh_harmonics
 from physics.testbeds import IndependentPair, simulate_record, wear_depths
-from surrogate import settings
+from surrogate import few_labels, settings
 from surrogate.baselines import fit_estimator, typical_wear
 from surrogate.data import load_dataset
 from surrogate.figures import error_summary, parity_of_set
@@ -735,6 +738,11 @@ def refusal(extra: list[str]) -> str | None:
     return None
 
 
+#: the model's curves of the rig's pair the few-label study calibrates, as a checkout holds them
+#: (``python -m physics.reproduce.rig --out docs/figures`` writes them)
+RIG_COMPARISON = Path("docs/figures/rig_comparison.csv")
+
+
 def copy_figures(out: Path, figures: Path | None,
                  names: tuple[str, ...] = ("real_rig.csv", "real_rig_stages.csv")) -> None:
     """Copy the real rig's tables from ``out`` into ``figures`` (``--figures``), atomically."""
@@ -781,8 +789,19 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--one-rig-only", action="store_true",
                         help="instead: only the one-rig part (one_rig.csv, seed 0; about "
                              "22 min on 2 cores)")
+    parser.add_argument("--few-labels-only", action="store_true",
+                        help="instead: only the few-label study on the real rig (the healthy "
+                             "stage and 3 worn ones labelled, 200 draws; few_labels.csv, "
+                             "few_labels_draws.csv; seconds): the physics model's curves of "
+                             "--rig-comparison calibrated on them, beside the same calibration "
+                             "without physics and a straight line (surrogate.few_labels)")
+    parser.add_argument("--rig-comparison", type=Path, default=RIG_COMPARISON, metavar="PATH",
+                        help="the model's curves of the rig's pair, the rig_comparison.csv "
+                             "written by python -m physics.reproduce.rig (default: "
+                             f"{RIG_COMPARISON}, in a checkout of the repository)")
     parser.add_argument("--figures", type=Path, default=None, metavar="DIR",
-                        help="with --real-rig-only or --one-rig-only: also copy the tables "
+                        help="with --real-rig-only, --one-rig-only or --few-labels-only: "
+                             "also copy the tables "
                              "it writes into DIR (docs/figures: the tables docs/benchmark.md "
                              "quotes, checked by tests/surrogate/test_doc_figures.py)")
     parser.add_argument("--narrow-ranges", action="store_true",
@@ -795,9 +814,10 @@ def main(argv: list[str] | None = None) -> None:
     out = args.out or Path("logs/benchmark") / datetime.now().strftime("%Y-%m-%d_%H-%M-%S")
     if args.seeds < 1:
         parser.error(f"--seeds {args.seeds}: give at least 1")
-    if args.figures is not None and not (args.real_rig_only or args.one_rig_only):
-        parser.error(f"--figures {args.figures}: copies the tables of --real-rig-only or "
-                     "--one-rig-only; add one of them")
+    if args.figures is not None and not (args.real_rig_only or args.one_rig_only
+                                         or args.few_labels_only):
+        parser.error(f"--figures {args.figures}: copies the tables of --real-rig-only, "
+                     "--one-rig-only or --few-labels-only; add one of them")
     given = {**({f"--max-epochs {args.max_epochs}": f"trainer.max_epochs={args.max_epochs}"}
                  if args.max_epochs else {}),
              **{f"--override {o}": o for o in args.override}}
@@ -809,6 +829,23 @@ def main(argv: list[str] | None = None) -> None:
     refused = refusal(extra)
     if refused:
         parser.error(f"{' '.join(given)}: {refused}")
+    if args.few_labels_only:
+        try:
+            curves = read_csv_table(args.rig_comparison, "--rig-comparison",
+                                    "give the rig_comparison.csv of python -m "
+                                    "physics.reproduce.rig", columns=("wear_mm",))
+            records = pd.read_csv(args.real_rig)
+            table = few_labels.summary(draws := few_labels.study_table(records, curves))
+        except ValueError as err:
+            parser.error(str(err))
+        out = out.resolve()
+        out.mkdir(parents=True, exist_ok=True)
+        atomic_write(out / "few_labels.csv", lambda p: table.to_csv(p, index=False))
+        atomic_write(out / "few_labels_draws.csv", lambda p: draws.to_csv(p, index=False))
+        copy_figures(out, args.figures, ("few_labels.csv",))
+        print(table.to_string(index=False))
+        print(f"\n-> {out / 'few_labels.csv'}, {out / 'few_labels_draws.csv'}")
+        return
     if args.real_rig_only:
         summary = real_rig(Path.cwd(), out.resolve(), extra, args.real_rig)
         copy_figures(out.resolve(), args.figures)

@@ -184,3 +184,28 @@ def test_the_benchmark_copies_its_tables_into_figures(tmp_path, capsys):
         main(["--figures", str(figures)])
     assert end.value.code == 2
     assert "--figures" in capsys.readouterr().err
+
+
+#: the few-label table: doc row -> few_labels.csv reader
+FEW_LABEL_ROWS = {"physics, the exact tooth contact": "physics_exact",
+                  "physics, the contact on the path": "physics_path",
+                  "exponential (no physics)": "exponential", "straight line": "line"}
+
+
+def test_the_few_label_figures_are_those_of_its_table():
+    """docs/benchmark.md's few-label table and its rank correlations, from few_labels.csv
+    (``--few-labels-only``) and rig_summary.csv (``python -m physics.reproduce.rig``)."""
+    table = pd.read_csv(FIGURES / "few_labels.csv").set_index("reader")
+    doc = {row[0]: row[1:] for row in table_with(section("Few labels: the physics as a prior"),
+                                                 "reader")[1:]}
+    assert set(doc) == set(FEW_LABEL_ROWS)
+    for label, reader in FEW_LABEL_ROWS.items():
+        r = table.loc[reader]
+        assert doc[label] == [f"{r.mean_mre_pct:.1f}", f"{r.median_mre_pct:.1f}",
+                              f"{r.best_share:.2f}"], label
+    rig = pd.read_csv(FIGURES / "rig_summary.csv")
+    text = " ".join(section("Few labels: the physics as a prior").split())
+    for contact in ("exact", "path"):
+        rank = rig[rig.contact == contact].rank_correlation
+        assert f"{rank.min():.2f}-{rank.max():.2f}" in text, contact
+    assert table.loc["physics_exact", "mean_mre_pct"] > table.loc["exponential", "mean_mre_pct"]

@@ -1,0 +1,164 @@
+"""Wear read from a few labelled stages of one rig, with and without the physics as a prior.
+
+A user who has measured a rig's housing acceleration over its life but labelled only a few
+stages (an inspection now and then) reads the others from the RMS over the healthy stage's,
+``r``, by one of three readers, each calibrated on the healthy stage and the labelled ones:
+
+- **physics**: the project's model of the user's pair (``python -m physics.reproduce.rig``:
+  the contact-driven wear of the rig's geometry and its housing acceleration, one curve
+  ``g_T(w)`` of RMS over new per torque ``T`` of the swept range, the rig's load being
+  unknown) calibrated as ``log r = a + log g_T(w)``: the torque ``T`` of the curve and the level
+  ``a`` of least squares over the labelled stages (the calibration of the physics model's
+  scale, two numbers). The curve is read through its monotone envelope (scikit-learn's
+  ``IsotonicRegression`` of ``log g_T`` over wear: a reading needs one wear per level), the
+  wear of a record the envelope's inverse at ``log r - a``, clipped to the curve's range;
+- **exponential** (the same calibration without physics): ``log r = a + b w``, level and rate
+  of least squares, the exponential degradation model of a vibration feature (Gebraeel,
+  Lawley, Li & Ryan, IIE Trans. 37 (2005) 543), inverted; a rate that is not positive reads no
+  wear;
+- **line**: wear a straight line of ``r`` through the labelled stages (least squares).
+
+:func:`few_label_study` draws ``labelled`` worn stages with a seed, ``draws`` times, and scores
+each reader on the records of every other worn stage: the mean over the stages of each stage's
+mean relative error, as the real rig's benchmark scores (docs/benchmark.md, Few labels).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+from sklearn.isotonic import IsotonicRegression
+
+#: the readers of :func:`few_label_study`, in the order it reports them
+READERS = ("physics", "exponential", "line")
+
+
+def physics_curves(comparison: pd.DataFrame, contact: str = "model") -> dict[float, np.ndarray]:
+    """The model's RMS-over-new curves of ``comparison`` (``rig_comparison.csv`` of ``python -m
+    physics.reproduce.rig``: one row per stage, ``wear_mm`` and ``rms_<contact>_<T>Nm`` columns,
+    ``model`` the exact tooth contact, ``path`` the contact on the theoretical path) by torque
+    [N m], each on the stages' wear."""
+    prefix = f"rms_{contact}_"
+    curves = {float(c[len(prefix):-2]): comparison[c].to_numpy(float)
+              for c in comparison.columns if c.startswith(prefix) and c.endswith("Nm")}
+    if not curves:
+        raise ValueError(f"the rig comparison has no column {prefix}<torque>Nm; give the "
+                         "rig_comparison.csv of python -m physics.reproduce.rig")
+    return curves
+
+
+class PhysicsReader:
+    """The model's curve calibrated on labelled stages (module text)."""
+
+    def __init__(self, wear_mm: np.ndarray, curves: dict[float, np.ndarray],
+                 labelled_mm: np.ndarray, labelled_ratio: np.ndarray) -> None:
+        order = np.argsort(wear_mm)
+        self.wear = np.asarray(wear_mm, float)[order]
+        best = None
+        for torque, g in curves.items():
+            env = IsotonicRegression(increasing=True).fit(
+                self.wear, np.log(np.asarray(g, float)[order])).predict(self.wear)
+            at = np.interp(labelled_mm, self.wear, env)
+            level = float(np.mean(np.log(labelled_ratio) - at))
+            cost = float(np.sum((np.log(labelled_ratio) - level - at) ** 2))
+            if best is None or cost < best[0]:
+                best = (cost, torque, level, env)
+        _, self.torque, self.level, self.envelope = best
+
+    def read(self, ratio: np.ndarray) -> np.ndarray:
+        """Wear [mm] of RMS ratios ``ratio``: the envelope's inverse (its first wear of each
+        level), clipped to the curve's wear range."""
+        levels, first = np.unique(self.envelope, return_index=True)
+        return np.interp(np.log(np.asarray(ratio, float)) - self.level, levels,
+                         self.wear[first])
+
+
+def exponential_read(labelled_mm: np.ndarray, labelled_ratio: np.ndarray,
+                     ratio: np.ndarray) -> np.ndarray:
+    """Wear [mm] of ``ratio`` by ``log r = a + b w`` fitted on the labelled stages (module
+    text); zero where the fitted rate is not positive."""
+    b, a = np.polyfit(labelled_mm, np.log(labelled_ratio), 1)
+    if b <= 0:
+        return np.zeros(len(np.atleast_1d(ratio)))
+    return np.maximum((np.log(np.asarray(ratio, float)) - a) / b, 0.0)
+
+
+def line_read(labelled_mm: np.ndarray, labelled_ratio: np.ndarray,
+              ratio: np.ndarray) -> np.ndarray:
+    """Wear [mm] of ``ratio`` by a straight line of the ratio through the labelled stages."""
+    slope, intercept = np.polyfit(labelled_ratio, labelled_mm, 1)
+    return np.maximum(slope * np.asarray(ratio, float) + intercept, 0.0)
+
+
+def stage_error(read: np.ndarray, true: np.ndarray, stage: np.ndarray) -> float:
+    """The mean over the stages of each stage's mean relative error [%]."""
+    rel = pd.Series(np.abs(read - true) / true)
+    return float(rel.groupby(np.asarray(stage)).mean().mean() * 100)
+
+
+def few_label_study(records: pd.DataFrame, comparison: pd.DataFrame, labelled: int = 3,
+                    draws: int = 200, seed: int = 0, contact: str = "model") -> pd.DataFrame:
+    """One row per draw of ``labelled`` worn stages of the rig's ``records`` (``stage``,
+    ``wear_mm``, ``acc_rms_g``; the healthy stage, ``wear_mm`` 0, labelled always): the
+    stages drawn, the physics reader's torque, and each reader's error over the other worn
+    stages' records (module text)."""
+    if labelled < 2:
+        raise ValueError(f"labelled = {labelled}: the readers fit two numbers; give at least 2 "
+                         "labelled worn stages (the healthy one is labelled besides)")
+    healthy = records.loc[records.wear_mm == 0, "acc_rms_g"].mean()
+    worn = records[records.wear_mm > 0]
+    means = worn.groupby("stage", sort=False).agg(wear_mm=("wear_mm", "first"),
+                                                  rms=("acc_rms_g", "mean"))
+    if len(means) <= labelled:
+        raise ValueError(f"labelled = {labelled}: the rig has {len(means)} worn stages; "
+                         "label fewer, so that some are read")
+    curves = physics_curves(comparison, contact)
+    rng = np.random.default_rng(seed)
+    rows = []
+    for k in range(draws):
+        chosen = means.iloc[np.sort(rng.choice(len(means), labelled, replace=False))]
+        lab_w = np.r_[0.0, chosen.wear_mm.to_numpy(float)]
+        lab_r = np.r_[1.0, chosen.rms.to_numpy(float) / healthy]
+        test = worn[~worn.stage.isin(chosen.index)]
+        ratio, true = test.acc_rms_g.to_numpy(float) / healthy, test.wear_mm.to_numpy(float)
+        physics = PhysicsReader(comparison.wear_mm.to_numpy(float), curves, lab_w[1:],
+                                lab_r[1:])
+        reads = {"physics": physics.read(ratio),
+                 "exponential": exponential_read(lab_w, lab_r, ratio),
+                 "line": line_read(lab_w, lab_r, ratio)}
+        rows.append({"draw": k, "stages": " ".join(chosen.index), "torque_Nm": physics.torque,
+                     **{f"{name}_mre_pct": stage_error(reads[name], true, test.stage)
+                        for name in READERS}})
+    return pd.DataFrame(rows)
+
+
+#: the contacts of the physics model's curves the study calibrates (rig_comparison.csv's
+#: ``model``: the exact tooth contact, the project's model; ``path``: on the theoretical path)
+CONTACTS = {"physics_exact": "model", "physics_path": "path"}
+
+
+def study_table(records: pd.DataFrame, comparison: pd.DataFrame, labelled: int = 3,
+                draws: int = 200, seed: int = 0) -> pd.DataFrame:
+    """:func:`few_label_study` with the physics reader of each contact of :data:`CONTACTS`
+    (the same draws: the same seed), one row per draw and columns ``<reader>_mre_pct`` of
+    ``physics_exact``, ``physics_path``, ``exponential`` and ``line``, the torques chosen."""
+    out = None
+    for name, contact in CONTACTS.items():
+        one = few_label_study(records, comparison, labelled, draws, seed, contact)
+        one = one.rename(columns={"physics_mre_pct": f"{name}_mre_pct",
+                                  "torque_Nm": f"{name}_torque_Nm"})
+        out = one if out is None else out.assign(**{c: one[c] for c in
+                                                    (f"{name}_mre_pct", f"{name}_torque_Nm")})
+    return out
+
+
+def summary(study: pd.DataFrame) -> pd.DataFrame:
+    """One row per reader of :func:`study_table`: the mean and median over the draws of its
+    error, and the share of the draws it reads best."""
+    names = [*CONTACTS, "exponential", "line"]
+    errors = study[[f"{r}_mre_pct" for r in names]].to_numpy()
+    best = np.argmin(errors, axis=1)
+    return pd.DataFrame({"reader": names, "mean_mre_pct": errors.mean(axis=0),
+                         "median_mre_pct": np.median(errors, axis=0),
+                         "best_share": [float(np.mean(best == i)) for i in range(len(names))],
+                         "draws": len(study)})
