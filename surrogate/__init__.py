@@ -8,8 +8,8 @@ of (:class:`DataConfig`, :class:`ModelConfig`, :class:`TrainerConfig`) and the L
 module :class:`WearDataModule`. The rest is reached through its module:
 
 - :mod:`surrogate.inputs`: the network's default inputs, by sensor and reading;
-- :mod:`surrogate.schema`: the feature schema (names, units, scaling, training envelope) a model
-  carries and checks its input against, and how a network reads its rows (complex lines as
+- :mod:`surrogate.schema`: the feature schema (names, units, scaling, training envelope and
+  operating point) a model carries and checks its input against, and how a network reads its rows (complex lines as
   magnitudes, changes since each gearbox's baseline record);
 - :mod:`surrogate.tables`: a user's own table: reading it, its units and its checks;
 - :mod:`surrogate.splits`: the splits by trajectory, by a table's groups or by groups named by
@@ -28,6 +28,8 @@ module :class:`WearDataModule`. The rest is reached through its module:
   and the interval's difficulty;
 - :mod:`surrogate.conformal`: the conformal quantile of held-out scores, by row or by
   gearbox, that sets the interval's scale and the flag's threshold;
+- :mod:`surrogate.few_labels`: a rig read from a few labelled stages, with and without the
+  physics model's curve as a prior;
 - :mod:`surrogate.figures`: the parity plot of a run and the benchmark's figures;
 - :mod:`surrogate.predict`, :mod:`surrogate.summarise`, :mod:`surrogate.benchmark`: commands.
 """
