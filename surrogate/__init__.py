@@ -9,8 +9,8 @@ module :class:`WearDataModule`. The rest is reached through its module:
 
 - :mod:`surrogate.inputs`: the network's default inputs, by sensor and reading;
 - :mod:`surrogate.schema`: the feature schema (names, units, scaling, training envelope and
-  operating point) a model carries and checks its input against, and how a network reads its rows (complex lines as
-  magnitudes, changes since each gearbox's baseline record);
+  operating point) a model carries and checks its input against, and how a network reads its
+  rows (complex lines as magnitudes, changes since each gearbox's baseline record);
 - :mod:`surrogate.tables`: a user's own table: reading it, its units and its checks;
 - :mod:`surrogate.splits`: the splits by trajectory, by a table's groups or by groups named by
   value, and the validation half that calibrates the interval;
