@@ -122,16 +122,21 @@ def first_round_markdown(r: dict) -> str:
              "for a verdict.", ""]
     cal = ", ".join(f"{k} = {v:.4g}" for k, v in r["calibration"].items())
     lines.append(f"Calibrated nuisance parameters ({r['calibrated_on']}): {cal or 'none'}.")
+    if r.get("error_before") is not None:
+        lines.append(f"The declared model's held-out error: {r['error_before']:.3f} "
+                     f"({r['error_unit']}).")
     if r["ranking"]:
-        lines += ["", "## Candidates fitted on the train records (not judged)", "",
-                  "| effect | option | fit | train residual sum | parameters |",
-                  "|---|---|---|---|---|"]
+        held = all("heldout_error" in c for c in r["ranking"])
+        lines += ["", "## Candidates fitted by then (no effect named from them)", "",
+                  "| effect | option | fit | train residual sum |"
+                  + (" held-out error |" if held else "") + " parameters |",
+                  "|---|---|---|---|" + ("---|" if held else "") + "---|"]
         for c in r["ranking"]:
             par = ", ".join(f"{k}={v:.3g}" for k, v in c["parameters"].items()
                             if isinstance(v, float))
             lines.append(f"| {c['effect']} | {c['option'] or ''} | "
-                         f"{'refined' if c['refined'] else 'screened'} | "
-                         f"{c['train_rss']:.4g} | {par} |")
+                         f"{'refined' if c['refined'] else 'screened'} | {c['train_rss']:.4g} |"
+                         + (f" {c['heldout_error']:.3f} |" if held else "") + f" {par} |")
     return "\n".join(lines) + "\n"
 
 

@@ -439,6 +439,40 @@ def _noise_bounds(td: TableData) -> tuple[str, float, float, bool]:
     return ("noise", 1e-3 * scale, 0.5 * scale, True)
 
 
+def stopped_table(stop: BaseException, settings: LoopSettings, nuisance: dict | None,
+                  null: dict | None, judged: list[dict], candidates: int, not_searched: dict
+                  ) -> LoopReport:
+    """The report of a feature table's run interrupted (Ctrl-C or SIGTERM) before every
+    candidate was judged: the calibration if finished, the declared model's held-out error if
+    judged, and the candidates judged by then (their fits and held-out errors); no effect is
+    named from a part of the candidates (verdict ``not_judged``), nothing is simulated after
+    the stop."""
+    missing = ("the calibration was not finished: no candidate was judged" if nuisance is None
+               else f"{len(judged)} of {candidates} candidates were judged: no effect is named "
+               "from a part of them")
+    error = null["heldout"] if null is not None else None
+    return LoopReport(
+        verdict="not_judged", unexplained=None, mode="feature_table",
+        partial={"stopped": "interrupted", "interrupted": isinstance(stop, KeyboardInterrupt),
+                 "after_round": 0, "missing": missing},
+        chosen_effect=None, chosen_option=None, chosen_parameters=None,
+        error_before=error, error_after=error,
+        error_unit="RMS natural-log ratio of the features, cross-validated over the rows",
+        feature_error_before_pct=None, feature_error_after_pct=None,
+        wear_error_before_pct=None, wear_error_after_pct=None,
+        calibration=dict(nuisance or {}),
+        calibrated_on=("the least-worn row" if nuisance is not None
+                       else "not calibrated: stopped during the calibration"),
+        nuisance_after=dict(nuisance or {}), null_bic=null["bic"] if null else None,
+        ranking=[{"effect": c["effect"], "option": c["option"],
+                  "parameters": {k: v for k, v in c["parameters"].items()
+                                 if k not in c["option"]},
+                  "nuisance": c["nuisance"], "refined": True, "train_rss": c["rss"],
+                  "heldout_error": c["heldout"]} for c in judged],
+        decision_rule={"min_gain": settings.min_gain, "min_delta_bic": settings.min_delta_bic},
+        details={"not_searched": not_searched})
+
+
 @one_blas_thread
 def run_feature_table(table: FeatureTable | pd.DataFrame, base: Scenario,
                       settings: LoopSettings | None = None) -> LoopReport:
@@ -466,7 +500,10 @@ def run_feature_table(table: FeatureTable | pd.DataFrame, base: Scenario,
     names = [n for n in td.bounds if n != "housing_mass_kg"]
     cal_free = [(n, *td.bounds[n]) for n in names] + gain + [_noise_bounds(td)]
     ref = rows[[int(np.argmin(td.wear))]]  # the healthy (least worn) state
-    nuisance, _, _ = _fit(td, ref, cal_free, start, None, {})
+    try:
+        nuisance, _, _ = _fit(td, ref, cal_free, start, None, {})
+    except KeyboardInterrupt as stop:
+        return stopped_table(stop, settings, None, None, [], len(searched), not_searched)
     # refitted with every candidate and every fold; an unknown torque's factor over its whole
     # prior (the bundle loop's rule: physics.loop.model.declared.TORQUE)
     torque = [("torque_factor", *TORQUE["torque_factor"])] if td.torque_unknown else []
@@ -488,13 +525,17 @@ def run_feature_table(table: FeatureTable | pd.DataFrame, base: Scenario,
                 "heldout": float(np.sqrt(np.mean(held**2))),
                 "heldout_by_feature": np.sqrt(np.mean(held**2, axis=0))}
 
-    null = judge(None, {})
-    log.info("feature table: the declared model judged (held-out %.3f)", null["heldout"])
-    ranking = []
-    for k, (e, o) in enumerate(searched):
-        ranking.append(judge(e, o))
-        log.info("feature table: candidate %d of %d, %s%s judged (held-out %.3f)", k + 1,
-                 len(searched), e.name, f" {o}" if o else "", ranking[-1]["heldout"])
+    null, ranking = None, []
+    try:
+        null = judge(None, {})
+        log.info("feature table: the declared model judged (held-out %.3f)", null["heldout"])
+        for k, (e, o) in enumerate(searched):
+            ranking.append(judge(e, o))
+            log.info("feature table: candidate %d of %d, %s%s judged (held-out %.3f)", k + 1,
+                     len(searched), e.name, f" {o}" if o else "", ranking[-1]["heldout"])
+    except KeyboardInterrupt as stop:  # what was judged by then, kept
+        return stopped_table(stop, settings, nuisance, null, ranking, len(searched),
+                             not_searched)
     ranking.sort(key=lambda c: c["heldout"])
     best = ranking[0]
     checks = null_test(best["heldout"], null["heldout"], best["bic"] - null["bic"],

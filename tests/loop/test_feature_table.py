@@ -185,6 +185,44 @@ def test_with_the_exact_contact_the_path_only_effects_are_not_searched(shallow_r
     assert report["flank_contact"] == "exact"
 
 
+@pytest.mark.parametrize("after_fits", [0, 1 + (1 + 3) * 2])
+def test_an_interrupt_keeps_what_the_table_loop_judged(shallow_rig, tmp_path, monkeypatch,
+                                                        after_fits):
+    """Ctrl-C during the calibration (no fit done), or after the calibration, the declared
+    model and one candidate were judged (a fit on all rows and one per fold of the three, each;
+    the calibration one): a report marked
+    partial with what was judged, no effect named from a part of the candidates."""
+    from physics.loop import table_loop
+    from physics.loop.report import write_report
+
+    table, scn = shallow_rig
+    real, calls = table_loop._fit, []
+
+    def fit(*args, **kwargs):
+        if len(calls) == after_fits:
+            raise KeyboardInterrupt
+        calls.append(1)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(table_loop, "_fit", fit)
+    stopped = run_feature_table(table, scn, LoopSettings(
+        max_nfev=1, candidates=("transfer_path", "friction"), segment_s=0.15))
+    report = stopped.to_dict()
+    assert report["partial"]["after_round"] == 0 and report["partial"]["interrupted"]
+    assert report["verdict"] == "not_judged" and report["chosen_effect"] is None
+    if after_fits == 0:
+        assert report["calibration"] == {} and report["error_before"] is None
+        assert report["ranking"] == []
+    else:
+        assert report["calibration"] and report["error_before"] > 0
+        assert [c["effect"] for c in report["ranking"]] == ["transfer_path"]
+        assert report["partial"]["missing"].startswith("1 of 2 candidates were judged")
+    write_report(stopped, tmp_path / "run")
+    md = (tmp_path / "run" / "report.md").read_text()
+    assert "in its first round" in md and not list((tmp_path / "run").glob("*.png"))
+    assert ("| transfer_path |" in md) == (after_fits > 0)
+
+
 @pytest.mark.slow
 def test_the_public_rigs_table_runs_from_new_to_its_deepest_stage(tmp_path):
     """The rig's 36 stage means (0-0.93 mm) at 15 rev/s, torque unknown: exit 0, every stage

@@ -213,7 +213,7 @@ def test_a_stop_in_the_first_round_keeps_the_calibration_and_the_candidates_fitt
     assert saved["partial"]["after_round"] == 0 and saved["verdict"] == "not_judged"
     md = (tmp_path / "run" / "report.md").read_text()
     assert "in its first round" in md and "Calibrated nuisance parameters (the train" in md
-    assert ("Candidates fitted on the train records" in md) == (stop == "interrupt")
+    assert ("Candidates fitted by then" in md) == (stop == "interrupt")
     assert not list((tmp_path / "run").glob("*.png"))  # no figure of what was not computed
 
 
