@@ -135,3 +135,20 @@ def test_loop_time_quotes():
     assert ("not met" in readme_row("Loop time")) == (t["wall_s"] > 30)
     doc = " ".join((ROOT / "docs" / "loop.md").read_text().split())
     assert f"takes {t['wall_s']:.0f} s ({t['cpu_s']:.0f} s of CPU, 2 cores; target 30 s" in doc
+
+
+def test_main_job_paragraph_of_the_benchmark_page():
+    """docs/benchmark.md's main-job paragraph, from the same metrics.json (its RMSE in mm, the
+    target's unit)."""
+    import json
+
+    m = json.loads((FIGURES / "main_job_case3_metrics.json").read_text())
+    doc = " ".join((ROOT / "docs" / "benchmark.md").read_text().split())
+    quote = (f"at {m['test_mean_relative_error_pct']:.1f} % mean relative error (a linear model "
+             f"of the same inputs {m['test_linear_mean_relative_error_pct']:.1f} %, the monotone "
+             f"model {m['test_monotone_mean_relative_error_pct']:.0f} %, the median "
+             f"{m['test_median_mean_relative_error_pct']:.0f} %, the thesis's estimator "
+             f"{m['test_estimator_mean_relative_error_pct']:.0f} %), R2 {m['test_r2']:.3f}, RMSE "
+             f"{m['test_rmse'] * 1e3:.2f} um; its 95 % interval covers "
+             f"{m['test_interval_coverage']:.2f} of them")
+    assert quote in doc
