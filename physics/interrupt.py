@@ -20,6 +20,7 @@ import contextlib
 import os
 import signal
 import sys
+import threading
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
@@ -195,6 +196,7 @@ def _stop_workers(runs: Iterator[Any] | None) -> None:
     from joblib.externals.loky.backend.process import LokyProcess
 
     children = [c for c in multiprocessing.active_children() if isinstance(c, LokyProcess)]
+    quiet_executor_manager()
     for child in children:
         with contextlib.suppress(ProcessLookupError):  # (loky's process has no kill())
             os.kill(child.pid, signal.SIGKILL)
@@ -204,6 +206,35 @@ def _stop_workers(runs: Iterator[Any] | None) -> None:
             runs.close()  # type: ignore[attr-defined]
     for child in children:
         child.join()
+    for thread in threading.enumerate():  # its manager sees the pool broken and ends
+        if thread.name.startswith(EXECUTOR_MANAGER) and thread is not threading.current_thread():
+            thread.join(timeout=MANAGER_JOIN_S)
+
+
+#: the name of loky's thread that feeds and watches its worker processes
+EXECUTOR_MANAGER = "ExecutorManagerThread"
+#: how long a stop waits for that thread to end [s]
+MANAGER_JOIN_S = 5.0
+
+
+def quiet_executor_manager() -> None:
+    """From now on an exception in loky's executor-manager thread (:data:`EXECUTOR_MANAGER`)
+    is not printed; every other thread's still is (:func:`threading.excepthook`). Called as
+    the workers are killed on purpose: a manager that was queueing a task then reads the task
+    the kill dropped and dies with a KeyError from its own thread, a traceback after the app's
+    one line about what was kept (seen once in about ten Ctrl-C's as the first worker
+    starts)."""
+    previous = threading.excepthook
+    if getattr(previous, "quiets_executor_manager", False):
+        return
+
+    def hook(args: threading.ExceptHookArgs) -> None:
+        if args.thread is not None and args.thread.name.startswith(EXECUTOR_MANAGER):
+            return
+        previous(args)
+
+    hook.quiets_executor_manager = True  # type: ignore[attr-defined]
+    threading.excepthook = hook
 
 
 def install_at_start(name: str) -> None:

@@ -164,3 +164,23 @@ def test_shielded_notes_a_signal_and_raises_it_nowhere(monkeypatch):
     with interrupt.shielded():
         interrupt._on_signal(signal.SIGINT, None)  # as the handler is called: no raise
     assert interrupt._SIGNAL == signal.SIGINT and not interrupt._DEFERRED
+
+
+def test_the_stop_quiets_the_executor_managers_own_exception_and_no_other(monkeypatch):
+    """After the workers are killed on purpose, loky's manager thread may die on the task the
+    kill dropped (a KeyError from its own thread): not printed; another thread's error is."""
+    import threading
+
+    seen = []
+    monkeypatch.setattr(threading, "excepthook", lambda args: seen.append(args.thread.name))
+    interrupt.quiet_executor_manager()
+    interrupt.quiet_executor_manager()  # once is enough: not stacked
+
+    def fail():
+        raise KeyError(1)
+
+    for name in (interrupt.EXECUTOR_MANAGER, "candidate_0"):
+        t = threading.Thread(target=fail, name=name)
+        t.start()
+        t.join()
+    assert seen == ["candidate_0"]

@@ -32,6 +32,7 @@ from omegaconf import OmegaConf
 
 from physics.command import RunRecord, register_schema, run_command
 from physics.files import check_fresh, check_writable, resolved
+from physics.gear.stiffness import mesh_stiffness
 from physics.params import check_case, scenario_for_case, scenario_from_config
 from physics.reference import THESIS_TABLES
 from physics.reproduce import rig
@@ -270,7 +271,8 @@ def test_rig_depths_beyond_the_pairs_tip_are_refused_before_work(tmp_path, capsy
     """G07b: a table in um read as mm ran 163 s into the wear model's OutOfScope; refused
     at once, naming the depth and the tip thickness; negative and NaN depths too."""
     records = pd.read_csv(rig.default_table())
-    tip = rig.tip_thickness_mm(rig.rig_scenario(100.0))
+    scn = rig.rig_scenario(100.0)
+    tip = mesh_stiffness(scn.gear, scn.material).geometry.tip_thickness * 1e3
     assert 1.6 < tip < 1.8
     for wear, said in ((records.wear_um, f"wear_mm = 932 mm reaches the {tip:.3g} mm"),
                        (records.wear_mm.where(records.stage_order != 3, -0.1),
