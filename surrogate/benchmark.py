@@ -835,7 +835,7 @@ def main(argv: list[str] | None = None) -> None:
                                     "give the rig_comparison.csv of python -m "
                                     "physics.reproduce.rig", columns=("wear_mm",))
             records = pd.read_csv(args.real_rig)
-            table = few_labels.summary(draws := few_labels.study_table(records, curves))
+            table = few_labels.summary(draws := few_labels.few_label_study(records, curves))
         except ValueError as err:
             parser.error(str(err))
         out = out.resolve()

@@ -29,9 +29,6 @@ import numpy as np
 import pandas as pd
 from sklearn.isotonic import IsotonicRegression
 
-#: the readers of :func:`few_label_study`, in the order it reports them
-READERS = ("physics", "exponential", "line")
-
 
 def physics_curves(comparison: pd.DataFrame, contact: str = "model") -> dict[float, np.ndarray]:
     """The model's RMS-over-new curves of ``comparison`` (``rig_comparison.csv`` of ``python -m
@@ -47,18 +44,26 @@ def physics_curves(comparison: pd.DataFrame, contact: str = "model") -> dict[flo
     return curves
 
 
-class PhysicsReader:
-    """The model's curve calibrated on labelled stages (module text)."""
+def monotone_envelopes(wear_mm: np.ndarray, curves: dict[float, np.ndarray]
+                       ) -> tuple[np.ndarray, dict[float, np.ndarray]]:
+    """The wear sorted and each curve's monotone envelope of its logarithm over it (module
+    text): made once, read by every :class:`PhysicsReader`."""
+    order = np.argsort(wear_mm)
+    wear = np.asarray(wear_mm, float)[order]
+    return wear, {t: IsotonicRegression(increasing=True).fit(
+        wear, np.log(np.asarray(g, float)[order])).predict(wear) for t, g in curves.items()}
 
-    def __init__(self, wear_mm: np.ndarray, curves: dict[float, np.ndarray],
+
+class PhysicsReader:
+    """The model's curve calibrated on labelled stages (module text), from the curves'
+    envelopes over the sorted ``wear`` (:func:`monotone_envelopes`)."""
+
+    def __init__(self, wear: np.ndarray, envelopes: dict[float, np.ndarray],
                  labelled_mm: np.ndarray, labelled_ratio: np.ndarray) -> None:
-        order = np.argsort(wear_mm)
-        self.wear = np.asarray(wear_mm, float)[order]
+        self.wear = wear
         best = None
-        for torque, g in curves.items():
-            env = IsotonicRegression(increasing=True).fit(
-                self.wear, np.log(np.asarray(g, float)[order])).predict(self.wear)
-            at = np.interp(labelled_mm, self.wear, env)
+        for torque, env in envelopes.items():
+            at = np.interp(labelled_mm, wear, env)
             level = float(np.mean(np.log(labelled_ratio) - at))
             cost = float(np.sum((np.log(labelled_ratio) - level - at) ** 2))
             if best is None or cost < best[0]:
@@ -96,12 +101,19 @@ def stage_error(read: np.ndarray, true: np.ndarray, stage: np.ndarray) -> float:
     return float(rel.groupby(np.asarray(stage)).mean().mean() * 100)
 
 
+#: the physics readers of the study, by the contact of the model's curves they calibrate
+#: (rig_comparison.csv's ``model``: the exact tooth contact, the project's model; ``path``: on
+#: the theoretical path)
+CONTACTS = {"physics_exact": "model", "physics_path": "path"}
+
+
 def few_label_study(records: pd.DataFrame, comparison: pd.DataFrame, labelled: int = 3,
-                    draws: int = 200, seed: int = 0, contact: str = "model") -> pd.DataFrame:
+                    draws: int = 200, seed: int = 0) -> pd.DataFrame:
     """One row per draw of ``labelled`` worn stages of the rig's ``records`` (``stage``,
     ``wear_mm``, ``acc_rms_g``; the healthy stage, ``wear_mm`` 0, labelled always): the
-    stages drawn, the physics reader's torque, and each reader's error over the other worn
-    stages' records (module text)."""
+    stages drawn, each physics reader's torque (``<reader>_torque_Nm``, :data:`CONTACTS`),
+    and each reader's error over the other worn stages' records (``<reader>_mre_pct``: the
+    physics readers, ``exponential`` and ``line``; module text)."""
     if labelled < 2:
         raise ValueError(f"labelled = {labelled}: the readers fit two numbers; give at least 2 "
                          "labelled worn stages (the healthy one is labelled besides)")
@@ -112,7 +124,9 @@ def few_label_study(records: pd.DataFrame, comparison: pd.DataFrame, labelled: i
     if len(means) <= labelled:
         raise ValueError(f"labelled = {labelled}: the rig has {len(means)} worn stages; "
                          "label fewer, so that some are read")
-    curves = physics_curves(comparison, contact)
+    wear = comparison.wear_mm.to_numpy(float)
+    models = {name: monotone_envelopes(wear, physics_curves(comparison, contact))
+              for name, contact in CONTACTS.items()}
     rng = np.random.default_rng(seed)
     rows = []
     for k in range(draws):
@@ -121,40 +135,20 @@ def few_label_study(records: pd.DataFrame, comparison: pd.DataFrame, labelled: i
         lab_r = np.r_[1.0, chosen.rms.to_numpy(float) / healthy]
         test = worn[~worn.stage.isin(chosen.index)]
         ratio, true = test.acc_rms_g.to_numpy(float) / healthy, test.wear_mm.to_numpy(float)
-        physics = PhysicsReader(comparison.wear_mm.to_numpy(float), curves, lab_w[1:],
-                                lab_r[1:])
-        reads = {"physics": physics.read(ratio),
-                 "exponential": exponential_read(lab_w, lab_r, ratio),
-                 "line": line_read(lab_w, lab_r, ratio)}
-        rows.append({"draw": k, "stages": " ".join(chosen.index), "torque_Nm": physics.torque,
-                     **{f"{name}_mre_pct": stage_error(reads[name], true, test.stage)
-                        for name in READERS}})
+        row = {"draw": k, "stages": " ".join(chosen.index)}
+        for name, (grid, envelopes) in models.items():
+            reader = PhysicsReader(grid, envelopes, lab_w[1:], lab_r[1:])
+            row[f"{name}_torque_Nm"] = reader.torque
+            row[f"{name}_mre_pct"] = stage_error(reader.read(ratio), true, test.stage)
+        for name, read in (("exponential", exponential_read), ("line", line_read)):
+            row[f"{name}_mre_pct"] = stage_error(read(lab_w, lab_r, ratio), true, test.stage)
+        rows.append(row)
     return pd.DataFrame(rows)
 
 
-#: the contacts of the physics model's curves the study calibrates (rig_comparison.csv's
-#: ``model``: the exact tooth contact, the project's model; ``path``: on the theoretical path)
-CONTACTS = {"physics_exact": "model", "physics_path": "path"}
-
-
-def study_table(records: pd.DataFrame, comparison: pd.DataFrame, labelled: int = 3,
-                draws: int = 200, seed: int = 0) -> pd.DataFrame:
-    """:func:`few_label_study` with the physics reader of each contact of :data:`CONTACTS`
-    (the same draws: the same seed), one row per draw and columns ``<reader>_mre_pct`` of
-    ``physics_exact``, ``physics_path``, ``exponential`` and ``line``, the torques chosen."""
-    out = None
-    for name, contact in CONTACTS.items():
-        one = few_label_study(records, comparison, labelled, draws, seed, contact)
-        one = one.rename(columns={"physics_mre_pct": f"{name}_mre_pct",
-                                  "torque_Nm": f"{name}_torque_Nm"})
-        out = one if out is None else out.assign(**{c: one[c] for c in
-                                                    (f"{name}_mre_pct", f"{name}_torque_Nm")})
-    return out
-
-
 def summary(study: pd.DataFrame) -> pd.DataFrame:
-    """One row per reader of :func:`study_table`: the mean and median over the draws of its
-    error, and the share of the draws it reads best."""
+    """One row per reader of :func:`few_label_study`: the mean and median over the draws of
+    its error, and the share of the draws it reads best."""
     names = [*CONTACTS, "exponential", "line"]
     errors = study[[f"{r}_mre_pct" for r in names]].to_numpy()
     best = np.argmin(errors, axis=1)

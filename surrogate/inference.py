@@ -385,8 +385,8 @@ class Surrogate:
             raise ValueError(f"the model gives a non-finite wear for row {int(np.argmax(bad))} "
                              f"({int(bad.sum())} of {len(bad)} rows); nothing is written")
         score, flagged = self.flags(x)
-        flagged = flagged | self.schema.operating_outside(df)[0]
-        line = self.schema.operating_line(df)
+        off, line = self.schema.operating_check(df)
+        flagged = flagged | off
         if line:
             log.warning(line)
         lower, upper = self.bounds(x, mean, std, score)

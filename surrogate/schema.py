@@ -212,44 +212,52 @@ class FeatureSchema:
                 f"{self.units[j]}: a unit or transcription error; repair or drop the row")
         return x
 
-    def operating_outside(self, df: pd.DataFrame, margin: float = OPERATING_MARGIN
+    def operating_values(self, df: pd.DataFrame) -> dict[str, np.ndarray]:
+        """The values of the :attr:`operating` columns ``df`` holds, as numbers (NaN where a
+        cell is not one)."""
+        return {c: pd.to_numeric(df[c], errors="coerce").to_numpy(float)
+                for c in self.operating if c in df.columns}
+
+    def operating_outside(self, df: pd.DataFrame, margin: float = OPERATING_MARGIN,
+                          values: dict[str, np.ndarray] | None = None
                           ) -> tuple[np.ndarray, list[str], list[str]]:
         """The rows of ``df`` read at an operating point the model was not trained at: a value
         of one of :attr:`operating` outside its training range widened by ``margin`` of the
         range or of the value's size, whichever is larger (a rig trained at 15 rev/s alone
         reads 15 +- 0.75). Returns that mask, the operating columns named in it (flagged rows'
         columns first), and the operating columns ``df`` lacks (its rows are read unchecked:
-        the caller says so). A value that is not a finite number counts as outside."""
+        the caller says so). A value that is not a finite number counts as outside.
+        ``values``: :meth:`operating_values` of ``df``, where the caller has them."""
+        values = self.operating_values(df) if values is None else values
         outside = np.zeros(len(df), bool)
-        missing = [c for c in self.operating if c not in df.columns]
+        missing = [c for c in self.operating if c not in values]
         named = []
         for c, lo, hi in zip(self.operating, self.operating_low, self.operating_high,
                              strict=True):
             if c in missing:
                 continue
-            v = pd.to_numeric(df[c], errors="coerce").to_numpy(float)
             pad = margin * max(hi - lo, abs(lo), abs(hi))
-            off = ~((v >= lo - pad) & (v <= hi + pad))
+            off = ~((values[c] >= lo - pad) & (values[c] <= hi + pad))
             if off.any():
                 named.append(c)
             outside |= off
         return outside, named, missing
 
-    def operating_line(self, df: pd.DataFrame) -> str | None:
-        """One line on the operating point of ``df`` where a user must hear of it: rows read
-        outside the training one (:meth:`operating_outside`), or operating columns ``df``
-        lacks; None where neither."""
-        outside, named, missing = self.operating_outside(df)
-        parts = []
-        given = [c for c in self.operating if c in df.columns]
+    def operating_check(self, df: pd.DataFrame) -> tuple[np.ndarray, str | None]:
+        """The rows of ``df`` to flag for their operating point (:meth:`operating_outside`)
+        and one line on it where a user must hear of it: rows without a number there, rows
+        read outside the training one, or operating columns ``df`` lacks; None where none."""
+        values = self.operating_values(df)
+        flagged, named, missing = self.operating_outside(df, values=values)
         blank = np.zeros(len(df), bool)
-        for c in given:
-            blank |= ~np.isfinite(pd.to_numeric(df[c], errors="coerce").to_numpy(float))
+        for v in values.values():
+            blank |= ~np.isfinite(v)
+        outside = flagged & ~blank
+        parts = []
         if blank.any():
             parts.append(f"{int(blank.sum())} of {len(df)} rows give no number for "
-                         f"{', '.join(given)}: flagged (out_of_range), their operating point "
+                         f"{', '.join(values)}: flagged (out_of_range), their operating point "
                          "unknown")
-            outside = outside & ~blank
         trained = {c: (lo, hi) for c, lo, hi in zip(self.operating, self.operating_low,
                                                      self.operating_high, strict=True)}
 
@@ -267,7 +275,11 @@ class FeatureSchema:
                          f"and the input has no column {', '.join(missing)}: its rows' "
                          "operating point is not checked (add the column to have rows at "
                          "another one flagged)")
-        return "; ".join(parts) if parts else None
+        return flagged, ("; ".join(parts) if parts else None)
+
+    def operating_line(self, df: pd.DataFrame) -> str | None:
+        """The line of :meth:`operating_check` alone."""
+        return self.operating_check(df)[1]
 
     def in_envelope(self, x: np.ndarray, margin: float = 0.05) -> np.ndarray:
         """True for rows whose every input lies in the training range widened by ``margin``."""

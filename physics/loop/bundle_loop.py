@@ -148,7 +148,7 @@ from physics.loop.model.declared import (
 )
 from physics.loop.model.discrepancy import entry_family, with_discrepancy
 from physics.loop.model.simulation import model_signals
-from physics.loop.report import LoopReport
+from physics.loop.report import LoopReport, stop_entries
 from physics.loop.search.attribution import Round, attribute, candidates_for, second_candidates
 from physics.loop.search.detection import detection_limits
 from physics.loop.search.fit import (
@@ -254,13 +254,6 @@ def calibrated_on(held: bool, refits: list[str], capped: bool) -> str:
     return text
 
 
-def stopped_by(stop: BaseException, settings: LoopSettings) -> dict:
-    """The report's ``partial`` entries of a stop: why (the time limit or an interrupt)."""
-    return {"stopped": (f"time limit of {settings.time_limit_s:g} s"
-                        if isinstance(stop, TimeLimit) else "interrupted"),
-            "interrupted": isinstance(stop, KeyboardInterrupt)}
-
-
 def first_round_partial(bundle: Bundle, rec: Records, settings: LoopSettings,
                         stop: BaseException, nuisance: dict | None, left_out: dict
                         ) -> LoopReport:
@@ -277,24 +270,13 @@ def first_round_partial(bundle: Bundle, rec: Records, settings: LoopSettings,
     missing = ("the calibration was not finished: no candidate was searched" if nuisance is None
                else f"{len(done)} candidates were fitted on the train records and none judged"
                " on the held-out ones: no effect is named")
-    return LoopReport(
-        verdict="not_judged", unexplained=None, mode="bundle",
-        partial={**stopped_by(stop, settings), "after_round": 0, "missing": missing},
-        chosen_effect=None, chosen_option=None, chosen_parameters=None,
-        error_before=None, error_after=None,
-        error_unit="not computed: the run stopped before any held-out comparison",
-        feature_error_before_pct=None, feature_error_after_pct=None,
-        wear_error_before_pct=None, wear_error_after_pct=None,
-        calibration=dict(nuisance or {}),
-        calibrated_on=("the train records" if nuisance is not None
-                       else "not calibrated: stopped during the calibration"),
-        nuisance_after=dict(nuisance or {}), null_bic=None, ranking=done,
-        decision_rule={"min_gain": settings.min_gain, "min_delta_bic": settings.min_delta_bic,
-                       "false_add_rate": settings.false_add_rate,
-                       "max_wear_loss": settings.max_wear_loss},
-        details={"not_searched": left_out,
-                 "train_records": [bundle.records[i] for i in rec.train],
-                 "test_records": [bundle.records[i] for i in rec.test]})
+    return LoopReport.stopped(
+        "bundle", stop, settings.time_limit_s, missing, nuisance, "the train records", None,
+        "not computed: the run stopped before any held-out comparison", None, done,
+        {"min_gain": settings.min_gain, "min_delta_bic": settings.min_delta_bic,
+         "false_add_rate": settings.false_add_rate, "max_wear_loss": settings.max_wear_loss},
+        {"not_searched": left_out, "train_records": [bundle.records[i] for i in rec.train],
+         "test_records": [bundle.records[i] for i in rec.test]})
 
 
 @one_blas_thread
@@ -344,7 +326,7 @@ def run_loop(bundle: Bundle, base: Scenario, settings: LoopSettings | None = Non
             rounds.append(attribute(rec, judged, eff, first.best.values, first.best.nuisance,
                                     free_nuisance, more, first.reader, progress, deadline))
     except (TimeLimit, KeyboardInterrupt) as stop:
-        partial = {**stopped_by(stop, settings), "after_round": 1,
+        partial = {**stop_entries(stop, settings.time_limit_s), "after_round": 1,
                    "missing": f"the greedy second round on {first.best.name} was not "
                               "finished: a second effect was not searched"}
     last = next((r for r in reversed(rounds) if r.adopted), None)

@@ -104,12 +104,44 @@ class LoopReport:
         if self.verdict is None:
             self.verdict = "effect" if self.chosen_effect else "none"
 
+    @classmethod
+    def stopped(cls, mode: str, stop: BaseException, time_limit_s: float, missing: str,
+                calibration: dict | None, calibrated_on: str, error: float | None,
+                error_unit: str, null_bic: float | None, ranking: list[dict],
+                decision_rule: dict, details: dict) -> LoopReport:
+        """The report of a run stopped (``stop``: the time limit, :class:`TimeLimit`, or an
+        interrupt) in its first round, before every candidate was judged: ``partial`` after
+        round 0 saying why and what is ``missing``, verdict ``not_judged``, no effect named;
+        the ``calibration`` fitted on ``calibrated_on`` (None: the stop came during it), the
+        declared model's held-out ``error`` if it was judged, the ``ranking`` of the
+        candidates fitted by then."""
+        return cls(
+            verdict="not_judged", unexplained=None, mode=mode,
+            partial={**stop_entries(stop, time_limit_s), "after_round": 0, "missing": missing},
+            chosen_effect=None, chosen_option=None, chosen_parameters=None,
+            error_before=error, error_after=error, error_unit=error_unit,
+            feature_error_before_pct=None, feature_error_after_pct=None,
+            wear_error_before_pct=None, wear_error_after_pct=None,
+            calibration=dict(calibration or {}),
+            calibrated_on=(calibrated_on if calibration is not None
+                           else "not calibrated: stopped during the calibration"),
+            nuisance_after=dict(calibration or {}), null_bic=null_bic, ranking=ranking,
+            decision_rule=decision_rule, details=details)
+
     def to_dict(self) -> dict:
         return {k: getattr(self, k) for k in STABLE_KEYS} | self.details
 
     def __getitem__(self, key: str) -> Any:
         """``report[key]`` is the entry ``key`` of report.json."""
         return self.to_dict()[key]
+
+
+def stop_entries(stop: BaseException, time_limit_s: float) -> dict:
+    """The report's ``partial`` entries of a stop: why (the time limit of ``time_limit_s`` s, or
+    an interrupt: Ctrl-C or SIGTERM)."""
+    interrupted = isinstance(stop, KeyboardInterrupt)
+    return {"stopped": "interrupted" if interrupted else f"time limit of {time_limit_s:g} s",
+            "interrupted": interrupted}
 
 
 def first_round_markdown(r: dict) -> str:

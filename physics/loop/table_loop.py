@@ -450,27 +450,17 @@ def stopped_table(stop: BaseException, settings: LoopSettings, nuisance: dict | 
     missing = ("the calibration was not finished: no candidate was judged" if nuisance is None
                else f"{len(judged)} of {candidates} candidates were judged: no effect is named "
                "from a part of them")
-    error = null["heldout"] if null is not None else None
-    return LoopReport(
-        verdict="not_judged", unexplained=None, mode="feature_table",
-        partial={"stopped": "interrupted", "interrupted": isinstance(stop, KeyboardInterrupt),
-                 "after_round": 0, "missing": missing},
-        chosen_effect=None, chosen_option=None, chosen_parameters=None,
-        error_before=error, error_after=error,
-        error_unit="RMS natural-log ratio of the features, cross-validated over the rows",
-        feature_error_before_pct=None, feature_error_after_pct=None,
-        wear_error_before_pct=None, wear_error_after_pct=None,
-        calibration=dict(nuisance or {}),
-        calibrated_on=("the least-worn row" if nuisance is not None
-                       else "not calibrated: stopped during the calibration"),
-        nuisance_after=dict(nuisance or {}), null_bic=null["bic"] if null else None,
-        ranking=[{"effect": c["effect"], "option": c["option"],
-                  "parameters": {k: v for k, v in c["parameters"].items()
-                                 if k not in c["option"]},
-                  "nuisance": c["nuisance"], "refined": True, "train_rss": c["rss"],
-                  "heldout_error": c["heldout"]} for c in judged],
-        decision_rule={"min_gain": settings.min_gain, "min_delta_bic": settings.min_delta_bic},
-        details={"not_searched": not_searched})
+    ranking = [{"effect": c["effect"], "option": c["option"],
+                "parameters": {k: v for k, v in c["parameters"].items() if k not in c["option"]},
+                "nuisance": c["nuisance"], "refined": True, "train_rss": c["rss"],
+                "heldout_error": c["heldout"]} for c in judged]
+    return LoopReport.stopped(
+        "feature_table", stop, settings.time_limit_s, missing, nuisance, "the least-worn row",
+        null["heldout"] if null else None,
+        "RMS natural-log ratio of the features, cross-validated over the rows",
+        null["bic"] if null else None, ranking,
+        {"min_gain": settings.min_gain, "min_delta_bic": settings.min_delta_bic},
+        {"not_searched": not_searched})
 
 
 @one_blas_thread

@@ -123,21 +123,27 @@ def public_like(tmp_path_factory):
     return read_bundle(path), scenario_from_config({"case": 3}), truth
 
 
+def second_round_raises(monkeypatch, stop: type[BaseException]) -> list:
+    """The loop's attribution as it is for the first round, raising ``stop`` when the second
+    starts; returns the list of its calls."""
+    real, calls = bundle_loop.attribute, []
+
+    def attribute(*args, **kwargs):
+        calls.append(1)
+        if len(calls) > 1:
+            raise stop
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(bundle_loop, "attribute", attribute)
+    return calls
+
+
 def test_a_public_like_bundle_runs_to_the_end_and_stops_after_round_one(public_like,
                                                                         tmp_path, monkeypatch):
     """The time limit passes in the second round (its attribution raises it): the first
     round's report, marked partial."""
     bundle, scn, _ = public_like
-    real = bundle_loop.attribute
-    calls = []
-
-    def attribute(*args, **kwargs):
-        calls.append(1)
-        if len(calls) > 1:
-            raise TimeLimit
-        return real(*args, **kwargs)
-
-    monkeypatch.setattr(bundle_loop, "attribute", attribute)
+    calls = second_round_raises(monkeypatch, TimeLimit)
     report = run_loop(bundle, scn, dataclasses.replace(SETTINGS, time_limit_s=600.0))
     assert len(calls) == 2
     assert report["verdict"] == "effect" and report["chosen_effect"] == "transfer_path"
@@ -158,16 +164,7 @@ def test_a_public_like_bundle_runs_to_the_end_and_stops_after_round_one(public_l
 
 def test_an_interrupt_after_round_one_keeps_its_report(public_like, monkeypatch):
     bundle, scn, _ = public_like
-    calls = []
-
-    def attribute(*args, **kwargs):
-        calls.append(1)
-        if len(calls) > 1:
-            raise KeyboardInterrupt
-        return real(*args, **kwargs)
-
-    real = bundle_loop.attribute
-    monkeypatch.setattr(bundle_loop, "attribute", attribute)
+    calls = second_round_raises(monkeypatch, KeyboardInterrupt)
     report = run_loop(bundle, scn, SETTINGS)
     assert len(calls) == 2
     assert report["partial"] == {"stopped": "interrupted", "after_round": 1,

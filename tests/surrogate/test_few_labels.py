@@ -12,9 +12,9 @@ from surrogate.few_labels import (
     exponential_read,
     few_label_study,
     line_read,
+    monotone_envelopes,
     physics_curves,
     stage_error,
-    study_table,
     summary,
 )
 
@@ -34,7 +34,7 @@ def test_the_physics_reader_finds_the_curve_and_level_of_data_made_by_it():
     curves = physics_curves(comparison())
     assert set(curves) == {50.0, 20.0}
     lab = np.array([0.2, 0.5, 0.8])
-    reader = PhysicsReader(WEAR, curves, lab, 1.3 * np.exp(2.0 * lab))
+    reader = PhysicsReader(*monotone_envelopes(WEAR, curves), lab, 1.3 * np.exp(2.0 * lab))
     assert reader.torque == 50.0 and reader.level == pytest.approx(np.log(1.3))
     w = np.array([0.05, 0.33, 0.61, 0.9])
     assert reader.read(1.3 * np.exp(2.0 * w)) == pytest.approx(w)
@@ -44,7 +44,7 @@ def test_the_physics_reader_finds_the_curve_and_level_of_data_made_by_it():
 def test_a_curve_that_dips_is_read_through_its_monotone_envelope():
     """The 20 N m curve falls after its first stages: its envelope is flat there, and a level
     on the flat part reads the first wear that reaches it (one wear per level)."""
-    reader = PhysicsReader(WEAR, {20.0: comparison().rms_model_20Nm.to_numpy()},
+    reader = PhysicsReader(*monotone_envelopes(WEAR, {20.0: comparison().rms_model_20Nm}),
                            np.array([0.9]), np.array([1.0 + 0.45 - 0.3 * np.sin(7.2)]))
     assert np.all(np.diff(reader.envelope) >= 0)
     read = reader.read(np.exp(reader.envelope + reader.level))
@@ -81,12 +81,12 @@ def test_the_study_draws_labelled_stages_and_reads_the_others():
     """On a rig of the model's own curve the physics reader is exact and the others are not;
     the draws are the seed's; the summary names the best reader of every draw."""
     study = few_label_study(records(), comparison(), labelled=3, draws=20, seed=1)
-    assert len(study) == 20 and (study.physics_mre_pct < 1e-6).all()
-    assert (study.torque_Nm == 50.0).all() and (study.line_mre_pct > 1).all()
+    assert len(study) == 20 and (study.physics_exact_mre_pct < 1e-6).all()
+    assert (study.physics_exact_torque_Nm == 50.0).all() and (study.line_mre_pct > 1).all()
     assert study.stages.str.split().map(len).eq(3).all()
     again = few_label_study(records(), comparison(), labelled=3, draws=20, seed=1)
     pd.testing.assert_frame_equal(study, again)
-    table = summary(study_table(records(), comparison(), labelled=3, draws=20, seed=1))
+    table = summary(study)
     assert table.reader.tolist() == ["physics_exact", "physics_path", "exponential", "line"]
     assert table.best_share.sum() == pytest.approx(1.0)
     assert table.set_index("reader").loc["physics_exact", "best_share"] == 1.0
