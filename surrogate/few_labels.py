@@ -102,8 +102,8 @@ def stage_error(read: np.ndarray, true: np.ndarray, stage: np.ndarray) -> float:
 
 
 #: the physics readers of the study, by the contact of the model's curves they calibrate
-#: (rig_comparison.csv's ``model``: the exact tooth contact, the project's model; ``path``: on
-#: the theoretical path)
+#: (rig_comparison.csv's ``model``: the exact tooth contact; ``path``: on the theoretical path,
+#: the dynamics' default ``flank_contact``)
 CONTACTS = {"physics_exact": "model", "physics_path": "path"}
 
 

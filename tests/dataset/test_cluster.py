@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 import pandas as pd
+import pytest
 from hydra import compose, initialize_config_module
 from omegaconf import DictConfig
 
@@ -22,6 +23,7 @@ def _run(args: list[str], cwd: Path) -> subprocess.CompletedProcess:
                           timeout=600, check=True)
 
 
+@pytest.mark.slow
 def test_chunks_run_as_submitit_jobs_and_merge(tmp_path):
     _run(["-m", "physics.dataset", "-m", "chunk=0,1", "hydra/launcher=submitit_local", *SMALL],
          tmp_path)

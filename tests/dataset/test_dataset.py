@@ -190,6 +190,7 @@ def test_spec_rejects_more_chunks_than_units():
         DatasetSpec(cases=(3,), replicates=2, chunks=9)
 
 
+@pytest.mark.slow
 def test_a_gearbox_worn_through_is_recorded_not_a_row(tmp_path, caplog):
     # a wear coefficient 1e4 times the calibrated one wears the teeth through within the life
     # of every trajectory: each is listed in the sidecar with its reason, none is a row

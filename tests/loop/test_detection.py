@@ -25,6 +25,7 @@ def clean(tmp_path_factory):
     return run_loop(read_bundle(path), scn, FAST)
 
 
+@pytest.mark.slow
 def test_each_candidate_not_named_has_its_limit_in_the_report(clean, tmp_path):
     assert clean["verdict"] == "none"
     limits = clean["detection_limits"]
@@ -46,6 +47,7 @@ def test_each_candidate_not_named_has_its_limit_in_the_report(clean, tmp_path):
     assert "## Detection limits" in md and "| transfer_path |  | residue" in md
 
 
+@pytest.mark.slow
 def test_the_limit_is_where_the_rule_starts_naming(clean):
     """At the reported limit the null test holds on the injected records, at the largest
     size tried below it it does not."""

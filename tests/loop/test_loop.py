@@ -663,6 +663,7 @@ def run_app(tmp: Path, data: Path, *extra: str) -> subprocess.CompletedProcess:
                           capture_output=True, text=True, timeout=600)
 
 
+@pytest.mark.slow
 def test_loop_app_finds_an_undeclared_transfer_path(tmp_path, scn):
     path, truth = make_bundle(tmp_path / "bundle", scn, "transfer_path", seed=2, records=6,
                               duration_s=0.75)

@@ -85,6 +85,7 @@ def test_a_cut_the_loop_cannot_use_is_refused_before_work(cycles, time, spec, ru
     assert f"reference={spec}" in str(err.value)
 
 
+@pytest.mark.slow
 def test_an_effect_that_appears_over_the_life_is_named_against_the_first_records(tmp_path):
     """A torque ripple that appears at a third of the life: the first two records (clean) are
     the reference, left out of the analysis, and the ripple in the others is named."""

@@ -77,6 +77,7 @@ def scn():
     return scenario_from_config({"case": 3})
 
 
+@pytest.mark.slow
 def test_a_ripple_at_a_non_integer_order_is_an_unexplained_residual(tmp_path, scn):
     path, truth = make_bundle(tmp_path / "ripple", scn, "torque_ripple", seed=2, records=6,
                               duration_s=0.75, values={"order": 2.6})

@@ -208,4 +208,7 @@ def test_the_few_label_figures_are_those_of_its_table():
     for contact in ("exact", "path"):
         rank = rig[rig.contact == contact].rank_correlation
         assert f"{rank.min():.2f}-{rank.max():.2f}" in text, contact
+    for reader in FEW_LABEL_ROWS.values():  # the prose's comparisons quote the same means
+        assert f"{table.loc[reader, 'mean_mre_pct']:.1f} %" in text, reader
     assert table.loc["physics_exact", "mean_mre_pct"] > table.loc["exponential", "mean_mre_pct"]
+    assert table.loc["physics_path", "mean_mre_pct"] <= table.loc["exponential", "mean_mre_pct"]

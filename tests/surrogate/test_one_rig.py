@@ -20,7 +20,7 @@ from surrogate import benchmark
 from surrogate.training import train
 
 ROOT = Path(__file__).resolve().parents[2]
-FAST = ["trainer.max_epochs=150", "trainer.min_epochs=20", "model.members=3",
+FAST = ["trainer.max_epochs=40", "trainer.min_epochs=10", "model.members=2", "model.folds=2",
         "trainer.enable_progress_bar=false", "logger=csv"]
 
 

@@ -180,7 +180,7 @@ def test_acceptance_leave_one_group_out_prints_each_fold_and_the_mean(tmp_path):
                           INPUTS, "data.target=wear_mm", "data.group=stage",
                           "data.group_by=speed", "data.cv=logo", "data.val_replicates=3",
                           "trainer.max_epochs=3", "trainer.min_epochs=1", "model.members=2",
-                          "logger=csv", "trainer.enable_progress_bar=false"],
+                          "model.folds=2", "logger=csv", "trainer.enable_progress_bar=false"],
                          capture_output=True, text=True, timeout=600, cwd=tmp_path)
     assert run.returncode == 0, run.stderr[-3000:]
     out = run.stdout + run.stderr
