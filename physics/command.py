@@ -39,6 +39,7 @@ from typing import Any, TypeVar
 
 from hydra.experimental.callback import Callback
 from omegaconf import DictConfig, OmegaConf, open_dict, read_write
+from omegaconf.errors import MissingMandatoryValue
 
 from physics import interrupt
 from physics.files import WriteFailed, check_writable
@@ -237,7 +238,11 @@ def run_command(cfg: DictConfig, prepare: Callable[[DictConfig], Plan],
         check_keys(cfg)
         check_case(cfg, _command_line_keys())
         plan = prepare(cfg)
-    except ValueError as err:
+    except (ValueError, MissingMandatoryValue) as err:
+        if isinstance(err, MissingMandatoryValue):  # a setting without default, not given
+            err = ValueError(f"{err.full_key} is not given and has no default: give "
+                             f"{err.full_key}=... on the command line (--help says what it "
+                             "takes)")
         if job is None:
             refuse(err, folder)
         _record_failure(folder, f"refused: {err}")

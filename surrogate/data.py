@@ -166,6 +166,10 @@ class WearDataModule(L.LightningDataModule):
                              "for the default inputs of data.sensors")
         self.inputs = (list(inputs) if inputs is not None else
                        input_columns(list(sensors), operating_point, baseline))
+        repeated = sorted({c for c in self.inputs if self.inputs.count(c) > 1})
+        if repeated:
+            raise ValueError(f"data.inputs = {self.inputs} names {repeated} more than once: each "
+                             "input is one column of the network; name each column once")
         self.target = target or ("mean_wear_mm" if baseline else "root_wear_mm")
         if self.target in self.inputs:
             raise ValueError(f"data.target = {self.target!r} is also among data.inputs: a model "

@@ -69,11 +69,12 @@ class PredictJob:
     gearbox: tuple[str, ...] = ()  # the columns that tell the gearboxes apart (baseline models)
 
 
-def check_output(value: object, source: Path, overwrite: object) -> Path:
+def check_output(value: object, source: Path, overwrite: object, model: Path | None = None
+                 ) -> Path:
     """The output file ``value``; refused (ValueError, one line) where it is no file name, or
-    would replace a file: the input table ``source`` (an existing file) itself, also through a
-    link, always; another existing file unless ``overwrite`` is true; a folder; a device or a
-    FIFO (/dev/full); a folder that cannot be written."""
+    would replace a file: the input table ``source`` or the model file ``model`` (existing
+    files) itself, also through a link, always; another existing file unless ``overwrite`` is
+    true; a folder; a device or a FIFO (/dev/full); a folder that cannot be written."""
     if isinstance(value, bool) or not isinstance(value, str | os.PathLike) or value == "":
         raise ValueError(f"output = {value!r} is not a file name; give a .csv file name")
     output = Path(value)
@@ -86,10 +87,11 @@ def check_output(value: object, source: Path, overwrite: object) -> Path:
         raise ValueError(f"output = {str(output)!r} is not a regular file (a FIFO, a device or "
                          "a socket); give a .csv file name")
     if output.exists():
-        if os.path.samefile(output, source):
-            raise ValueError(f"output = {str(output)!r} is the input table itself (input = "
-                             f"{str(source)!r}): the predictions never replace their input; "
-                             "give another output file name")
+        for option, given in (("input", source), ("ckpt", model)):
+            if given is not None and given.is_file() and os.path.samefile(output, given):
+                raise ValueError(f"output = {str(output)!r} is the {option} file itself "
+                                 f"({option} = {str(given)!r}): the predictions never replace "
+                                 "what the run reads; give another output file name")
         if not overwrite:
             raise ValueError(f"output = {str(output)!r} already exists: a file this run did "
                              "not write is replaced only when asked; give another output file "
@@ -114,7 +116,7 @@ def checked_job(ckpt: object, source: object, target: object, gearbox: object,
     if surrogate.schema.baseline:
         check_gearboxes(table, list(columns), surrogate.schema.target, f"input = {source}")
     surrogate.schema.check(surrogate.schema.network_rows(table, list(columns)))
-    output = check_output(target, Path(source), overwrite)
+    output = check_output(target, Path(source), overwrite, Path(ckpt))
     return PredictJob(surrogate, table, output, columns)
 
 

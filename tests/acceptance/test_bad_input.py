@@ -156,6 +156,7 @@ CASES = [
     ("train", ["data.val_replicates=0"], None, "data.val_replicates = 0"),
     ("train", ["data.inputs=[dte_rms,mean_wear_mm]"], None,
      "data.target = 'mean_wear_mm' is also among data.inputs"),
+    ("train", ["data.inputs=[dte_rms,dte_rms]"], None, "names ['dte_rms'] more than once"),
     ("predict", ["ckpt=missing.pt", "input=x.csv"], None, "missing.pt"),
     ("loop", ["data=missing"], None, "'missing'"),
     ("loop", ["data=missing", "dynamics.flank_contact=exact"], None,

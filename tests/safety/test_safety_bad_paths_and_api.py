@@ -220,7 +220,7 @@ def test_the_api_never_writes_over_its_input(model, tmp_path):
     mine = tmp_path / "T.csv"
     table().to_csv(mine, index=False)
     before = mine.read_bytes()
-    with pytest.raises(ValueError, match="is the input table itself"):
+    with pytest.raises(ValueError, match="is the input file itself"):
         predict_file(model, mine, mine, overwrite=True)
     (tmp_path / "w.csv").write_text("mine\n")
     with pytest.raises(ValueError, match="already exists"):

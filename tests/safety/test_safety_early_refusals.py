@@ -110,3 +110,17 @@ def test_an_existing_file_as_out_dir_is_refused_at_once(tmp_path):
     (tmp_path / "out").write_text("mine")
     with pytest.raises(ValueError, match=r"is a file, not a folder"):
         check_writable(tmp_path / "out", "out_dir")
+
+
+@pytest.mark.parametrize("app, key", [("surrogate.predict", "ckpt"), ("physics.loop", "data")])
+def test_a_setting_without_default_left_out_is_one_line_naming_it(tmp_path, app, key):
+    """The command typed without its one required setting: one line naming the setting and
+    how to give it (it was omegaconf's MissingMandatoryValue traceback), exit 2, no run
+    folder left."""
+    run = subprocess.run([sys.executable, "-m", app], capture_output=True, text=True,
+                         timeout=300, cwd=tmp_path)
+    assert run.returncode == 2, run.stderr[-2000:]
+    assert "Traceback" not in run.stderr, run.stderr[-2000:]
+    (line,) = [ln for ln in run.stderr.splitlines() if ln.startswith("error:")]
+    assert line.startswith(f"error: {key} is not given and has no default: give {key}=")
+    assert not list(tmp_path.iterdir()), sorted(tmp_path.rglob("*"))

@@ -23,7 +23,7 @@ ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(Path(__file__).parent))
 from test_safety_user_tables import table, train_cfg  # noqa: E402
 
-SAME = "is the input table itself"
+SAME = "is the input file itself"
 EXISTS = "already exists: a file this run did not write is replaced only when asked"
 
 
@@ -61,6 +61,22 @@ def _same_file_spellings(mine: Path) -> dict[str, Path]:
     (folder / "sub").mkdir()
     return {"same path": mine, "with ..": folder / "sub" / ".." / mine.name,
             "symbolic link": folder / "link.csv", "hard link": folder / "hard.csv"}
+
+
+def test_the_model_file_is_never_the_output_even_when_asked(model, mine, tmp_path,
+                                                             config_store):
+    """``output=`` the checkpoint the run reads (by a symbolic link too) is refused, with
+    ``overwrite=true`` as well: the model file is an input."""
+    (tmp_path / "m.pt").symlink_to(model)
+    before = model.read_bytes()
+    for output in (model, tmp_path / "m.pt"):
+        with pytest.raises(ValueError) as err:
+            prepare(model, mine, output, "overwrite=true", work=tmp_path / "work")
+        text = str(err.value)
+        assert text.startswith(f"output = {str(output)!r} is the ckpt file itself"), text
+        assert "\n" not in text
+    assert model.read_bytes() == before
+    assert not (tmp_path / "work").exists()
 
 
 @pytest.mark.parametrize("spelling", ["same path", "with ..", "symbolic link", "hard link"])
@@ -120,6 +136,6 @@ def test_the_command_refuses_to_replace_its_input_in_one_line(model, mine, tmp_p
     assert run.returncode == 2, run.stderr[-2000:]
     assert run.stderr.splitlines() == [
         f"error: output = {str(mine)!r} {SAME} (input = {str(mine)!r}): the predictions never "
-        "replace their input; give another output file name"], run.stderr[-2000:]
+        "replace what the run reads; give another output file name"], run.stderr[-2000:]
     assert mine.read_bytes() == before
     assert not any(work.iterdir()) and sorted(p.name for p in mine.parent.iterdir()) == ["T.csv"]
