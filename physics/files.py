@@ -5,6 +5,7 @@ An interrupted run therefore never leaves a half-written file that a later run w
 
 from __future__ import annotations
 
+import csv
 import os
 import tempfile
 from collections.abc import Callable, Iterable
@@ -351,3 +352,25 @@ def file_problem(path: Path, missing: str = "does not exist") -> str | None:
     if not path.is_file():
         return "is not a regular file (a FIFO, a device or a socket)"
     return None
+
+
+def repeated_header(path: str | Path) -> list[str]:
+    """The column names a table file (``.csv``: its header line as written; ``.parquet``: its
+    schema) holds more than once, which pandas would read as ``a``, ``a.1``, ... or refuse
+    with pyarrow's own text; none for other files or a file whose header cannot be read (its
+    reader then says why)."""
+    path = Path(path)
+    if path.suffix == ".csv":
+        with open(path, newline="", encoding="utf-8", errors="replace") as f:
+            names = [h.strip() for h in next(csv.reader(f), [])]
+    elif path.suffix == ".parquet":
+        import pyarrow.lib
+        import pyarrow.parquet
+
+        try:
+            names = pyarrow.parquet.read_schema(path).names
+        except (OSError, pyarrow.lib.ArrowException):
+            return []
+    else:
+        return []
+    return sorted({n for n in names if names.count(n) > 1})

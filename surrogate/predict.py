@@ -39,10 +39,9 @@ import pandas as pd
 from omegaconf import DictConfig
 
 from physics.command import entry, run_command
-from physics.files import atomic_write, check_writable, existing_file
+from physics.files import atomic_write, check_writable, existing_file, repeated_header
 from surrogate.inference import Surrogate, check_gearboxes, gearbox_columns
 from surrogate.novelty import envelope_report
-from surrogate.schema import repeated_header
 
 log = logging.getLogger(__name__)
 

@@ -2,10 +2,8 @@
 
 from __future__ import annotations
 
-import csv
 import math
 from dataclasses import asdict, dataclass
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -409,14 +407,3 @@ def baseline_changes(df: pd.DataFrame, columns: list[str], gearbox: list[str],
 KEEP_COLUMNS = frozenset({"case", "replicate", "cycles", "record", "root_wear_mm",
                           "max_wear_mm", "mean_wear_mm", "eta0_Pa_s", "sigma_um", "n1_rpm",
                           "torque_Nm", *NUISANCE_COLUMNS})
-
-
-def repeated_header(path: str | Path) -> list[str]:
-    """The column names a CSV file's header holds more than once (pandas would read them as
-    ``a``, ``a.1``, ... and the repetition would pass unseen); none for other files."""
-    path = Path(path)
-    if path.suffix != ".csv":
-        return []
-    with open(path, newline="", encoding="utf-8", errors="replace") as f:
-        names = [h.strip() for h in next(csv.reader(f), [])]
-    return sorted({n for n in names if names.count(n) > 1})

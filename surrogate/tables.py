@@ -14,9 +14,9 @@ import numpy as np
 import pandas as pd
 
 from physics.dataset.generation import units as dataset_units
-from physics.files import existing_file
+from physics.files import existing_file, repeated_header
 from surrogate.inputs import CONDITIONS
-from surrogate.schema import repeated_header, vector_parts
+from surrogate.schema import vector_parts
 
 #: the range (low, high) each unit allows a user's column: a value outside is a unit error or
 #: a broken reading. DTE features: 1 mm of transmission error is far beyond any running spur

@@ -63,6 +63,15 @@ def _empty_manifest(folder: Path) -> Path:
     return path
 
 
+def _repeated_column(folder: Path) -> Path:
+    """The manifest with a second ``fs_hz`` column (pandas reads it as fs_hz.1)."""
+    path = bundle(folder)
+    lines = (path / "manifest.csv").read_text().splitlines()
+    (path / "manifest.csv").write_text("\n".join(
+        [lines[0] + ",fs_hz", *(line + ",99" for line in lines[1:])]) + "\n")
+    return path
+
+
 def _bad_gear(folder: Path) -> Path:
     path = bundle(folder)
     (path / "gear.yaml").write_text("z1: abc\n")
@@ -162,6 +171,7 @@ CASES = [
     ("loop", ["data=missing", "dynamics.flank_contact=exact"], None,
      "dynamics.flank_contact = 'exact': the loop's effects"),
     ("loop", ["data={input}"], _empty_manifest, "manifest.csv"),
+    ("loop", ["data={input}"], _repeated_column, "column(s) ['fs_hz'] more than once"),
     ("loop", ["data={input}"], _garbage_npy, "record 'r01': signals/r01.npy"),
     ("loop", ["data={input}"], _bad_gear, "gear.z1 = 'abc'"),
     ("loop", ["data={input}"], _torque("abc"), "record 'r02': torque_Nm = 'abc'"),

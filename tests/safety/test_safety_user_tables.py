@@ -154,3 +154,24 @@ def test_a_csv_header_that_repeats_a_column_is_refused(tmp_path):
     good = tmp_path / "once.csv"
     good.write_text("rig,dte_rms,wear_mm\nA,1.0,0.1\n")
     assert list(read_table(good).columns) == ["rig", "dte_rms", "wear_mm"]
+
+
+def test_a_parquet_schema_that_repeats_a_column_is_refused(tmp_path):
+    """A Parquet table may hold one name twice (pyarrow writes it): refused by name for a
+    training table and a prediction input, not with pyarrow's FieldRef text."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from surrogate.predict import read_table
+    from surrogate.tables import read_user_table
+
+    bad = tmp_path / "twice.parquet"
+    pq.write_table(pa.table([["A"], [1.0], [2.0], [0.1]],
+                            names=["rig", "dte_rms", "dte_rms", "wear_mm"]), bad)
+    with pytest.raises(ValueError, match=r"has column\(s\) \['dte_rms'\] more than once"):
+        read_user_table(bad, {})
+    with pytest.raises(ValueError, match=r"input = .* has column\(s\) \['dte_rms'\] more than"):
+        read_table(bad)
+    good = tmp_path / "once.parquet"
+    pq.write_table(pa.table([["A"], [1.0], [0.1]], names=["rig", "dte_rms", "wear_mm"]), good)
+    assert list(read_table(good).columns) == ["rig", "dte_rms", "wear_mm"]

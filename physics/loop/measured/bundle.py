@@ -31,7 +31,7 @@ from omegaconf import OmegaConf
 from omegaconf.errors import OmegaConfBaseException
 
 from physics.arguments import argument, path_argument
-from physics.files import file_problem
+from physics.files import file_problem, repeated_header
 from physics.params import GearPair, Operating, Scenario
 from physics.scope import check_scope
 from physics.tribology.asperity_table import check_scenario
@@ -212,6 +212,9 @@ def _read_manifest(path: Path) -> pd.DataFrame:
     except (pd.errors.EmptyDataError, pd.errors.ParserError, UnicodeDecodeError) as err:
         raise _fail(path, None, f"not a readable CSV table ({err}); one header line and one "
                                 "row per record are needed") from None
+    twice = repeated_header(f)
+    if twice:  # pandas reads a repeated name as name.1, and the first would be used unseen
+        raise _fail(path, None, f"column(s) {twice} more than once; keep one of each")
     missing = [c for c in REQUIRED if c not in man.columns]
     if missing:
         raise _fail(path, None, f"column(s) {missing} missing; required: {list(REQUIRED)}")
