@@ -83,6 +83,7 @@ import itertools
 import json
 import logging
 import math
+import os
 import tempfile
 import time
 from datetime import datetime
@@ -97,7 +98,14 @@ from hydra.utils import instantiate
 from physics.dataset.generation import NuisanceRanges
 from physics.dynamics.model_form import FACTORS
 from physics.estimators.empirical_inverse import EmpiricalInverse, wear_errors
-from physics.files import atomic_write, existing_file, pyplot, read_csv_table
+from physics.files import (
+    atomic_write,
+    check_writable,
+    existing_file,
+    pyplot,
+    read_csv_table,
+    repeated_header,
+)
 from physics.params import Dynamics
 from physics.reference import RIG_RECORDS
 from physics.signals.features import features
@@ -795,7 +803,7 @@ def main(argv: list[str] | None = None) -> None:
                              "few_labels_draws.csv; seconds): the physics model's curves of "
                              "--rig-comparison calibrated on them, beside the same calibration "
                              "without physics and a straight line (surrogate.few_labels)")
-    parser.add_argument("--rig-comparison", type=Path, default=RIG_COMPARISON, metavar="PATH",
+    parser.add_argument("--rig-comparison", type=Path, default=None, metavar="PATH",
                         help="the model's curves of the rig's pair, the rig_comparison.csv "
                              "written by python -m physics.reproduce.rig (default: "
                              f"{RIG_COMPARISON}, in a checkout of the repository)")
@@ -814,6 +822,22 @@ def main(argv: list[str] | None = None) -> None:
     out = args.out or Path("logs/benchmark") / datetime.now().strftime("%Y-%m-%d_%H-%M-%S")
     if args.seeds < 1:
         parser.error(f"--seeds {args.seeds}: give at least 1")
+    only = [f for f, on in (("--real-rig-only", args.real_rig_only),
+                            ("--one-rig-only", args.one_rig_only),
+                            ("--few-labels-only", args.few_labels_only),
+                            ("--narrow-ranges", args.narrow_ranges)) if on]
+    if len(only) > 1:
+        parser.error(f"{' '.join(only)}: each runs one part instead of the whole benchmark; "
+                     "give one of them")
+    if args.rig_comparison is not None and not args.few_labels_only:
+        parser.error(f"--rig-comparison {args.rig_comparison}: is read by --few-labels-only "
+                     "alone; add it, or leave --rig-comparison out")
+    for key, folder in (("--out", out), ("--figures", args.figures)):
+        try:
+            if folder is not None:
+                check_writable(folder, key)
+        except ValueError as err:
+            parser.error(str(err))
     if args.figures is not None and not (args.real_rig_only or args.one_rig_only
                                          or args.few_labels_only):
         parser.error(f"--figures {args.figures}: copies the tables of --real-rig-only, "
@@ -830,15 +854,33 @@ def main(argv: list[str] | None = None) -> None:
     if refused:
         parser.error(f"{' '.join(given)}: {refused}")
     if args.few_labels_only:
+        comparison = args.rig_comparison or RIG_COMPARISON
+        out = out.resolve()
+        written = [out / "few_labels.csv", out / "few_labels_draws.csv",
+                   *([args.figures / "few_labels.csv"] if args.figures is not None else [])]
+        for target in written:
+            for key, given in (("--rig-comparison", comparison), ("--real-rig", args.real_rig)):
+                if target.is_file() and Path(given).is_file() and os.path.samefile(target,
+                                                                                     given):
+                    parser.error(f"{key} {given} is a file this run writes ({target}): it "
+                                 "would replace what it reads; give another --out or "
+                                 "--figures folder")
         try:
-            curves = read_csv_table(args.rig_comparison, "--rig-comparison",
+            records = read_csv_table(args.real_rig, "--real-rig", "give the rig's record "
+                                     "table (stage, wear_mm, acc_rms_g)",
+                                     columns=few_labels.RECORD_COLUMNS,
+                                     numeric=few_labels.RECORD_COLUMNS[1:])
+            curves = read_csv_table(comparison, "--rig-comparison",
                                     "give the rig_comparison.csv of python -m "
                                     "physics.reproduce.rig", columns=("wear_mm",))
-            records = pd.read_csv(args.real_rig)
+            twice = repeated_header(comparison)
+            if twice:
+                raise ValueError(f"--rig-comparison {comparison} has column(s) {twice} more "
+                                 "than once; keep one of each")
+            few_labels.check_comparison(curves, records, f"--rig-comparison {comparison}")
             table = few_labels.summary(draws := few_labels.few_label_study(records, curves))
         except ValueError as err:
             parser.error(str(err))
-        out = out.resolve()
         out.mkdir(parents=True, exist_ok=True)
         atomic_write(out / "few_labels.csv", lambda p: table.to_csv(p, index=False))
         atomic_write(out / "few_labels_draws.csv", lambda p: draws.to_csv(p, index=False))

@@ -29,6 +29,36 @@ import numpy as np
 import pandas as pd
 from sklearn.isotonic import IsotonicRegression
 
+#: the columns of the rig's record table the study reads
+RECORD_COLUMNS = ("stage", "wear_mm", "acc_rms_g")
+#: how far the curves' deepest stage may lie from the records' [factor]: the same rig's stages
+#: in the same unit (a table in um, or of a few stages, lies far outside)
+REACH_FACTOR = 1.5
+
+
+def check_comparison(comparison: pd.DataFrame, records: pd.DataFrame, where: str) -> None:
+    """Refuse (ValueError, one line starting with ``where``) model curves that cannot be the
+    rig's: a wear column that is not finite, non-negative and non-decreasing down the stages
+    (as ``python -m physics.reproduce.rig`` writes it), a deepest stage more than
+    :data:`REACH_FACTOR` times off the records' (another unit, a part of the stages) or a
+    curve value that is not a finite positive ratio."""
+    wear = pd.to_numeric(comparison.wear_mm, errors="coerce").to_numpy(float)
+    if not (np.isfinite(wear).all() and (wear >= 0).all() and (np.diff(wear) >= 0).all()):
+        raise ValueError(f"{where}: wear_mm must be finite, >= 0 and non-decreasing down the "
+                         "stages, one row per stage as python -m physics.reproduce.rig "
+                         "writes it")
+    deepest, measured = float(wear.max(initial=0.0)), float(records.wear_mm.max())
+    if not measured / REACH_FACTOR <= deepest <= measured * REACH_FACTOR:
+        raise ValueError(f"{where}: its deepest stage is {deepest:g} mm and the records' "
+                         f"{measured:g} mm: the curves must cover the same rig's stages in mm "
+                         "(within a factor 1.5); give the rig_comparison.csv of those records")
+    for c in map(str, comparison.columns):
+        if c.startswith("rms_") and c.endswith("Nm"):
+            g = pd.to_numeric(comparison[c], errors="coerce").to_numpy(float)
+            if not (np.isfinite(g).all() and (g > 0).all()):
+                raise ValueError(f"{where}: column {c} must hold finite positive ratios of "
+                                 "RMS over new; one is not")
+
 
 def physics_curves(comparison: pd.DataFrame, contact: str = "model") -> dict[float, np.ndarray]:
     """The model's RMS-over-new curves of ``comparison`` (``rig_comparison.csv`` of ``python -m
