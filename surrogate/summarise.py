@@ -18,7 +18,7 @@ from pathlib import Path
 import pandas as pd
 import yaml
 
-from physics.files import WriteFailed, atomic_write, check_writable
+from physics.files import WriteFailed, atomic_write, check_writable, resolved
 
 #: what to pass instead of a bad folder
 FIX = "pass the folder of a multirun, e.g. logs/train/multiruns/<time>"
@@ -88,14 +88,27 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m surrogate.summarise",
                                      description=__doc__.split("\n\n")[1])
     parser.add_argument("sweep", help="the multirun folder (logs/train/multiruns/<time>)")
-    parser.add_argument("--out", help="output CSV (default: SWEEP/summary.csv)")
+    parser.add_argument("--out", help="output CSV (default: SWEEP/summary.csv, which a run "
+                                      "of this command replaces)")
+    parser.add_argument("--overwrite", action="store_true",
+                        help="replace an existing --out file (never one of the sweep's own)")
     args = parser.parse_args(argv)
-    out = Path(args.out or Path(args.sweep) / "summary.csv")
+    default = Path(args.sweep) / "summary.csv"
+    out = Path(args.out or default)
     try:
         df = summarise(args.sweep)
         if out.is_dir() or (out.exists() and not out.is_file()):
             raise ValueError(f"--out = {str(out)!r} is not a regular file; give a .csv file "
                                  "name")
+        mine = resolved(out) == resolved(default)
+        if not mine and resolved(args.sweep) in resolved(out).parents:
+            raise ValueError(f"--out = {str(out)!r} lies in the sweep's folder, whose files "
+                             "this command reads; give a file outside it (or leave --out out: "
+                             f"{default})")
+        if not mine and out.exists() and not args.overwrite:
+            raise ValueError(f"--out = {str(out)!r} already exists: a file this command did "
+                             "not write is replaced only when asked; give another file name, "
+                             "or add --overwrite")
         check_writable(out.parent, "--out")
         atomic_write(out, lambda p: df.to_csv(p, index=False))
     except ValueError as err:

@@ -117,6 +117,22 @@ def test_summarise_lists_a_run_whose_records_cannot_be_read(tmp_path, capsys):
     code, err = _summarise(capsys, str(sweep), "--out", "/dev/full")
     assert code == 2 and err == ("error: --out = '/dev/full' is not a regular file; give a .csv "
                                  "file name\n")
+    # the default summary.csv is the command's own; another existing file only when asked, and
+    # never one of the sweep's files, which it reads
+    summarise_main([str(sweep)])
+    mine = tmp_path / "mine.csv"
+    mine.write_text("my own table\n")
+    code, err = _summarise(capsys, str(sweep), "--out", str(mine))
+    assert code == 2 and "already exists: a file this command did not write" in err, err
+    assert mine.read_text() == "my own table\n"
+    summarise_main([str(sweep), "--out", str(mine), "--overwrite"])
+    assert pd.read_csv(mine).status.tolist() == ["ok", "unreadable"]
+    before = (sweep / "0" / "metrics.json").read_text()
+    for inside in (sweep / "0" / "metrics.json", sweep / "1" / ".." / "0" / "new.csv"):
+        code, err = _summarise(capsys, str(sweep), "--out", str(inside), "--overwrite")
+        assert code == 2 and "lies in the sweep's folder" in err, err
+    assert (sweep / "0" / "metrics.json").read_text() == before
+    assert not (sweep / "0" / "new.csv").exists()
 
 
 # --- a full disk while predict writes -------------------------------------------------------------
