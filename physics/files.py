@@ -133,7 +133,8 @@ def lock_is_live(holder: dict) -> bool:
 def take_lock(path: str | os.PathLike, what: str, extra: dict | None = None) -> Path:
     """Create lock file ``path`` atomically (``O_CREAT | O_EXCL``) holding this process's pid,
     host and command line (and ``extra``). A lock left by a dead process on this host is taken
-    over with a warning; a live one raises ValueError naming its pid and the lock's path."""
+    over with a warning; a live one raises ValueError naming its pid and the lock's path; a
+    lock that cannot be written (a full disk) is removed and raised as :class:`WriteFailed`."""
     import json
     import logging
     import socket
@@ -157,8 +158,13 @@ def take_lock(path: str | os.PathLike, what: str, extra: dict | None = None) -> 
                 what, holder.get("pid"), holder.get("host"))
             path.unlink(missing_ok=True)
             continue
-        with os.fdopen(fd, "w") as f:
-            f.write(body + "\n")
+        try:
+            with os.fdopen(fd, "w") as f:
+                f.write(body + "\n")
+        except OSError as err:  # a full disk: no empty lock left for the next run to trip on
+            path.unlink(missing_ok=True)
+            raise WriteFailed(err.errno, f"the lock {path} of {what} could not be written "
+                                         f"({err.strerror or err})") from err
         return path
     raise ValueError(f"could not take the lock {path} of {what}; another run keeps taking it: "
                      "wait until it ends")

@@ -108,3 +108,32 @@ def test_acceptance_second_app_run_refused_in_one_line(tmp_path, other_process):
     assert len(lines) == 1 and f"pid {other_process}" in lines[0]
     assert str(out / "dataset.lock") in lines[0]
     assert not (out / "dataset_chunks").exists()
+
+
+def test_a_lock_that_cannot_be_written_is_removed_and_named(tmp_path, monkeypatch):
+    """A full disk as the lock's line is written: the lock is removed (no empty lock that the
+    next run takes for another run's) and the failure is a WriteFailed naming it, which the
+    apps end in one line."""
+    from physics.files import WriteFailed, take_lock
+
+    class Full:
+        def __init__(self, fd, mode):
+            os.close(fd)
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            return False
+
+        def write(self, text):
+            raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(os, "fdopen", Full)
+    lock = tmp_path / "d" / "dataset_case3.lock"
+    with pytest.raises(WriteFailed) as err:
+        take_lock(lock, "the dataset")
+    assert f"the lock {lock} of the dataset could not be written (No space left" in str(err.value)
+    assert not lock.exists()
+    monkeypatch.undo()
+    assert take_lock(lock, "the dataset") == lock and json.loads(lock.read_text())["pid"]
