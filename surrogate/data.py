@@ -189,9 +189,15 @@ class WearDataModule(L.LightningDataModule):
             if v is not None and v < lo:
                 raise ValueError(f"data.{name} = {v} must be >= {lo}")
         # a dataset built here holds the trained cases only (the main job stays short)
-        spec = {"cases": self.cases,
-                "replicates": replicates_per_case(int(gearboxes), len(self.cases)),
-                **dict(generate or {})}
+        per_case = replicates_per_case(int(gearboxes), len(self.cases))
+        if int(gearboxes) < MIN_REPLICATES and "replicates" not in (generate or {}):
+            log.warning("data.gearboxes = %d: a dataset built here simulates at least %d "
+                        "gearboxes per trained case (fewer scatter a network's error on new "
+                        "gearboxes over seeds), %d in all for %d case(s); "
+                        "+data.generate.replicates=N sets the count per case itself",
+                        int(gearboxes), MIN_REPLICATES, per_case * len(self.cases),
+                        len(self.cases))
+        spec = {"cases": self.cases, "replicates": per_case, **dict(generate or {})}
         if "chunks" not in spec:  # a user's count wins; the spec's checks come first
             work = spec_from_config(spec | {"chunks": 1}).units
             spec["chunks"] = min(BUILD_CHUNKS, work)

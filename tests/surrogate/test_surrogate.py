@@ -183,6 +183,25 @@ def test_a_built_dataset_holds_enough_gearboxes_and_a_sixth_validates(tmp_path):
     assert dm.generate["chunks"] == BUILD_CHUNKS  # many chunks: both processes busy to the end
     cfg = train_cfg(tmp_path, tmp_path / "x.parquet", "case=3", "+data.generate.chunks=3")
     assert instantiate(cfg.data).generate["chunks"] == 3  # a user's count wins
+
+
+def test_fewer_gearboxes_than_the_floor_are_said_not_built_silently(tmp_path, caplog):
+    """``data.gearboxes`` below the 128 per case a built dataset simulates: the run says how
+    many it builds instead; the default (256) and an explicit count per case say nothing."""
+    with caplog.at_level("WARNING", logger="surrogate.data"):
+        dm = instantiate(train_cfg(tmp_path, tmp_path / "x.parquet", "case=3",
+                                   "data.gearboxes=4").data)
+    assert dm.generate["replicates"] == 128
+    (line,) = [r.getMessage() for r in caplog.records]
+    assert line.startswith("data.gearboxes = 4: a dataset built here simulates at least 128 "
+                           "gearboxes per trained case"), line
+    caplog.clear()
+    with caplog.at_level("WARNING", logger="surrogate.data"):
+        instantiate(train_cfg(tmp_path, tmp_path / "x.parquet", "case=3").data)
+        instantiate(train_cfg(tmp_path, tmp_path / "x.parquet", "case=3", "data.gearboxes=4",
+                              "+data.generate.replicates=8", "data.test_replicates=1",
+                              "data.val_replicates=1").data)
+    assert not caplog.records
     cfg = train_cfg(tmp_path, tmp_path / "x.parquet", "case=3", "+data.generate.replicates=0")
     with pytest.raises(Exception, match=r"data\.replicates = 0 must"):  # not a chunks error
         instantiate(cfg.data)
