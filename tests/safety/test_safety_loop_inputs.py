@@ -342,3 +342,11 @@ def test_settings_a_feature_table_does_not_use_are_refused_not_ignored():
     with pytest.raises(ValueError, match=r"loop.explore, loop.refine: .* these settings"):
         check_table_settings({"loop.refine", "loop.explore"})
     assert set(BUNDLE_SETTINGS) < {f.name for f in dataclasses.fields(LoopSettings)}
+
+
+def test_the_docs_state_the_acceleration_bound_the_loop_applies():
+    """docs/own-data.md quotes the bound of a record's acceleration RMS as the code holds it."""
+    from physics.loop.measured.bundle import MAX_ACCEL_RMS
+
+    text = " ".join((Path(__file__).parents[2] / "docs" / "own-data.md").read_text().split())
+    assert text.count(f"{MAX_ACCEL_RMS:.0f} m/s^2") == 2 and "1e4 m/s^2" not in text
