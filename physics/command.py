@@ -295,7 +295,11 @@ def entry(task: Callable[[], Any], check: Callable[[DictConfig], Any] | str | No
         except ValueError as err:
             print(f"error: {err}", file=sys.stderr)
             raise SystemExit(2) from None
-        return interrupt.guard(task, undo=_undo_unstarted)
+        try:
+            return interrupt.guard(task, undo=_undo_unstarted)
+        except BrokenPipeError:  # the reader of the output left (python train.py --help | head)
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no flush error
+            raise SystemExit(1) from None
 
     main.__doc__ = task.__doc__
     return main

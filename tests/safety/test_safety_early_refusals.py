@@ -124,3 +124,15 @@ def test_a_setting_without_default_left_out_is_one_line_naming_it(tmp_path, app,
     (line,) = [ln for ln in run.stderr.splitlines() if ln.startswith("error:")]
     assert line.startswith(f"error: {key} is not given and has no default: give {key}=")
     assert not list(tmp_path.iterdir()), sorted(tmp_path.rglob("*"))
+
+
+def test_help_whose_reader_left_ends_without_a_traceback():
+    """``python train.py --help | head -1``: the reader leaves before the help is printed
+    (here: before the command starts, so the write always fails); the command ends quietly,
+    exit 1 (it was a BrokenPipeError traceback)."""
+    proc = subprocess.Popen([sys.executable, "train.py", "--help"], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, cwd=ROOT)
+    proc.stdout.close()
+    err = proc.stderr.read()
+    assert proc.wait(timeout=300) == 1, err
+    assert "Traceback" not in err and "BrokenPipe" not in err, err
