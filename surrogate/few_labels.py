@@ -147,6 +147,10 @@ def few_label_study(records: pd.DataFrame, comparison: pd.DataFrame, labelled: i
     if labelled < 2:
         raise ValueError(f"labelled = {labelled}: the readers fit two numbers; give at least 2 "
                          "labelled worn stages (the healthy one is labelled besides)")
+    if not (records.wear_mm == 0).any():
+        raise ValueError(f"the rig's records hold no healthy stage (wear_mm 0) among their "
+                         f"{len(records)} rows: every reading is over the healthy stage's RMS; "
+                         "give the rig's whole record table")
     healthy = records.loc[records.wear_mm == 0, "acc_rms_g"].mean()
     worn = records[records.wear_mm > 0]
     means = worn.groupby("stage", sort=False).agg(wear_mm=("wear_mm", "first"),

@@ -54,6 +54,10 @@ def test_outputs_and_options_it_cannot_honour_are_refused(tmp_path, capsys):
     io.mkdir()
     (io / "few_labels.csv").write_bytes(CURVES.read_bytes())
     (tmp_path / "afile").write_text("mine")
+    empty = tmp_path / "empty.csv"
+    empty.write_text("stage,wear_mm,acc_rms_g\n")
+    worn = tmp_path / "worn.csv"
+    worn.write_text("stage,wear_mm,acc_rms_g\nW1,0.1,0.2\nW2,0.9,0.3\n")
     tries = {
         ("--few-labels-only", "--out", str(io), "--rig-comparison", str(io / "few_labels.csv")):
             "is a file this run writes",
@@ -62,6 +66,10 @@ def test_outputs_and_options_it_cannot_honour_are_refused(tmp_path, capsys):
         ("--few-labels-only", "--out", str(tmp_path / "o"), "--real-rig", str(CURVES)):
             "columns ['acc_rms_g'] are missing",
         ("--few-labels-only", "--real-rig-only"): "give one of them",
+        ("--few-labels-only", "--out", str(tmp_path / "o"), "--real-rig", str(empty)):
+            "holds a header and no rows",
+        ("--few-labels-only", "--out", str(tmp_path / "o"), "--real-rig", str(worn)):
+            "hold no healthy stage (wear_mm 0) among their 2 rows",
         ("--rig-comparison", str(CURVES)): "is read by --few-labels-only alone"}
     for argv, message in tries.items():
         with pytest.raises(SystemExit) as end:
