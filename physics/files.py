@@ -379,4 +379,18 @@ def repeated_header(path: str | Path) -> list[str]:
             return []
     else:
         return []
+    return repeated(names)
+
+
+def repeated(names: Iterable) -> list:
+    """The names that stand more than once in ``names`` (column labels), sorted."""
+    names = list(names)
     return sorted({n for n in names if names.count(n) > 1})
+
+
+def check_unrepeated(path: str | Path, where: str) -> None:
+    """Refuse (ValueError, one line starting with ``where``) a table file whose header names a
+    column more than once (:func:`repeated_header`)."""
+    twice = repeated_header(path)
+    if twice:
+        raise ValueError(f"{where} has column(s) {twice} more than once; keep one of each")

@@ -100,11 +100,11 @@ from physics.dynamics.model_form import FACTORS
 from physics.estimators.empirical_inverse import EmpiricalInverse, wear_errors
 from physics.files import (
     atomic_write,
+    check_unrepeated,
     check_writable,
     existing_file,
     pyplot,
     read_csv_table,
-    repeated_header,
 )
 from physics.params import Dynamics
 from physics.reference import RIG_RECORDS
@@ -873,10 +873,7 @@ def main(argv: list[str] | None = None) -> None:
             curves = read_csv_table(comparison, "--rig-comparison",
                                     "give the rig_comparison.csv of python -m "
                                     "physics.reproduce.rig", columns=("wear_mm",))
-            twice = repeated_header(comparison)
-            if twice:
-                raise ValueError(f"--rig-comparison {comparison} has column(s) {twice} more "
-                                 "than once; keep one of each")
+            check_unrepeated(comparison, f"--rig-comparison {comparison}")
             few_labels.check_comparison(curves, records, f"--rig-comparison {comparison}")
             table = few_labels.summary(draws := few_labels.few_label_study(records, curves))
         except ValueError as err:

@@ -34,6 +34,7 @@ from physics.dataset.generation import (
     spec_from_config,
 )
 from physics.dataset.generation import units as dataset_units
+from physics.files import repeated
 from physics.params import Scenario, operating_cases
 from surrogate.inputs import (
     CONDITIONS,
@@ -166,9 +167,9 @@ class WearDataModule(L.LightningDataModule):
                              "for the default inputs of data.sensors")
         self.inputs = (list(inputs) if inputs is not None else
                        input_columns(list(sensors), operating_point, baseline))
-        repeated = sorted({c for c in self.inputs if self.inputs.count(c) > 1})
-        if repeated:
-            raise ValueError(f"data.inputs = {self.inputs} names {repeated} more than once: each "
+        twice = repeated(self.inputs)
+        if twice:
+            raise ValueError(f"data.inputs = {self.inputs} names {twice} more than once: each "
                              "input is one column of the network; name each column once")
         self.target = target or ("mean_wear_mm" if baseline else "root_wear_mm")
         if self.target in self.inputs:

@@ -39,7 +39,7 @@ import pandas as pd
 from omegaconf import DictConfig
 
 from physics.command import entry, run_command
-from physics.files import atomic_write, check_writable, existing_file, repeated_header
+from physics.files import atomic_write, check_unrepeated, check_writable, existing_file
 from surrogate.inference import Surrogate, check_gearboxes, gearbox_columns
 from surrogate.novelty import envelope_report
 
@@ -50,9 +50,7 @@ def read_table(path: str | Path) -> pd.DataFrame:
     path = existing_file(path, "input", "pass a CSV or parquet feature table")
     if path.suffix not in (".parquet", ".csv"):
         raise ValueError(f"input = {path}: use a .csv or .parquet file")
-    twice = repeated_header(path)
-    if twice:
-        raise ValueError(f"input = {path} has column(s) {twice} more than once; keep one of each")
+    check_unrepeated(path, f"input = {path}")
     try:
         return pd.read_parquet(path) if path.suffix == ".parquet" else pd.read_csv(path)
     except (pd.errors.EmptyDataError, pd.errors.ParserError, UnicodeDecodeError,

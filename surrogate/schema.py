@@ -9,6 +9,7 @@ import numpy as np
 import pandas as pd
 
 from physics.dataset.generation import NUISANCE_COLUMNS
+from physics.files import repeated
 from physics.signals.order_analysis import VECTOR_PARTS
 
 SCHEMA_VERSION = 2
@@ -158,7 +159,7 @@ class FeatureSchema:
         value, or a column whose values lie orders of magnitude outside the training envelope
         (a unit error, e.g. micrometres given for metres).
         """
-        twice = sorted(set(df.columns[df.columns.duplicated()]))
+        twice = repeated(df.columns)
         if twice:
             raise ValueError(f"input has column(s) {twice} more than once; keep one of each")
         missing = [c for c in self.inputs if c not in df.columns]

@@ -14,7 +14,7 @@ import numpy as np
 import pandas as pd
 
 from physics.dataset.generation import units as dataset_units
-from physics.files import existing_file, repeated_header
+from physics.files import check_unrepeated, existing_file, repeated
 from surrogate.inputs import CONDITIONS
 from surrogate.schema import vector_parts
 
@@ -175,10 +175,7 @@ def read_user_table(path: str | Path, columns: dict[str, str]) -> pd.DataFrame:
     path = existing_file(path, "data.table", "give your .csv or .parquet table")
     if path.suffix not in (".csv", ".parquet"):
         raise ValueError(f"data.table = {str(path)!r} must be an existing .csv or .parquet file")
-    twice = repeated_header(path)
-    if twice:
-        raise ValueError(f"data.table = {path} has column(s) {twice} more than once; keep one "
-                         "of each")
+    check_unrepeated(path, f"data.table = {path}")
     try:
         df = pd.read_parquet(path) if path.suffix == ".parquet" else pd.read_csv(path)
     except (pd.errors.EmptyDataError, pd.errors.ParserError, UnicodeDecodeError,
@@ -188,7 +185,7 @@ def read_user_table(path: str | Path, columns: dict[str, str]) -> pd.DataFrame:
     if unknown:
         raise ValueError(f"data.columns names {unknown}, which {path} does not have")
     df = df.rename(columns=columns)
-    twice = sorted(set(df.columns[df.columns.duplicated()]))
+    twice = repeated(df.columns)
     if twice:
         raise ValueError(f"{path} has column(s) {twice} more than once (after data.columns); "
                          "keep one of each")
