@@ -42,7 +42,7 @@ from omegaconf import DictConfig, OmegaConf, open_dict, read_write
 from omegaconf.errors import MissingMandatoryValue
 
 from physics import interrupt
-from physics.files import WriteFailed, check_writable
+from physics.files import WriteFailed, check_writable, resolved
 from physics.params import OutOfScope, check_case
 
 Plan = TypeVar("Plan")
@@ -111,6 +111,7 @@ class RunRecord(Callback):
     def on_run_start(self, config: DictConfig, **kwargs: Any) -> None:
         global _RUN_DIR
         _RUN_DIR = Path(str(config.hydra.run.dir))
+        check_single_run(config)
         check_run_folder(_RUN_DIR, "hydra.run.dir")
         _record_before(_RUN_DIR)
 
@@ -125,8 +126,7 @@ class RunRecord(Callback):
             interrupt.quiet_workers()
         check_sweep(config)  # every job's config, before the first starts
         sweep = Path(str(config.hydra.sweep.dir))
-        interrupt.note(lambda: f"the sweep's finished jobs are kept in {sweep}; run the jobs "
-                               "that did not finish again")
+        interrupt.note(lambda: sweep_kept(sweep))
 
     def on_job_end(self, config: DictConfig, job_return: Any, **kwargs: Any) -> None:
         """A failed job of a basic sweep is recorded and reported at the sweep's end: the
@@ -150,11 +150,28 @@ class RunRecord(Callback):
             raise SystemExit(1)
 
 
+def check_single_run(config: DictConfig) -> None:
+    """End a single run (one line, exit code 2, before Hydra makes its folder) whose command
+    line chooses a launcher or a sweeper (``hydra/launcher=cluster``, ``hydra.sweeper.*``):
+    they act on sweeps only (``-m``), so the run went on here without them, unsaid."""
+    given = [str(o) for o in (config.hydra.get("overrides", {}).get("hydra") or [])]
+    sweep_only = [o for o in given if o.lstrip("+~").startswith(
+        ("hydra/launcher", "hydra/sweeper", "hydra.launcher.", "hydra.sweeper."))]
+    if sweep_only:
+        print(f"error: {sweep_only[0]} sets how a sweep's jobs run (-m), and this is a single "
+              "run, which runs here without it: add -m to run it as a sweep (of one job, or "
+              "more), or drop the setting", file=sys.stderr)
+        raise SystemExit(2)
+
+
 def check_run_folder(folder: Path, key: str) -> None:
     """End the app (one line, exit code 2) where its run folder ``folder`` (``key``:
     ``hydra.run.dir``, or ``hydra.sweep.dir`` with ``-m``; under the working folder by default)
     cannot be made, before Hydra makes it: from a read-only working folder Hydra's own attempt
-    ended in a PermissionError traceback. Called by :class:`RunRecord` for every app."""
+    ended in a PermissionError traceback; or where it already holds anything (a folder the user
+    chose, an earlier run's): Hydra's record, the log and the results would go among files this
+    run did not make, and replace those of the same name. Called by :class:`RunRecord` for every
+    app."""
     try:
         check_writable(folder, key)
     except ValueError as err:
@@ -163,6 +180,15 @@ def check_run_folder(folder: Path, key: str) -> None:
               f"run from a folder you can write to, or give {key}=<such a folder>",
               file=sys.stderr)
         raise SystemExit(2) from None
+    real = resolved(folder)
+    held = sorted(p.name for p in real.iterdir()) if real.is_dir() else []
+    if held:  # a folder a user chose (or an earlier run's): its files are not this run's
+        more = f" and {len(held) - 1} more" if len(held) > 1 else ""
+        print(f"error: {key} = {str(folder)!r} already holds {held[0]}{more}: this run writes "
+              f"its files (.hydra/, its log, its results) there and would replace files it did "
+              f"not make; give {key} a new or empty folder, or leave {key} out (each run then "
+              "gets its own)", file=sys.stderr)
+        raise SystemExit(2)
 
 
 def _record_of(folder: Path) -> dict[Path, frozenset[str] | None] | None:
@@ -233,7 +259,7 @@ def run_command(cfg: DictConfig, prepare: Callable[[DictConfig], Plan],
     folder = _run_folder()
     job = _sweep_job()
     if job is not None and folder is not None:
-        (folder / FAILED).unlink(missing_ok=True)  # a record of an earlier sweep in this folder
+        (folder / FAILED).unlink(missing_ok=True)  # an earlier job's sharing its folder
     try:
         check_keys(cfg)
         check_case(cfg, _command_line_keys())
@@ -307,29 +333,59 @@ def entry(task: Callable[[], Any], check: Callable[[DictConfig], Any] | str | No
 
 def check_spelling(argv: list[str]) -> None:
     """Refuse (ValueError, one line) a command-line override that Hydra's grammar cannot read
-    because it holds a character beyond ASCII unquoted (a path ``data.table=/tmp/mé.csv``), with
-    the way to write it: Hydra's own error names its lexer and no fix. Other overrides, and
-    other errors, are left to Hydra."""
+    but would read quoted: a value holding a character beyond ASCII (a path
+    ``data.table=/tmp/mé.csv``) or one of the grammar's own (``data.table=a(1).csv``, ``=``,
+    a quote), with the way to write it: Hydra's own error names its lexer and no fix. A key
+    beyond ASCII is refused with the rule for keys. Other overrides, and other errors, are
+    left to Hydra."""
     from hydra.core.override_parser.overrides_parser import OverridesParser
     from hydra.errors import OverrideParseException
 
     parser = OverridesParser.create()
-    for arg in argv:
-        if arg.startswith("-") or "=" not in arg or arg.isascii():
-            continue
+
+    def reads(override: str) -> bool:
         try:
-            parser.parse_overrides([arg])
+            parser.parse_overrides([override])
         except OverrideParseException:
-            key, _, value = arg.partition("=")
-            if not key.isascii():
-                key = key.lstrip("+~")
-                raise ValueError(f"{arg}: the key {key!r} holds a character beyond ASCII, which "
-                                 "no key given on the command line may hold (letters a-z, "
-                                 "digits, '_', '-', '.'); rename that column in your table"
-                                 ) from None
-            raise ValueError(f"{arg}: a value holding a character beyond ASCII must be quoted "
-                             f"for Hydra: {key}='{value}' (in the shell: \"{key}='{value}'\"; "
-                             "in a list, each such item: [a,'é'])") from None
+            return False
+        return True
+
+    for arg in argv:
+        if arg.startswith("-") or "=" not in arg or reads(arg):
+            continue
+        key, _, value = arg.partition("=")
+        if not key.isascii():
+            key = key.lstrip("+~")
+            raise ValueError(f"{arg}: the key {key!r} holds a character beyond ASCII, which "
+                             "no key given on the command line may hold (letters a-z, "
+                             "digits, '_', '-', '.'); rename that column in your table")
+        if value.startswith(("[", "{")):
+            if not value.isascii():
+                raise ValueError(f"{arg}: an item holding a character beyond ASCII must be "
+                                 f"quoted for Hydra, each such item: {key}=[a,'é'] (in the "
+                                 f"shell: \"{key}=[a,'é']\")")
+            continue
+        quote = '"' if "'" in value else "'"
+        if ('"' in value and "'" in value) or not reads(f"{key}={quote}{value}{quote}"):
+            continue
+        odd = sorted({c for c in value if not c.isascii() or not (c.isalnum() or c in SAFE)})
+        shown = " ".join(repr(c) for c in odd)
+        raise ValueError(f"{arg}: the value holds {shown}, which Hydra's override grammar "
+                         f"reads as its own or cannot read unquoted; quote the value: "
+                         f"{key}={quote}{value}{quote} (in the shell: "
+                         f"{_shell(f'{key}={quote}{value}{quote}')})")
+
+
+#: characters an unquoted override value may hold besides letters and digits
+SAFE = "_-./:+~@%*?^"
+
+
+def _shell(text: str) -> str:
+    """``text`` as one word for a POSIX shell: in double quotes where none of them would
+    change it, else as :func:`shlex.quote` writes it."""
+    import shlex
+
+    return f'"{text}"' if not any(c in text for c in '$`"\\!') else shlex.quote(text)
 
 
 #: the folder of this single run (RunRecord.on_run_start), and whether its work has started
@@ -476,6 +532,21 @@ def check_sweep(config: DictConfig) -> None:
                 raise SystemExit(2) from None
     finally:
         HydraConfig.instance().cfg = saved
+
+
+def sweep_kept(sweep: Path) -> str:
+    """What an interrupted sweep keeps, said truly: none of its jobs' folders made yet (an
+    interrupt before the first job), or how many of them there are in ``sweep``."""
+    folders = ([j.folder for j in _JOBS] if _JOBS else
+               [p for p in sweep.iterdir() if p.is_dir() and p.name != ".hydra"]
+               if sweep.is_dir() else [])
+    started = [f for f in folders if f.is_dir()]
+    if not started:
+        return "no job of the sweep had started; nothing was computed"
+    of = f" of {len(_JOBS)}" if _JOBS else ""
+    return (f"{len(started)}{of} of the sweep's jobs had started; their folders are kept in "
+            f"{sweep} (one stopped mid-run keeps what it had written); run the jobs that did "
+            "not finish again, into a new hydra.sweep.dir")
 
 
 def sweep_summary() -> str | None:

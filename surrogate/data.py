@@ -29,6 +29,7 @@ from torch.utils.data import BatchSampler, DataLoader, RandomSampler, TensorData
 from physics.dataset.generation import (
     DatasetJob,
     build_dataset,
+    check_not_users,
     dataset_digest,
     plan_dataset,
     spec_from_config,
@@ -128,6 +129,7 @@ def load_dataset(path: str | Path, spec: dict | None = None, jobs: int = 2) -> p
     path = Path(path)
     job = dataset_job(path, spec, jobs)
     if not path.is_file():
+        check_not_users(job, "the folder of data.dataset")
         log.info("dataset %s missing: generating it (physics.dataset, %d jobs)", path, jobs)
         build_dataset(job)
     elif (diff := stale_dataset(path, job)) is not None:
@@ -229,8 +231,9 @@ class WearDataModule(L.LightningDataModule):
                                  "(data.table=...); the physics dataset is split by "
                                  "data.test_replicates, data.val_replicates and "
                                  "data.holdout_case")
-            if not Path(self.dataset).is_file():
-                dataset_job(self.dataset, self.generate, self.jobs)  # checks the build
+            if not Path(self.dataset).is_file():  # checks the build: its settings, its files
+                check_not_users(dataset_job(self.dataset, self.generate, self.jobs),
+                                "the folder of data.dataset")
             self.check_dataset_columns_and_split()
         self.schema: FeatureSchema | None = None
         self.frames: dict[str, pd.DataFrame] = {}

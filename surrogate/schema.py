@@ -155,9 +155,10 @@ class FeatureSchema:
     def check(self, df: pd.DataFrame) -> np.ndarray:
         """The input matrix of ``df``, after checking its columns, values and units.
 
-        Raises ``ValueError`` for a missing or repeated column, a non-numeric, NaN or infinite
-        value, or a column whose values lie orders of magnitude outside the training envelope
-        (a unit error, e.g. micrometres given for metres).
+        Raises ``ValueError`` for a missing or repeated column, a value that is not a real
+        number (:func:`check_numbers`), a NaN or infinite one, or a column whose values lie
+        orders of magnitude outside the training envelope (a unit error, e.g. micrometres given
+        for metres).
         """
         twice = repeated(df.columns)
         if twice:
@@ -169,17 +170,15 @@ class FeatureSchema:
                              "(column: unit)")
         if len(df) == 0:
             raise ValueError("input has no rows")
-        try:
-            x = df[list(self.inputs)].to_numpy(float)
-        except ValueError as err:
-            raise ValueError(f"input columns must be numeric: {err}") from None
+        check_numbers(df, self.inputs)
+        x = df[list(self.inputs)].to_numpy(float)
         bad = ~np.isfinite(x)
         if bad.any():
             r, c = np.argwhere(bad)[0]
             name = self.inputs[c]
             shown = (f"{name} (its parts {vector_parts(name)})" if name in self.vectors
                      else name)
-            raise ValueError(f"row {r} column {shown} is {x[r, c]}: every input must "
+            raise ValueError(f"row {r + 1} column {shown} is {x[r, c]}: every input must "
                              "be finite; drop or repair such rows" + (
                                  " (read against the first record: the change since the "
                                  "gearbox's "
@@ -206,7 +205,7 @@ class FeatureSchema:
         if far.any():
             r, j = np.argwhere(far)[0]
             raise ValueError(
-                f"row {r} column {self.inputs[j]} is {x[r, j]:.4g}, more than {factor[j]:g} "
+                f"row {r + 1} column {self.inputs[j]} is {x[r, j]:.4g}, more than {factor[j]:g} "
                 f"times the training range [{self.low[j]:.3g}, {self.high[j]:.3g}] "
                 f"{self.units[j]}: a unit or transcription error; repair or drop the row")
         return x
@@ -311,6 +310,39 @@ def vector_inputs(inputs: list[str], columns: list[str]) -> tuple[str, ...]:
     :func:`physics.signals.order_analysis.mesh_lines`)."""
     have = set(columns)
     return tuple(c for c in inputs if c not in have and set(vector_parts(c)) <= have)
+
+
+def check_numbers(df: pd.DataFrame, columns) -> None:
+    """Refuse (ValueError naming the row, counted from 1 without the header, the column and the
+    cell) a cell of ``columns`` of ``df`` that is not a real number: text (``'abc'``), a
+    complex number with an imaginary part (read as a float it would keep its real part alone)
+    or a boolean (read as 0 or 1). Empty cells (NaN) are left to the finiteness check."""
+    for c in columns:
+        if c not in df.columns or df[c].dtype.kind in "iuf":
+            continue
+        col = df[c].to_numpy(object)
+        why = [_not_real(v) for v in col]
+        bad = [i for i, w in enumerate(why) if w]
+        if bad:
+            r = bad[0]
+            raise ValueError(f"row {r + 1} column {c} is {col[r]!r}: {why[r]}; every input "
+                             "must be a real number: repair the cell or drop the row")
+
+
+def _not_real(v: object) -> str:
+    """Why a table cell ``v`` is neither empty nor a real number ('' where it is one)."""
+    if isinstance(v, (bool, np.bool_)):
+        return "a boolean (it would be read as 0 or 1), not a number"
+    if isinstance(v, (complex, np.complexfloating)):
+        return ("" if v.imag == 0 else "a complex number: give its magnitude (or the part "
+                "the model was trained on)")
+    if v is None or (isinstance(v, float) and np.isnan(v)):
+        return ""
+    try:
+        float(v)
+    except (TypeError, ValueError):
+        return "not a real number"
+    return ""
 
 
 def vector_parts(name: str) -> list[str]:

@@ -72,7 +72,8 @@ def test_without_a_record_nothing_is_removed(tmp_path):
 
 
 def test_refused_loop_run_in_the_working_folder_keeps_the_users_files(tmp_path):
-    """The app as typed: ``hydra.run.dir=.`` in a folder holding the user's notebook."""
+    """The app as typed: ``hydra.run.dir=.`` in a folder holding the user's notebook is refused
+    before Hydra writes there; in an empty one, a refused run leaves it empty."""
     man = pd.DataFrame({"record": ["r0", "r1", "r2"], "quantity": "dte_m", "fs_hz": 40960.0,
                         "n1_rpm": 2000.0, "torque_Nm": 300.0, "wear_mm": [0.0, 0.005, 0.01],
                         "cycles": "", "split": ""})
@@ -86,9 +87,16 @@ def test_refused_loop_run_in_the_working_folder_keeps_the_users_files(tmp_path):
                           "hydra.run.dir=."], cwd=work, capture_output=True, text=True,
                          timeout=120)
     assert run.returncode == 2, run.stderr
-    assert "non-finite sample" in run.stderr and "Traceback" not in run.stderr
+    assert "hydra.run.dir = '.' already holds notebook.log" in run.stderr, run.stderr
     assert [p.name for p in work.iterdir()] == ["notebook.log"]
     assert (work / "notebook.log").read_text() == "notes"
+    (work / "notebook.log").unlink()  # an empty folder is taken; the refused run leaves it so
+    run = subprocess.run([sys.executable, "-m", "physics.loop", f"data={data}",
+                          "hydra.run.dir=."], cwd=work, capture_output=True, text=True,
+                         timeout=120)
+    assert run.returncode == 2, run.stderr
+    assert "non-finite sample" in run.stderr and "Traceback" not in run.stderr
+    assert not list(work.iterdir())
 
 
 @dataclasses.dataclass

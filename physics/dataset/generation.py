@@ -541,14 +541,28 @@ def lock_path(job: DatasetJob) -> Path:
 
 def check_not_users(job: DatasetJob, out_key: str = "out_dir") -> None:
     """Refuse, before work, a build that would replace a dataset file it did not make: a
-    ``<name>.parquet`` or ``<name>_signals.npy`` in the output folder without the
-    ``<name>.json`` every build writes beside them is the user's own."""
+    ``<name>.parquet``, ``<name>_signals.npy`` or ``<name>.json`` in the output folder is the
+    user's own unless the ``<name>.json`` beside it is the record every build writes (a JSON
+    object with this app's ``hash`` and ``schema_version``)."""
     record = job.out / f"{job.name}.json"
-    for ours in (job.out / f"{job.name}.parquet", job.out / f"{job.name}_signals.npy"):
-        if job.merge and ours.exists() and not record.is_file():
-            raise ValueError(f"{out_key} = {str(job.out)!r} already holds {ours.name}, which no "
-                             f"build of this app made (no {record.name} beside it) and this "
-                             "one would replace; choose another out_dir or name, or move it")
+    files = (job.out / f"{job.name}.parquet", job.out / f"{job.name}_signals.npy", record)
+    found = [f for f in files if f.exists()]
+    if not job.merge or not found or _built_here(record):
+        return
+    why = (f"no build of this app made it ({record.name} is not its record)" if record.exists()
+           else f"no build of this app made it (no {record.name} beside it)")
+    raise ValueError(f"{out_key} = {str(job.out)!r} already holds {found[0].name}, which "
+                     f"this build would replace: {why}; choose another folder or name, or move "
+                     "it")
+
+
+def _built_here(record: Path) -> bool:
+    """Whether ``record`` is the ``<name>.json`` a build of this app wrote."""
+    try:
+        data = json.loads(record.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False
+    return isinstance(data, dict) and {"hash", "schema_version"} <= data.keys()
 
 
 def acquire_output(job: DatasetJob) -> Path:

@@ -230,6 +230,27 @@ def test_predict_names_a_table_that_is_no_data_frame(model, value):
         s.predict(value)
 
 
+@pytest.mark.parametrize(("cell", "said"), [
+    (complex(0.02, 0.01), r"is \(0\.02\+0\.01j\): a complex number"),
+    ("abc", r"is 'abc': not a real number"),
+    (True, r"is True: a boolean"),
+])
+def test_predict_names_the_row_and_column_of_a_cell_that_is_no_real_number(model, cell, said):
+    """A complex feature (whose real part alone a float conversion would keep, without a word),
+    a text or a boolean cell: refused naming the row (counted from 1) and the column."""
+    s = Surrogate.load(model)
+    df = table().drop(columns="rig")
+    col = s.schema.columns[0]
+    bad = df.astype({col: object})
+    bad.loc[2, col] = cell
+    with pytest.raises(ValueError, match=rf"^row 3 column {col} {said}"):
+        s.predict(bad)
+    whole = df.astype({col: complex}).assign(**{col: df[col] + 1j})
+    with pytest.raises(ValueError, match=rf"^row 1 column {col} is .*a complex number"):
+        s.predict(whole)
+    assert len(s.predict(df.astype({col: complex}))) == len(df)  # no imaginary part: its value
+
+
 def test_the_api_never_writes_over_its_input(model, tmp_path):
     """predict_file, like the command, never replaces its input table, and another existing
     file only with ``overwrite``."""
@@ -301,9 +322,12 @@ def test_an_unquoted_value_beyond_ascii_gets_the_way_to_quote_it(tmp_path):
     with pytest.raises(ValueError) as err:
         check_spelling(["case=3", "data.table=/tmp/mé.csv"])
     assert str(err.value) == (
-        "data.table=/tmp/mé.csv: a value holding a character beyond ASCII must be quoted for "
-        "Hydra: data.table='/tmp/mé.csv' (in the shell: \"data.table='/tmp/mé.csv'\"; in a "
-        "list, each such item: [a,'é'])")
+        "data.table=/tmp/mé.csv: the value holds 'é', which Hydra's override grammar reads as "
+        "its own or cannot read unquoted; quote the value: data.table='/tmp/mé.csv' (in the "
+        "shell: \"data.table='/tmp/mé.csv'\")")
+    with pytest.raises(ValueError, match=r"^data\.inputs=\[a,é\]: an item holding a character "
+                                         r"beyond ASCII must be quoted"):
+        check_spelling(["data.inputs=[a,é]"])
     with pytest.raises(ValueError, match=r"the key 'data.columns.Weg_ü' holds a character "
                                          r"beyond ASCII"):
         check_spelling(["+data.columns.Weg_ü=dte_kurtosis"])
@@ -311,10 +335,27 @@ def test_an_unquoted_value_beyond_ascii_gets_the_way_to_quote_it(tmp_path):
                           "input=x.csv"], cwd=tmp_path, capture_output=True, text=True,
                          timeout=300, env=ENV)
     assert run.returncode == 2 and run.stderr.splitlines() == [
-        "error: ckpt=/tmp/mé.pt: a value holding a character beyond ASCII must be quoted for "
-        "Hydra: ckpt='/tmp/mé.pt' (in the shell: \"ckpt='/tmp/mé.pt'\"; in a list, each such "
-        "item: [a,'é'])"], run.stderr
+        "error: ckpt=/tmp/mé.pt: the value holds 'é', which Hydra's override grammar reads as "
+        "its own or cannot read unquoted; quote the value: ckpt='/tmp/mé.pt' (in the shell: "
+        "\"ckpt='/tmp/mé.pt'\")"], run.stderr
     assert not any(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize(("arg", "odd"), [("data.table=a(1).csv", "'(' ')'"),
+                                          ("input=v{2}.csv", "'{' '}'"),
+                                          ("ckpt=x=1.pt", "'='"),
+                                          ("output=it's.csv", "\"'\"")])
+def test_an_unquoted_value_with_the_grammar_s_own_characters_gets_the_way_to_quote_it(arg, odd):
+    """ASCII characters Hydra's grammar reads as its own (parentheses, braces, '=', a quote)
+    in a value: the way to quote it, not the lexer's text; the quoted form is read."""
+    with pytest.raises(ValueError) as err:
+        check_spelling([arg])
+    key, _, value = arg.partition("=")
+    q = '"' if "'" in value else "'"
+    assert str(err.value).startswith(f"{arg}: the value holds {odd}, which Hydra's override "
+                                     f"grammar reads as its own or cannot read unquoted; quote "
+                                     f"the value: {key}={q}{value}{q} (in the shell: "), err.value
+    check_spelling([f"{key}={q}{value}{q}", "data.inputs=[a,b]", "x=[1,2]", "+y={a: 1}"])
 
 
 def test_a_binary_units_sidecar_is_named(tmp_path):

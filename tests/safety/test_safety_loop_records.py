@@ -293,3 +293,26 @@ def test_negative_cycles_in_a_table_are_refused(tmp_path):
     text = "cycles," + TABLE.replace("\n0", "\n-5,0", 1).replace("\n0.0", "\n1,0.0")
     with pytest.raises(ValueError, match=r"row 1, column 'cycles' = -5 must be >= 0"):
         check_table(_table(tmp_path, text), Scenario())
+
+
+def test_a_stated_wear_the_model_does_not_reach_at_the_stated_cycles_is_said(caplog):
+    """A record stating both cycles and wear_mm is read at its cycles; where the stated depth
+    is far from the model's there (1.0 mm against about 10 um, or worn at 0 cycles) the run
+    says so, naming the record and both depths, instead of ignoring the stated wear."""
+    from physics.loop.measured.worn_states import WearHistory, check_stated_wear
+
+    s = np.linspace(0.0, 1.0, 5)
+    pinion = np.array([[0.0] * 5, [10e-6] * 5, [20e-6] * 5])  # 10 um per 1e6 cycles
+    h = WearHistory(s, np.array([0.0, 1e6, 2e6]), pinion, np.zeros_like(pinion))
+    rows = pd.DataFrame({"record": ["a", "b", "c", "d"], "cycles": [1e6, 1e6, 2e6, np.nan],
+                         "wear_mm": [1.0, 0.012, np.nan, 0.5]})
+    with caplog.at_level("WARNING"):
+        said = check_stated_wear(h, rows)
+    assert len(said) == 1 and said[0].startswith("record 'a': wear_mm = 1 mm stated, the "
+                                                 "model's 0.01 mm"), said
+    assert "leave cycles empty" in caplog.text
+    new = pd.DataFrame({"record": ["n"], "cycles": [0.0], "wear_mm": [0.3]})
+    assert check_stated_wear(None, new) == ["record 'n': wear_mm = 0.3 mm stated, the model's "
+                                            "0 mm at its 0 stated cycles"]
+    agree = pd.DataFrame({"record": ["z"], "cycles": [0.0], "wear_mm": [0.0]})
+    assert check_stated_wear(None, agree) == []

@@ -56,7 +56,36 @@ def test_the_dataset_app_keeps_a_dataset_file_it_did_not_make(tmp_path):
     (tmp_path / "dataset.parquet").write_text("mine")
     spec = DatasetSpec(cases=[3], replicates=2, wear_states=2, chunks=2)
     job = plan_dataset(Scenario(), spec, tmp_path)  # a user's table given to read stays fine
-    with pytest.raises(ValueError, match=r"already holds dataset\.parquet, which no build of "
-                                         r"this app made"):
+    with pytest.raises(ValueError, match=r"already holds dataset\.parquet, which this build "
+                                         r"would replace: no build of this app made it"):
         check_not_users(job)
     assert (tmp_path / "dataset.parquet").read_text() == "mine"
+
+
+def test_a_dataset_record_the_app_did_not_write_is_kept(tmp_path):
+    """A dataset.json that is not the app's record (a user's file of that name, no parquet
+    beside it) is refused before work, and kept; the app's own record lets the build go on."""
+    from physics.dataset.generation import DatasetSpec, check_not_users, plan_dataset
+    from physics.params import Scenario
+
+    spec = DatasetSpec(cases=[3], replicates=2, wear_states=2, chunks=2)
+    job = plan_dataset(Scenario(), spec, tmp_path)
+    (tmp_path / "dataset.json").write_text('{"my": "notes"}')
+    with pytest.raises(ValueError, match=r"already holds dataset\.json, which this build would "
+                                         r"replace: no build of this app made it"):
+        check_not_users(job)
+    assert (tmp_path / "dataset.json").read_text() == '{"my": "notes"}'
+    (tmp_path / "dataset.json").write_text('{"hash": "abc", "schema_version": 1}')
+    check_not_users(job)
+
+
+def test_train_refuses_to_build_over_a_users_dataset_record(tmp_path):
+    """The training run's own build of a missing dataset refuses, before work, a folder whose
+    dataset.json is the user's."""
+    from surrogate.data import WearDataModule
+
+    (tmp_path / "dataset.json").write_text("my notes")
+    with pytest.raises(ValueError, match=r"the folder of data\.dataset = .* already holds "
+                                         r"dataset\.json"):
+        WearDataModule(str(tmp_path / "dataset.parquet"))
+    assert (tmp_path / "dataset.json").read_text() == "my notes"

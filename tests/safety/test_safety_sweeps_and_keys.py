@@ -47,8 +47,10 @@ def test_a_failing_job_does_not_stop_the_others(tmp_path, launcher):
     assert (sweep / "2" / "done.txt").read_text() == "3"
     assert "thirteen" in (sweep / "1" / command.FAILED).read_text()
     again = _run(tmp_path, "-m", "x=1,2,3", f"hydra/launcher={launcher}")  # same folder
-    assert again.returncode == 0, again.stderr
-    assert not (sweep / "1" / command.FAILED).exists()  # the earlier record does not count
+    assert again.returncode == 2 and "hydra.sweep.dir = 'sweep' already holds 0 and 3 more" \
+        in again.stderr, again.stderr  # the earlier sweep's records are not written over
+    assert (sweep / "0" / "done.txt").read_text() == "1"
+    assert "thirteen" in (sweep / "1" / command.FAILED).read_text()
 
 
 def test_train_sweep_with_a_bad_case_is_refused_before_the_good_one_starts(tmp_path):
@@ -161,3 +163,19 @@ def test_a_bad_list_entry_is_blamed_on_its_list(override, key, tmp_path, config_
                                              rf"of {key}$"):
             prepare(cfg)
     assert not list(tmp_path.iterdir())
+
+
+def test_an_interrupted_sweep_says_truly_what_it_keeps(tmp_path, monkeypatch):
+    """Before any job's folder is made the line says nothing was computed (it said finished
+    jobs were kept); after, how many of the jobs had started and where their folders are."""
+    sweep = tmp_path / "sweep"
+    jobs = [command.SweepJob(n, (f"x={n}",), sweep / str(n)) for n in range(3)]
+    monkeypatch.setattr(command, "_JOBS", jobs)
+    assert command.sweep_kept(sweep) == "no job of the sweep had started; nothing was computed"
+    (sweep / "0").mkdir(parents=True)
+    (sweep / "1").mkdir()
+    assert command.sweep_kept(sweep).startswith(
+        f"2 of 3 of the sweep's jobs had started; their folders are kept in {sweep}")
+    monkeypatch.setattr(command, "_JOBS", [])  # another sweeper: its folders as they are
+    assert command.sweep_kept(sweep).startswith("2 of the sweep's jobs had started")
+    assert command.sweep_kept(tmp_path / "none").startswith("no job of the sweep had started")

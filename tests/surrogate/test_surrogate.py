@@ -351,13 +351,13 @@ def test_predict_round_trip_from_the_saved_checkpoint(trained, dataset, tmp_path
 @pytest.mark.parametrize(("change", "message"), [
     (lambda d: d.drop(columns="dte_kurtosis"), r"lacks column.*dte_kurtosis"),
     (lambda d: d.assign(dte_peak_to_peak=np.where(d.index == 2, np.nan, d.dte_peak_to_peak)),
-     r"row 2 column dte_peak_to_peak is nan"),
+     r"row 3 column dte_peak_to_peak is nan"),
     (lambda d: d.assign(dte_peak_to_peak=d.dte_peak_to_peak * 1e6),
      r"dte_peak_to_peak.*another unit.*expects m"),
     (lambda d: d.iloc[:0], r"no rows"),
     (lambda d: d.assign(dte_peak_to_peak=np.where(d.index == 3, d.dte_peak_to_peak * 1e6,
                                                   d.dte_peak_to_peak)),
-     r"row 3 column dte_peak_to_peak .* transcription error"),
+     r"row 4 column dte_peak_to_peak .* transcription error"),
 ])
 def test_bad_input_is_refused(trained, dataset, change, message):
     df = pd.read_parquet(dataset)[DEFAULT_INPUTS].reset_index(drop=True)
@@ -920,7 +920,7 @@ def test_a_change_since_baseline_far_beyond_training_is_read_and_a_unit_error_is
                                "root_wear_mm", baseline=("dte_kurtosis",))
     wide = pd.DataFrame({"dte_kurtosis": [0.0, 0.05, 3.3]})
     assert schema.check(wide)[2, 0] == 3.3
-    with pytest.raises(ValueError, match=r"row 2 column dte_kurtosis .* transcription error"):
+    with pytest.raises(ValueError, match=r"row 3 column dte_kurtosis .* transcription error"):
         schema.check(wide.assign(dte_kurtosis=[0.0, 0.05, 3.3e3]))
 
 
