@@ -365,15 +365,17 @@ def check_spelling(argv: list[str]) -> None:
                                  f"quoted for Hydra, each such item: {key}=[a,'é'] (in the "
                                  f"shell: \"{key}=[a,'é']\")")
             continue
-        quote = '"' if "'" in value else "'"
-        if ('"' in value and "'" in value) or not reads(f"{key}={quote}{value}{quote}"):
+        both = '"' in value and "'" in value  # then quoted in ', each ' escaped
+        quote = "'" if both or "'" not in value else '"'
+        inner = value.replace("'", "\\'") if both else value
+        quoted = f"{key}={quote}{inner}{quote}"
+        if not reads(quoted):
             continue
         odd = sorted({c for c in value if not c.isascii() or not (c.isalnum() or c in SAFE)})
         shown = " ".join(repr(c) for c in odd)
         raise ValueError(f"{arg}: the value holds {shown}, which Hydra's override grammar "
                          f"reads as its own or cannot read unquoted; quote the value: "
-                         f"{key}={quote}{value}{quote} (in the shell: "
-                         f"{_shell(f'{key}={quote}{value}{quote}')})")
+                         f"{quoted} (in the shell: {_shell(quoted)})")
 
 
 #: characters an unquoted override value may hold besides letters and digits

@@ -44,6 +44,13 @@ if TYPE_CHECKING:  # the training module imports Lightning, which inference does
 
 log = logging.getLogger(__name__)
 
+
+def _first_line(err: BaseException, most: int = 200) -> str:
+    """The first line of ``err``'s text, cut at ``most`` characters: torch's refusal of a
+    foreign file runs to a dozen lines of advice about its own settings."""
+    text = (str(err).strip().splitlines() or [type(err).__name__])[0]
+    return text if len(text) <= most else text[:most - 3] + "..."
+
 # 2: with the conformal interval scale; 3: with the novelty (normalised conformal interval)
 FORMAT = "gearwear-wear-surrogate-3"
 #: a model other than the network chosen by cross-validation (surrogate.candidates), with the
@@ -278,14 +285,15 @@ class Surrogate:
         try:
             payload = torch.load(path, map_location="cpu", weights_only=True)
         except Exception as err:
-            raise ValueError(f"{named} is not a safe wear-surrogate file ({err}); {fix}") from None
+            raise ValueError(f"{named} is not a safe wear-surrogate file ({_first_line(err)}); "
+                             f"{fix}") from None
         if isinstance(payload, dict) and payload.get("format") == CHOSEN_FORMAT:
             try:
                 chosen = Chosen.from_payload(payload)
                 novelty = Novelty.from_payload(payload["novelty"])
             except (KeyError, TypeError, AttributeError, RuntimeError, ValueError) as err:
-                raise ValueError(f"{named} is incomplete or from another model ({err}); "
-                                 f"{fix}") from None
+                raise ValueError(f"{named} is incomplete or from another model "
+                                 f"({_first_line(err)}); {fix}") from None
             return cls(None, 1.0, novelty, chosen)
         if not isinstance(payload, dict) or payload.get("format") != FORMAT:
             raise ValueError(f"{named} is not a {FORMAT} file; {fix}")
@@ -304,8 +312,8 @@ class Surrogate:
             if novelty.reference.shape[1] != len(model.hparams["schema"]["inputs"]):
                 raise ValueError("its novelty reference has another number of inputs")
         except (KeyError, TypeError, RuntimeError, ValueError) as err:
-            raise ValueError(f"{named} is incomplete or from another model ({err}); "
-                             f"{fix}") from None
+            raise ValueError(f"{named} is incomplete or from another model "
+                             f"({_first_line(err)}); {fix}") from None
         bad = [k for k, v in payload["state_dict"].items() if not torch.isfinite(v).all()]
         if bad:
             raise ValueError(f"{named} has non-finite weights ({bad[0]}, ...): the training "

@@ -98,6 +98,9 @@ class FeatureSchema:
         scale too. Dividing by a zero deviation gave every row an infinite input, and a zero
         target scale every row a wear of zero and an interval of width zero."""
         n = len(self.inputs)
+        twice = repeated(self.inputs)
+        if twice:
+            raise ValueError(f"its schema names the input(s) {twice} more than once")
         for name in ("units", "mean", "std", "low", "high"):
             if len(getattr(self, name)) != n:
                 raise ValueError(f"its schema has {len(getattr(self, name))} values of {name} "

@@ -206,6 +206,10 @@ def table_units(path: str | Path, columns: dict[str, str], given: dict | None,
     ``columns``. Raises naming every ``needed`` column without a unit."""
     own: dict[str, str] = {}
     side = sidecar_path(path)
+    if side.exists() and not side.is_file():
+        kind = "a folder" if side.is_dir() else "not a regular file (a FIFO or a device)"
+        raise ValueError(f"{side}, the units sidecar of the table, is {kind}; make it a text "
+                         "file of column: unit lines, or move it away and give data.units")
     if side.is_file():
         import yaml
 

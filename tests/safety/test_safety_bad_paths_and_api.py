@@ -77,6 +77,26 @@ def test_a_checkpoint_with_zero_deviations_is_refused_on_loading(model, tmp_path
     assert text.endswith("pass the wear_surrogate.pt a training run exported")
 
 
+def test_a_checkpoint_whose_schema_repeats_an_input_is_blamed(model, tmp_path):
+    payload = torch.load(model, weights_only=True)
+    schema = payload["hparams"]["schema"]
+    schema["inputs"] = [schema["inputs"][0]] * len(schema["inputs"])
+    torch.save(payload, tmp_path / "bad.pt")
+    with pytest.raises(ValueError, match=r"is incomplete or from another model \(its schema "
+                                         r"names the input\(s\) \['dte_peak_to_peak'\] more than "
+                                         r"once\)"):
+        Surrogate.load(tmp_path / "bad.pt")
+
+
+def test_a_foreign_torch_file_is_refused_in_one_line(tmp_path):
+    """A pickle torch's safe loader refuses: its dozen lines of advice cut to the first."""
+    torch.save({"x": __import__("types").SimpleNamespace(a=1)}, tmp_path / "foreign.pt")
+    with pytest.raises(ValueError) as err:
+        Surrogate.load(tmp_path / "foreign.pt")
+    assert len(str(err.value).splitlines()) == 1 and "is not a safe wear-surrogate file (" in \
+        str(err.value), err.value
+
+
 # --- surrogate.summarise on a bad folder --------------------------------------------------------
 
 def _summarise(capsys, *argv: str) -> tuple[int, str]:
@@ -356,6 +376,9 @@ def test_an_unquoted_value_with_the_grammar_s_own_characters_gets_the_way_to_quo
                                      f"grammar reads as its own or cannot read unquoted; quote "
                                      f"the value: {key}={q}{value}{q} (in the shell: "), err.value
     check_spelling([f"{key}={q}{value}{q}", "data.inputs=[a,b]", "x=[1,2]", "+y={a: 1}"])
+    with pytest.raises(ValueError) as err:  # both quotes: in ', each ' escaped
+        check_spelling(["input=it's\"q.csv"])
+    assert "quote the value: input='it\\'s\"q.csv' (in the shell: " in str(err.value), err.value
 
 
 def test_a_binary_units_sidecar_is_named(tmp_path):
@@ -367,4 +390,17 @@ def test_a_binary_units_sidecar_is_named(tmp_path):
     table.write_text("a,wear_mm\n1,0.1\n")
     (tmp_path / "mine.units.yaml").write_bytes(b"\x80\x81 binary")
     with pytest.raises(ValueError, match=r"mine\.units\.yaml is not UTF-8 text \(byte 0x80"):
+        table_units(table, {}, None, ["a"])
+
+
+def test_a_units_sidecar_that_is_a_folder_is_said_to_be_one(tmp_path):
+    """A folder named like the units sidecar was passed over, and the run asked for the units
+    it holds: said to be a folder."""
+    from surrogate.tables import table_units
+
+    table = tmp_path / "mine.csv"
+    table.write_text("a,wear_mm\n1,0.1\n")
+    (tmp_path / "mine.units.yaml").mkdir()
+    with pytest.raises(ValueError, match=r"mine\.units\.yaml, the units sidecar of the table, is "
+                                         r"a folder"):
         table_units(table, {}, None, ["a"])
