@@ -164,11 +164,16 @@ def check_single_run(config: DictConfig) -> None:
         raise SystemExit(2)
 
 
+#: the free space a run folder's disk must have before Hydra writes its record and log there
+ROOM_BYTES = 4 * 1024**2
+
+
 def check_run_folder(folder: Path, key: str) -> None:
     """End the app (one line, exit code 2) where its run folder ``folder`` (``key``:
     ``hydra.run.dir``, or ``hydra.sweep.dir`` with ``-m``; under the working folder by default)
     cannot be made, before Hydra makes it: from a read-only working folder Hydra's own attempt
-    ended in a PermissionError traceback; or where it already holds anything (a folder the user
+    ended in a PermissionError traceback, as its writes on a full disk did (less than
+    ``ROOM_BYTES`` free); or where it already holds anything (a folder the user
     chose, an earlier run's): Hydra's record, the log and the results would go among files this
     run did not make, and replace those of the same name. Called by :class:`RunRecord` for every
     app."""
@@ -181,6 +186,14 @@ def check_run_folder(folder: Path, key: str) -> None:
               file=sys.stderr)
         raise SystemExit(2) from None
     real = resolved(folder)
+    existing = next(p for p in (real, *real.parents) if p.exists())
+    free = shutil.disk_usage(existing).free
+    if free < ROOM_BYTES:  # Hydra's own writes of .hydra/ there ended in its traceback
+        print(f"error: {key} = {str(folder)!r}: the disk holding {existing} has "
+              f"{free / 1024:.0f} KiB free, less than the {ROOM_BYTES // 1024**2} MiB a run's "
+              f"record and log need; make room, or give {key}=<a folder on another disk>",
+              file=sys.stderr)
+        raise SystemExit(2)
     held = sorted(p.name for p in real.iterdir()) if real.is_dir() else []
     if held:  # a folder a user chose (or an earlier run's): its files are not this run's
         more = f" and {len(held) - 1} more" if len(held) > 1 else ""

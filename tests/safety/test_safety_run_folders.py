@@ -71,3 +71,23 @@ def test_a_sweep_setting_in_a_single_run_is_refused(tmp_path, capsys, override):
     assert not (tmp_path / "run").exists()
     RunRecord().on_run_start(OmegaConf.create({"hydra": {
         "run": {"dir": str(tmp_path / "run")}, "overrides": {"hydra": ["hydra.job.chdir=false"]}}}))
+
+
+def test_a_run_folder_on_a_full_disk_is_refused_before_hydra_writes(tmp_path, capsys,
+                                                                     monkeypatch):
+    """Hydra's own writes (.hydra/config.yaml) on a full disk ended in its traceback, before
+    the app ran: a disk with less than ROOM_BYTES free is refused first, in one line."""
+    import shutil
+
+    from physics import command
+
+    monkeypatch.setattr(shutil, "disk_usage", lambda _p: shutil._ntuple_diskusage(1, 1, 1000))
+    with pytest.raises(SystemExit) as end:
+        RunRecord().on_run_start(OmegaConf.create({"hydra": {"run": {
+            "dir": str(tmp_path / "run")}}}))
+    assert end.value.code == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"error: hydra.run.dir = '{tmp_path / 'run'}': the disk holding "
+                          f"{tmp_path} has 1 KiB free, less than the "
+                          f"{command.ROOM_BYTES // 1024**2} MiB") and "make room" in err, err
+    assert not (tmp_path / "run").exists()
