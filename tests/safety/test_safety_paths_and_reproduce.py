@@ -43,6 +43,7 @@ from physics.reproduce.thesis import (
     prepare,
 )
 from tests.acceptance.test_bad_input import APPS, composed
+from tests.safety.test_safety_run_folders import start_refused
 
 ROOT = Path(__file__).resolve().parents[2]
 TABLE14 = "table14_dte_features_case3.csv"
@@ -215,13 +216,7 @@ def test_a_run_folder_that_cannot_be_made_ends_the_app_in_one_line(tmp_path, cap
     folder and the fix. (/proc takes no folder, as a read-only working folder.)"""
     for key, node in (("hydra.run.dir", {"run": {"dir": "/proc/gearwear/logs/run"}}),
                       ("hydra.sweep.dir", {"sweep": {"dir": "/proc/gearwear/multi"}})):
-        config = OmegaConf.create({"hydra": node})
-        with pytest.raises(SystemExit) as end:
-            if key == "hydra.run.dir":
-                RunRecord().on_run_start(config)
-            else:
-                RunRecord().on_multirun_start(config)
-        assert end.value.code == 2
+        assert start_refused(key, node) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and err[0].startswith(
             f"error: {key} = '/proc/gearwear/") and "cannot write in /proc" in err[0] and (

@@ -17,19 +17,25 @@ from physics.command import RunRecord
 ROOT = Path(__file__).resolve().parents[2]
 
 
-@pytest.mark.parametrize("key", ["hydra.run.dir", "hydra.sweep.dir"])
-def test_a_run_folder_holding_files_is_refused_before_hydra_writes(tmp_path, capsys, key):
-    (tmp_path / "metrics.json").write_text("my own figures")
-    (tmp_path / "report.md").write_text("my own report")
-    node = {"run": {"dir": str(tmp_path)}} if key == "hydra.run.dir" else {
-        "sweep": {"dir": str(tmp_path)}, "launcher": {"_target_": "x"}}
+def start_refused(key: str, node: dict) -> int:
+    """The exit code with which RunRecord ends a run (``key`` ``hydra.run.dir``) or a sweep
+    (``hydra.sweep.dir``) of the Hydra config ``{"hydra": node}`` before it starts."""
     config = OmegaConf.create({"hydra": node})
     with pytest.raises(SystemExit) as end:
         if key == "hydra.run.dir":
             RunRecord().on_run_start(config)
         else:
             RunRecord().on_multirun_start(config)
-    assert end.value.code == 2
+    return end.value.code
+
+
+@pytest.mark.parametrize("key", ["hydra.run.dir", "hydra.sweep.dir"])
+def test_a_run_folder_holding_files_is_refused_before_hydra_writes(tmp_path, capsys, key):
+    (tmp_path / "metrics.json").write_text("my own figures")
+    (tmp_path / "report.md").write_text("my own report")
+    node = {"run": {"dir": str(tmp_path)}} if key == "hydra.run.dir" else {
+        "sweep": {"dir": str(tmp_path)}, "launcher": {"_target_": "x"}}
+    assert start_refused(key, node) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith(f"error: {key} = '{tmp_path}' already holds "
                                                "metrics.json and 1 more") and (
