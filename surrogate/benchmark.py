@@ -100,6 +100,7 @@ from physics.dynamics.model_form import FACTORS
 from physics.estimators.empirical_inverse import EmpiricalInverse, wear_errors
 from physics.files import (
     atomic_write,
+    check_fresh,
     check_unrepeated,
     check_writable,
     existing_file,
@@ -751,8 +752,12 @@ def refusal(extra: list[str]) -> str | None:
 RIG_COMPARISON = Path("docs/figures/rig_comparison.csv")
 
 
+#: the tables --real-rig-only copies into --figures
+FIGURE_TABLES = ("real_rig.csv", "real_rig_stages.csv")
+
+
 def copy_figures(out: Path, figures: Path | None,
-                 names: tuple[str, ...] = ("real_rig.csv", "real_rig_stages.csv")) -> None:
+                 names: tuple[str, ...] = FIGURE_TABLES) -> None:
     """Copy the real rig's tables from ``out`` into ``figures`` (``--figures``), atomically."""
     if figures is None:
         return
@@ -812,6 +817,9 @@ def main(argv: list[str] | None = None) -> None:
                              "also copy the tables "
                              "it writes into DIR (docs/figures: the tables docs/benchmark.md "
                              "quotes, checked by tests/surrogate/test_doc_figures.py)")
+    parser.add_argument("--overwrite", action="store_true",
+                        help="let the run replace the files an earlier run (or you) left in "
+                             "--out or --figures DIR (refused otherwise, before any work)")
     parser.add_argument("--narrow-ranges", action="store_true",
                         help="instead: case-3 networks of the default nuisance ranges, of "
                              "narrow ones (NARROW_RANGES) and of two steps between, --seeds "
@@ -842,6 +850,14 @@ def main(argv: list[str] | None = None) -> None:
                                          or args.few_labels_only):
         parser.error(f"--figures {args.figures}: copies the tables of --real-rig-only, "
                      "--one-rig-only or --few-labels-only; add one of them")
+    copied = (("few_labels.csv",) if args.few_labels_only else ("one_rig.csv",)
+              if args.one_rig_only else FIGURE_TABLES)
+    try:
+        check_fresh(out, "--out", ("*",), args.overwrite, "add --overwrite")
+        if args.figures is not None:
+            check_fresh(args.figures, "--figures", copied, args.overwrite, "add --overwrite")
+    except ValueError as err:
+        parser.error(str(err))
     given = {**({f"--max-epochs {args.max_epochs}": f"trainer.max_epochs={args.max_epochs}"}
                  if args.max_epochs else {}),
              **{f"--override {o}": o for o in args.override}}

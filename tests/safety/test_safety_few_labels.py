@@ -59,8 +59,13 @@ def test_outputs_and_options_it_cannot_honour_are_refused(tmp_path, capsys):
     worn = tmp_path / "worn.csv"
     worn.write_text("stage,wear_mm,acc_rms_g\nW1,0.1,0.2\nW2,0.9,0.3\n")
     tries = {
-        ("--few-labels-only", "--out", str(io), "--rig-comparison", str(io / "few_labels.csv")):
-            "is a file this run writes",
+        ("--few-labels-only", "--out", str(io), "--rig-comparison", str(io / "few_labels.csv"),
+         "--overwrite"): "is a file this run writes",
+        ("--few-labels-only", "--out", str(io), "--rig-comparison", str(CURVES)):
+            "already holds few_labels.csv, which this run would replace; choose a new folder, "
+            "or add --overwrite",
+        ("--few-labels-only", "--out", str(tmp_path / "o"), "--figures", str(io)):
+            "--figures = '" + str(io) + "' already holds few_labels.csv",
         ("--few-labels-only", "--out", str(tmp_path / "o"), "--figures", str(tmp_path / "afile")):
             "is a file, not a folder",
         ("--few-labels-only", "--out", str(tmp_path / "o"), "--real-rig", str(CURVES)):
