@@ -272,7 +272,7 @@ def run_command(cfg: DictConfig, prepare: Callable[[DictConfig], Plan],
     folder = _run_folder()
     job = _sweep_job()
     if job is not None and folder is not None:
-        (folder / FAILED).unlink(missing_ok=True)  # an earlier job's sharing its folder
+        (folder / FAILED).unlink(missing_ok=True)  # an earlier job's, where jobs share a folder
     try:
         check_keys(cfg)
         check_case(cfg, _command_line_keys())

@@ -174,7 +174,7 @@ class FeatureSchema:
         if len(df) == 0:
             raise ValueError("input has no rows")
         check_numbers(df, self.inputs)
-        x = df[list(self.inputs)].to_numpy(float)
+        x = np.column_stack([_as_real(df[c]) for c in self.inputs])
         bad = ~np.isfinite(x)
         if bad.any():
             r, c = np.argwhere(bad)[0]
@@ -332,6 +332,19 @@ def check_numbers(df: pd.DataFrame, columns) -> None:
                              "must be a real number: repair the cell or drop the row")
 
 
+def _as_real(col: pd.Series) -> np.ndarray:
+    """A column that :func:`check_numbers` passed as floats (a complex cell's imaginary part is
+    zero there)."""
+    if col.dtype.kind in "iuf":
+        return col.to_numpy(float)
+    return np.array([np.nan if _empty(v) else np.real(v) for v in col.to_numpy(object)], float)
+
+
+def _empty(v: object) -> bool:
+    """Whether a table cell ``v`` is empty (None, NaN, pandas' NA)."""
+    return v is None or v is pd.NA or (isinstance(v, float) and np.isnan(v))
+
+
 def _not_real(v: object) -> str:
     """Why a table cell ``v`` is neither empty nor a real number ('' where it is one)."""
     if isinstance(v, (bool, np.bool_)):
@@ -339,7 +352,7 @@ def _not_real(v: object) -> str:
     if isinstance(v, (complex, np.complexfloating)):
         return ("" if v.imag == 0 else "a complex number: give its magnitude (or the part "
                 "the model was trained on)")
-    if v is None or (isinstance(v, float) and np.isnan(v)):
+    if _empty(v):
         return ""
     try:
         float(v)

@@ -404,3 +404,21 @@ def test_a_units_sidecar_that_is_a_folder_is_said_to_be_one(tmp_path):
     with pytest.raises(ValueError, match=r"mine\.units\.yaml, the units sidecar of the table, is "
                                          r"a folder"):
         table_units(table, {}, None, ["a"])
+
+
+def test_cells_of_every_numeric_kind_are_read_as_their_value():
+    """Text numbers, pandas' nullable floats and strings, a Decimal, and a complex cell
+    without an imaginary part are their real value; empty cells stay NaN for the finiteness
+    check (which names them)."""
+    from decimal import Decimal
+
+    from surrogate.schema import FeatureSchema
+
+    train = pd.DataFrame({"a": [0.0, 1.0, 2.0, 3.0], "w": [0.0, 0.1, 0.2, 0.3]})
+    schema = FeatureSchema.fit(train, ["a"], {"a": "1", "w": "mm"}, "w")
+    for col in (["1", "2.5", "1e0"], pd.array([1, 2.5, 1], dtype="Float64"),
+                pd.array(["1", "2.5", "1"], dtype="string"), [Decimal("1"), 2.5, 1],
+                pd.Series([1 + 0j, "2.5", 1.0], dtype=object)):
+        assert schema.check(pd.DataFrame({"a": col}))[:, 0].tolist() == [1.0, 2.5, 1.0], col
+    with pytest.raises(ValueError, match=r"^row 2 column a is nan: every input must be finite"):
+        schema.check(pd.DataFrame({"a": pd.array(["1", None, "1"], dtype="string")}))
