@@ -42,7 +42,7 @@ from omegaconf import DictConfig, OmegaConf, open_dict, read_write
 from omegaconf.errors import MissingMandatoryValue
 
 from physics import interrupt
-from physics.files import WriteFailed, check_writable, resolved
+from physics.files import WriteFailed, check_writable, first_and_more, resolved
 from physics.params import OutOfScope, check_case
 
 Plan = TypeVar("Plan")
@@ -196,10 +196,9 @@ def check_run_folder(folder: Path, key: str) -> None:
         raise SystemExit(2)
     held = sorted(p.name for p in real.iterdir()) if real.is_dir() else []
     if held:  # a folder a user chose (or an earlier run's): its files are not this run's
-        more = f" and {len(held) - 1} more" if len(held) > 1 else ""
-        print(f"error: {key} = {str(folder)!r} already holds {held[0]}{more}: this run writes "
-              f"its files (.hydra/, its log, its results) there and would replace files it did "
-              f"not make; give {key} a new or empty folder, or leave {key} out (each run then "
+        print(f"error: {key} = {str(folder)!r} already holds {first_and_more(held)}: this run "
+              f"writes its files (.hydra/, its log, its results) there and would replace files it "
+              f"did not make; give {key} a new or empty folder, or leave {key} out (each run then "
               "gets its own)", file=sys.stderr)
         raise SystemExit(2)
 

@@ -217,10 +217,14 @@ def check_fresh(path: str | os.PathLike, key: str, patterns: tuple[str, ...], ov
         return
     found = sorted(p.name for pattern in patterns for p in folder.glob(pattern) if p.is_file())
     if found:
-        more = f" and {len(found) - 1} more" if len(found) > 1 else ""
         raise ValueError(f"{key} = {str(path)!r}{_spelled(path, folder)} already holds "
-                         f"{found[0]}{more}, which this run would replace; choose a new folder, "
-                         f"or {flag} to replace them")
+                         f"{first_and_more(found)}, which this run would replace; choose a new "
+                         f"folder, or {flag} to replace them")
+
+
+def first_and_more(names: list[str]) -> str:
+    """``a`` or ``a and 3 more``: the first of ``names`` and how many follow."""
+    return names[0] + (f" and {len(names) - 1} more" if len(names) > 1 else "")
 
 
 def check_inside(path: str | os.PathLike, root: str | os.PathLike, key: str) -> None:

@@ -113,6 +113,10 @@ def stale_dataset(path: Path, job: DatasetJob) -> str | None:
     return "; ".join(diff) or "the physics it was built with"
 
 
+#: how a refusal names the folder a missing dataset is built into
+BUILD_FOLDER = "the folder of data.dataset"
+
+
 def dataset_job(path: str | Path, spec: dict | None = None, jobs: int = 2) -> DatasetJob:
     """The checked build of the dataset at ``path`` (``spec``: DatasetSpec values other than the
     defaults), as ``python -m physics.dataset out_dir=<folder> name=<stem>`` would run it."""
@@ -129,7 +133,7 @@ def load_dataset(path: str | Path, spec: dict | None = None, jobs: int = 2) -> p
     path = Path(path)
     job = dataset_job(path, spec, jobs)
     if not path.is_file():
-        check_not_users(job, "the folder of data.dataset")
+        check_not_users(job, BUILD_FOLDER)
         log.info("dataset %s missing: generating it (physics.dataset, %d jobs)", path, jobs)
         build_dataset(job)
     elif (diff := stale_dataset(path, job)) is not None:
@@ -233,7 +237,7 @@ class WearDataModule(L.LightningDataModule):
                                  "data.holdout_case")
             if not Path(self.dataset).is_file():  # checks the build: its settings, its files
                 check_not_users(dataset_job(self.dataset, self.generate, self.jobs),
-                                "the folder of data.dataset")
+                                BUILD_FOLDER)
             self.check_dataset_columns_and_split()
         self.schema: FeatureSchema | None = None
         self.frames: dict[str, pd.DataFrame] = {}
