@@ -37,7 +37,7 @@ from surrogate.candidates import Candidate
 from surrogate.conformal import cv_plus, exchangeable_quantile
 from surrogate.network import Network, mixture
 from surrogate.novelty import Novelty, difficulty
-from surrogate.schema import FeatureSchema, check_numbers
+from surrogate.schema import FeatureSchema, real_columns
 
 if TYPE_CHECKING:  # the training module imports Lightning, which inference does without
     from surrogate.model import WearRegressor
@@ -384,7 +384,7 @@ class Surrogate:
             raise TypeError(f"df = {type(df).__name__}: predict reads a pandas DataFrame with "
                             f"the columns {self.schema.columns} (pd.read_csv of your table)")
         gearbox = list(gearbox_columns(gearbox or None))
-        check_numbers(df, self.schema.columns)  # before the baseline changes are formed
+        df = real_columns(df, self.schema.columns)  # before the baseline changes are formed
         if self.schema.baseline:
             check_gearboxes(df, gearbox, self.schema.target)
         x = self.schema.check(self.schema.network_rows(df, gearbox))

@@ -163,9 +163,7 @@ class FeatureSchema:
         orders of magnitude outside the training envelope (a unit error, e.g. micrometres given
         for metres).
         """
-        twice = repeated(df.columns)
-        if twice:
-            raise ValueError(f"input has column(s) {twice} more than once; keep one of each")
+        check_unrepeated_columns(df)
         missing = [c for c in self.inputs if c not in df.columns]
         if missing:
             units = dict(zip(self.inputs, self.units, strict=True))
@@ -173,8 +171,7 @@ class FeatureSchema:
                              "(column: unit)")
         if len(df) == 0:
             raise ValueError("input has no rows")
-        check_numbers(df, self.inputs)
-        x = np.column_stack([_as_real(df[c]) for c in self.inputs])
+        x = real_columns(df, self.inputs)[list(self.inputs)].to_numpy(float)
         bad = ~np.isfinite(x)
         if bad.any():
             r, c = np.argwhere(bad)[0]
@@ -315,6 +312,23 @@ def vector_inputs(inputs: list[str], columns: list[str]) -> tuple[str, ...]:
     return tuple(c for c in inputs if c not in have and set(vector_parts(c)) <= have)
 
 
+def check_unrepeated_columns(df: pd.DataFrame) -> None:
+    """Refuse (ValueError) an input frame naming a column more than once."""
+    twice = repeated(df.columns)
+    if twice:
+        raise ValueError(f"input has column(s) {twice} more than once; keep one of each")
+
+
+def real_columns(df: pd.DataFrame, columns) -> pd.DataFrame:
+    """``df`` with its ``columns`` checked (:func:`check_numbers`) and those not stored as
+    numbers (text numbers, Decimals, nullable strings, complex cells without an imaginary
+    part) as floats, so that later reads of them are plain numeric ones."""
+    check_unrepeated_columns(df)
+    check_numbers(df, columns)
+    odd = [c for c in columns if c in df.columns and df[c].dtype.kind not in "iuf"]
+    return df.assign(**{c: _as_real(df[c]) for c in odd}) if odd else df
+
+
 def check_numbers(df: pd.DataFrame, columns) -> None:
     """Refuse (ValueError naming the row, counted from 1 without the header, the column and the
     cell) a cell of ``columns`` of ``df`` that is not a real number: text (``'abc'``), a
@@ -333,10 +347,8 @@ def check_numbers(df: pd.DataFrame, columns) -> None:
 
 
 def _as_real(col: pd.Series) -> np.ndarray:
-    """A column that :func:`check_numbers` passed as floats (a complex cell's imaginary part is
-    zero there)."""
-    if col.dtype.kind in "iuf":
-        return col.to_numpy(float)
+    """A column of cells :func:`check_numbers` passed, as floats (a complex cell's imaginary
+    part is zero there; an empty cell is NaN)."""
     return np.array([np.nan if _empty(v) else np.real(v) for v in col.to_numpy(object)], float)
 
 

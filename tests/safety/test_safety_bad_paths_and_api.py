@@ -271,6 +271,17 @@ def test_predict_names_the_row_and_column_of_a_cell_that_is_no_real_number(model
     assert len(s.predict(df.astype({col: complex}))) == len(df)  # no imaginary part: its value
 
 
+def test_predict_refuses_a_frame_repeating_an_input_column(model):
+    """Through the Python API, before any cell is read (a repeated column read as one ended
+    in an AttributeError)."""
+    s = Surrogate.load(model)
+    df = table().drop(columns="rig")
+    col = s.schema.columns[0]
+    twice = pd.concat([df, df[[col]].astype(str)], axis=1)
+    with pytest.raises(ValueError, match=rf"input has column\(s\) \['{col}'\] more than once"):
+        s.predict(twice)
+
+
 def test_the_api_never_writes_over_its_input(model, tmp_path):
     """predict_file, like the command, never replaces its input table, and another existing
     file only with ``overwrite``."""
