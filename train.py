@@ -19,11 +19,30 @@ from surrogate import settings  # noqa: E402
 settings.register()
 
 
+def prepare(cfg: DictConfig):
+    """The settings that need no data and no Lightning first (a refusal in about a second),
+    then the whole run's checks (:func:`surrogate.training.prepare`, whose import loads
+    Lightning and torch: about 4 s)."""
+    settings.check_run(cfg)
+    with deferred():  # a signal during the import is raised after it
+        from surrogate import training
+    return training.prepare(cfg)
+
+
+def fit(job):
+    from surrogate import training  # imported by prepare
+
+    return training.fit(job)
+
+
+def kept(job) -> str:
+    from surrogate import training  # imported by prepare
+
+    return training.kept(job)
+
+
 @hydra.main(version_base="1.3", config_path="pkg://gearwear_conf.train", config_name="train")
 def task(cfg: DictConfig) -> float:
-    with deferred():  # after Hydra parsed the command line; a signal is raised after it
-        from surrogate.training import fit, kept, prepare
-
     return run_command(cfg, prepare, fit, kept)
 
 

@@ -10,12 +10,13 @@ import math
 import numbers
 import re
 from dataclasses import dataclass, field
-from pathlib import PurePath
+from pathlib import Path, PurePath
 from typing import Any
 
-from omegaconf import MISSING
+from omegaconf import MISSING, OmegaConf
 
 from physics.command import register_schema
+from physics.files import check_inside
 
 
 @dataclass
@@ -148,6 +149,22 @@ class TrainerConfig:
                 raise ValueError(f"trainer.{name} = {getattr(self, name)} must be >= 1")
 
 
+def check_run(cfg: Any) -> None:
+    """Raise ``ValueError`` for a train config's settings that need no data, no model and no
+    Lightning to judge: the run folder's task name, the seed, the thread count, the model's and
+    the trainer's settings. ``train.py`` checks them before its slow imports (a refusal of these
+    in about a second); :func:`surrogate.training.prepare` starts with them."""
+    root = Path(str(cfg.paths.root_dir)) / "logs"
+    check_inside(root / str(cfg.task_name), root, f"task_name = {cfg.task_name!r}")
+    for key in ("seed",):
+        if isinstance(cfg[key], bool) or not isinstance(cfg[key], int) or cfg[key] < 0:
+            raise ValueError(f"{key} = {cfg[key]!r} must be a whole number >= 0")
+    if cfg.get("threads") is not None and not (isinstance(cfg.threads, int) and cfg.threads > 0):
+        raise ValueError(f"threads = {cfg.threads!r} must be a whole number >= 1 or null")
+    OmegaConf.to_object(cfg.model).check()
+    OmegaConf.to_object(cfg.trainer).check()
+
+
 def run_name(table: str | None, case) -> str:
     """The run folder's name: after a user's table (its file name without the suffix), else
     ``case<case>`` (``conf/train/hydra/default.yaml``)."""
@@ -160,8 +177,6 @@ def run_name(table: str | None, case) -> str:
 def register() -> None:
     """Register the schemas (before Hydra composes a train config) and the ``run_name``
     resolver the run folder's name uses."""
-    from omegaconf import OmegaConf
-
     if not OmegaConf.has_resolver("run_name"):
         OmegaConf.register_new_resolver("run_name", run_name)
     register_schema("wear_schema", DataConfig, group="data")

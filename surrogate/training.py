@@ -22,7 +22,7 @@ from omegaconf import DictConfig, OmegaConf
 
 from physics import interrupt
 from physics.estimators.empirical_inverse import wear_errors
-from physics.files import atomic_write, check_inside, pyplot
+from physics.files import atomic_write, pyplot
 from surrogate import baselines, candidates, settings
 from surrogate.conformal import attainable
 from surrogate.data import WearDataModule
@@ -85,15 +85,7 @@ def prepare(cfg: DictConfig) -> TrainJob:
     """Check the whole run before any work: case, model settings, trainer, callbacks, loggers
     and the data module (whose dataset, if missing, is planned and checked but not built)."""
     quiet_lightning()
-    root = Path(str(cfg.paths.root_dir)) / "logs"
-    check_inside(root / str(cfg.task_name), root, f"task_name = {cfg.task_name!r}")
-    for key in ("seed",):
-        if isinstance(cfg[key], bool) or not isinstance(cfg[key], int) or cfg[key] < 0:
-            raise ValueError(f"{key} = {cfg[key]!r} must be a whole number >= 0")
-    if cfg.get("threads") is not None and not (isinstance(cfg.threads, int) and cfg.threads > 0):
-        raise ValueError(f"threads = {cfg.threads!r} must be a whole number >= 1 or null")
-    OmegaConf.to_object(cfg.model).check()
-    OmegaConf.to_object(cfg.trainer).check()
+    settings.check_run(cfg)
     trainer = make_trainer(cfg)
     init = Surrogate.load(cfg.init_from, key="init_from") if cfg.get("init_from") else None
     if init is not None and init.model is None:
