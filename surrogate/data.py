@@ -36,7 +36,8 @@ from physics.dataset.generation import (
 )
 from physics.dataset.generation import units as dataset_units
 from physics.files import repeated
-from physics.params import Scenario, operating_cases
+from physics.params import Scenario
+from surrogate import settings
 from surrogate.inputs import (
     CONDITIONS,
     SENSORS,
@@ -62,17 +63,6 @@ from surrogate.splits import (
 from surrogate.tables import read_user_table, table_units, user_rows, with_vector_units
 
 log = logging.getLogger(__name__)
-
-
-def cases_of(case: str | int) -> list[int]:
-    """``case`` of the train config: one operating case of Table 11 (1-5) or ``all``."""
-    valid = sorted(operating_cases())
-    if str(case).strip() == "all":
-        return valid
-    if str(case).strip() in {str(c) for c in valid}:
-        return [int(case)]
-    raise ValueError(f"case = {case!r} is not an operating case; use one of {valid} (thesis "
-                     "Table 11) or all")
 
 
 #: the fewest gearboxes per case a built dataset simulates: the all-case network's error on
@@ -160,7 +150,7 @@ class WearDataModule(L.LightningDataModule):
                  val_groups: list | None = None, cv: str | None = None) -> None:
         super().__init__()
         self.dataset = str(dataset)
-        self.cases = cases_of(case)
+        self.cases = settings.cases_of(case)
         if table is None and holdout_case is not None and int(holdout_case) not in self.cases:
             raise ValueError(f"data.holdout_case = {holdout_case} must be one of the cases "
                              f"{self.cases}")

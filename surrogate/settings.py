@@ -17,6 +17,7 @@ from omegaconf import MISSING, OmegaConf
 
 from physics.command import register_schema
 from physics.files import check_inside
+from physics.params import operating_cases
 
 
 @dataclass
@@ -149,11 +150,23 @@ class TrainerConfig:
                 raise ValueError(f"trainer.{name} = {getattr(self, name)} must be >= 1")
 
 
+def cases_of(case: str | int) -> list[int]:
+    """``case`` of the train config: one operating case of Table 11 (1-5) or ``all``."""
+    valid = sorted(operating_cases())
+    if str(case).strip() == "all":
+        return valid
+    if str(case).strip() in {str(c) for c in valid}:
+        return [int(case)]
+    raise ValueError(f"case = {case!r} is not an operating case; use one of {valid} (thesis "
+                     "Table 11) or all")
+
+
 def check_run(cfg: Any) -> None:
     """Raise ``ValueError`` for a train config's settings that need no data, no model and no
     Lightning to judge: the run folder's task name, the seed, the thread count, the model's and
-    the trainer's settings. ``train.py`` checks them before its slow imports (a refusal of these
-    in about a second); :func:`surrogate.training.prepare` starts with them."""
+    the trainer's settings, the operating case. ``train.py`` checks them before its slow
+    imports (such a refusal takes about a second, not six); :func:`surrogate.training.prepare`
+    starts with them."""
     root = Path(str(cfg.paths.root_dir)) / "logs"
     check_inside(root / str(cfg.task_name), root, f"task_name = {cfg.task_name!r}")
     for key in ("seed",):
@@ -163,6 +176,7 @@ def check_run(cfg: Any) -> None:
         raise ValueError(f"threads = {cfg.threads!r} must be a whole number >= 1 or null")
     OmegaConf.to_object(cfg.model).check()
     OmegaConf.to_object(cfg.trainer).check()
+    cases_of(cfg.data.case)
 
 
 def run_name(table: str | None, case) -> str:
