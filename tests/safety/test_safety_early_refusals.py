@@ -136,3 +136,25 @@ def test_help_whose_reader_left_ends_without_a_traceback():
     err = proc.stderr.read()
     assert proc.wait(timeout=300) == 1, err
     assert "Traceback" not in err and "BrokenPipe" not in err, err
+
+
+@pytest.mark.parametrize("bad, says", [
+    ("case=9", "case = '9' is not an operating case"),
+    ("model.lr=-1", "model.lr = -1.0 must lie in (0, 1)"),
+    ("trainer.max_epochs=0", "trainer.max_epochs = 0 must be >= 1"),
+    ("seed=-1", "seed = -1 must be a whole number >= 0"),
+])
+def test_train_refuses_what_needs_no_data_before_importing_lightning(tmp_path, bad, says):
+    """The settings judged without data or a model (surrogate.settings.check_run) are refused
+    before train.py imports Lightning and torch (-X importtime lists every module imported):
+    one line, exit 2, nothing left."""
+    proc = subprocess.run([sys.executable, "-X", "importtime", str(ROOT / "train.py"), bad,
+                           "hydra.run.dir=run"], cwd=tmp_path, capture_output=True, text=True,
+                          timeout=120)
+    imported = {line.split("|")[-1].strip() for line in proc.stderr.splitlines()
+                if line.startswith("import time:")}
+    errors = [line for line in proc.stderr.splitlines() if line.startswith("error:")]
+    assert proc.returncode == 2 and len(errors) == 1 and says in errors[0], proc.stderr[-2000:]
+    assert "surrogate.settings" in imported  # the listing is read
+    assert not {"lightning", "torch"} & imported, sorted({"lightning", "torch"} & imported)
+    assert not any(tmp_path.iterdir())
