@@ -20,7 +20,7 @@ settings.register()
 
 
 def prepare(cfg: DictConfig):
-    """The settings that need no data and no Lightning first (a refusal in about a second),
+    """The settings that need no data and no Lightning first (refused before the slow import),
     then the whole run's checks (:func:`surrogate.training.prepare`, whose import loads
     Lightning and torch: about 4 s)."""
     settings.check_run(cfg)

@@ -165,7 +165,7 @@ def check_run(cfg: Any) -> None:
     """Raise ``ValueError`` for a train config's settings that need no data, no model and no
     Lightning to judge: the run folder's task name, the seed, the thread count, the model's and
     the trainer's settings, the operating case. ``train.py`` checks them before its slow
-    imports (such a refusal takes about a second, not six); :func:`surrogate.training.prepare`
+    imports (such a refusal does not wait for them); :func:`surrogate.training.prepare`
     starts with them."""
     root = Path(str(cfg.paths.root_dir)) / "logs"
     check_inside(root / str(cfg.task_name), root, f"task_name = {cfg.task_name!r}")
