@@ -5,8 +5,11 @@ Prints wall times (best of several runs) for
   1.5e7-cycle run of Table 8, with their profile-update blocks;
 - all of tables 02-06 as ``python -m physics.reproduce`` computes them;
 - the worn contact of the 1.5e7-cycle flanks solved for every mesh position at once (batched
-  FFT conjugate gradient), against the reference: the same solve one position per call, in a
-  Python loop, measured in the same run; their ratio and their largest difference.
+  conjugate gradient), against the reference: the same solve one position per call, in a
+  Python loop, measured in the same run; their ratio and their largest difference;
+- the contact's deflection of 400 rows of cell pressures (64 and 512 cells) by its influence
+  matrix, against the reference: the same deflection by FFT convolution (scipy.signal), in the
+  same run; their ratio and largest difference.
 """
 
 from __future__ import annotations
@@ -16,12 +19,13 @@ import timeit
 
 import numpy as np
 from omegaconf import OmegaConf
+from scipy.signal import fftconvolve
 
 from physics.gear import contact
 from physics.params import Scenario
 from physics.reproduce.thesis import ReproduceConfig, reproduce
 from physics.tribology.wear import flank_grid, simulate_wear
-from physics.tribology.worn_contact import solve_worn_contact
+from physics.tribology.worn_contact import influence_matrix, solve_worn_contact
 
 
 def best_of(fn, repeat: int) -> float:
@@ -51,6 +55,24 @@ def one_by_one(args: dict) -> np.ndarray:
         for i in range(args["s"].size)])
 
 
+def deflections(cells: int) -> tuple[float, float, float]:
+    """Wall times [s] of the deflection of 400 rows of random cell pressures on ``cells``
+    cells of a 6-half-width window by the influence matrix and, as the reference, by FFT
+    convolution with the matrix's first row; and their largest relative difference."""
+    dX = 6.0 / cells
+    K = influence_matrix(cells, dX)
+    kernel = np.concatenate([K[0, :0:-1], K[0]])  # k(|i - j|) for i - j = -(n-1) .. n-1
+    P = np.random.default_rng(0).random((400, cells))
+
+    def convolved() -> np.ndarray:
+        return fftconvolve(P, kernel[None, :], axes=1)[:, cells - 1: 2 * cells - 1]
+
+    t_matrix = best_of(lambda: P @ K, 20)
+    t_fft = best_of(convolved, 20)
+    diff = float(np.max(np.abs(P @ K - convolved())) / np.max(np.abs(convolved())))
+    return t_matrix, t_fft, diff
+
+
 def main() -> None:
     scn = Scenario()
     t_run = best_of(lambda: simulate_wear(scn, 1e6), 5)
@@ -78,6 +100,11 @@ def main() -> None:
     print(f"speed-up of the batched solve        : {t_ref / t_batch:8.1f} x")
     print(f"largest difference of the peaks      : {diff:.1e} of the largest peak "
           "(numerically solved positions)")
+    for cells in (64, 512):
+        t_matrix, t_fft, diff = deflections(cells)
+        print(f"deflection, 400 rows x {cells:3d} cells    : {t_matrix * 1e3:8.3f} ms   "
+              f"(FFT convolution {t_fft * 1e3:.3f} ms: {t_fft / t_matrix:.1f} x; largest "
+              f"difference {diff:.1e})")
 
 
 if __name__ == "__main__":

@@ -55,6 +55,20 @@ def test_a_wear_curvature_changes_the_effective_radius(kappa):
     assert width == pytest.approx(1 / math.sqrt(1 + kappa), abs=2 * dX)
 
 
+def test_the_influence_matrix_deflects_a_hertz_ellipse_into_its_parabola():
+    """Johnson, Contact Mechanics 4.2: the Hertz pressure sqrt(1 - X^2) on a line contact
+    deflects the surfaces by a constant minus X^2/2 across the band (Hertz units), and a
+    uniform load's deflection is even about the band's centre."""
+    X, dX = _cells(n=256)
+    P = np.sqrt(np.clip(1 - X**2, 0, None))
+    u = P @ wc.influence_matrix(X.size, dX)
+    inside = np.abs(X) < 0.95
+    flat = u[inside] + X[inside] ** 2 / 2
+    assert np.ptp(flat) < 2e-3 * np.ptp(X[inside] ** 2 / 2)
+    v = np.ones_like(X) @ wc.influence_matrix(X.size, dX)
+    np.testing.assert_allclose(v, v[::-1], rtol=1e-12)
+
+
 @settings(max_examples=15, deadline=None)
 @given(depth=st.floats(-0.5, 2.0), width=st.floats(0.1, 1.5), at=st.floats(-1.0, 1.0))
 def test_contact_conditions_hold_for_any_local_wear(depth, width, at):
@@ -65,8 +79,7 @@ def test_contact_conditions_hold_for_any_local_wear(depth, width, at):
     gap = X**2 / 2 + depth * np.exp(-((X - at) / width) ** 2)
     P, _ = wc.solve_gap_contact(gap, dX)
     assert np.all(P >= 0) and P.sum() * dX == pytest.approx(math.pi / 2, rel=1e-9)
-    kf, nfft = wc._kernel(X.size, dX)
-    total = (wc._deflect(P, kf, nfft) + gap)[0]
+    total = (P @ wc.influence_matrix(X.size, dX) + gap)[0]
     on = P[0] > 0
     touch = total[on].mean()
     assert np.abs(total[on] - touch).max() < 2e-3 * (gap.max() - gap.min())
