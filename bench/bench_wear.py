@@ -102,7 +102,7 @@ def main() -> None:
           "(numerically solved positions)")
     for cells in (64, 512):
         t_matrix, t_fft, diff = deflections(cells)
-        print(f"deflection, 400 rows x {cells:3d} cells    : {t_matrix * 1e3:8.3f} ms   "
+        print(f"deflection, 400 rows x {cells:3d} cells     : {t_matrix * 1e3:8.3f} ms   "
               f"(FFT convolution {t_fft * 1e3:.3f} ms: {t_fft / t_matrix:.1f} x; largest "
               f"difference {diff:.1e})")
 
