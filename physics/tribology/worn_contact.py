@@ -19,7 +19,7 @@ pressure ``p(x) >= 0`` then solves the elastic half-space line contact
 by the projected conjugate-gradient method of Polonsky & Keer (Wear 231 (1999) 206-219), the
 deflection as the product of the cell pressures with the influence matrix of piecewise-constant
 pressure cells (the kernel of :mod:`physics.tribology.mixed_ehl`; a symmetric Toeplitz matrix of
-64 to 1024 cells, whose product is faster than an FFT convolution at these sizes:
+64 to 512 cells, whose product is faster than an FFT convolution at these sizes:
 ``bench/bench_wear.py``). Every position is solved at once, in Hertz units of its unworn
 contact (``X = x / b``, ``P = p / p_max``, gap over ``b^2 / R``): the cells have one width for
 all positions, so one matrix serves the whole batch. An unworn position (gap correction
