@@ -169,9 +169,8 @@ def check_run(cfg: Any) -> None:
     starts with them."""
     root = Path(str(cfg.paths.root_dir)) / "logs"
     check_inside(root / str(cfg.task_name), root, f"task_name = {cfg.task_name!r}")
-    for key in ("seed",):
-        if isinstance(cfg[key], bool) or not isinstance(cfg[key], int) or cfg[key] < 0:
-            raise ValueError(f"{key} = {cfg[key]!r} must be a whole number >= 0")
+    if isinstance(cfg.seed, bool) or not isinstance(cfg.seed, int) or cfg.seed < 0:
+        raise ValueError(f"seed = {cfg.seed!r} must be a whole number >= 0")
     if cfg.get("threads") is not None and not (isinstance(cfg.threads, int) and cfg.threads > 0):
         raise ValueError(f"threads = {cfg.threads!r} must be a whole number >= 1 or null")
     OmegaConf.to_object(cfg.model).check()
