@@ -16,9 +16,9 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 #: physics layers, each importing only from those before it (README, Architecture)
-LAYERS = ["exports", "arguments", "reference", "interrupt", "params", "files", "command", "gear",
-          "scope", "tribology", "dynamics", "signals", "estimators", "dataset", "reproduce", "loop",
-          "testbeds"]
+LAYERS = ["exports", "blas", "arguments", "reference", "interrupt", "params", "files", "command",
+          "gear", "scope", "tribology", "dynamics", "signals", "estimators", "dataset", "reproduce",
+          "loop", "testbeds"]
 #: the subpackages that name a public surface in ``__init__.py``
 SUBPACKAGES = sorted({".".join(p.parent.relative_to(ROOT).parts)
                       for p in (ROOT / "physics").glob("*/**/__init__.py")} | {"surrogate"})

@@ -31,9 +31,9 @@ from typing import TypeVar
 
 import numba
 import numpy as np
-from threadpoolctl import threadpool_limits
 from tqdm import tqdm
 
+from physics import blas
 from physics.dynamics.model import anti_aliased, anti_aliasing_filter
 
 F = TypeVar("F", bound=Callable)
@@ -77,7 +77,7 @@ def one_blas_thread(fn: F) -> F:
     """``fn`` run with the BLAS libraries limited to one thread (restored after)."""
     @functools.wraps(fn)
     def run(*args, **kwargs):
-        with threadpool_limits(limits=1, user_api="blas"):
+        with blas.one_blas_thread():
             return fn(*args, **kwargs)
     return run  # type: ignore[return-value]
 

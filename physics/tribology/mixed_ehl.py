@@ -152,8 +152,8 @@ from functools import lru_cache
 import numpy as np
 from scipy import fft as sfft
 from scipy import linalg, special
-from threadpoolctl import threadpool_limits
 
+from physics.blas import one_blas_thread
 from physics.tribology import lubrication
 
 # --- Greenwood-Tripp roughness constants -------------------------------------------------------
@@ -191,7 +191,7 @@ def _single_blas_thread():
     if not LIMIT_BLAS_THREADS:
         yield
         return
-    with threadpool_limits(limits=1, user_api="blas"):
+    with one_blas_thread():
         yield
 
 

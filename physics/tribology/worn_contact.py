@@ -42,8 +42,8 @@ from functools import cached_property, lru_cache
 import numpy as np
 from scipy.interpolate import make_interp_spline
 from scipy.linalg import toeplitz
-from threadpoolctl import threadpool_limits
 
+from physics.blas import one_blas_thread
 from physics.gear import contact
 from physics.params import OutOfScope
 
@@ -102,7 +102,7 @@ def solve_gap_contact(gap: np.ndarray, dX: float, load: float = math.pi / 2,
     delta = np.zeros(m)
     active = np.arange(m)  # rows still iterating: a converged row is left alone
     change = np.zeros(m)
-    with threadpool_limits(limits=1, user_api="blas"):  # products this small: one thread
+    with one_blas_thread():  # products this small
         for it in range(1, max_iter + 1):
             Pa, ta, ga = P[active], t[active], gap[active]
             on = Pa > 0
