@@ -248,78 +248,90 @@ def integrate(par, tables, x0, dt, n_transient, n_sub, n_out, n_bins, half, step
     load_b = np.empty((n, n_out))
     phase_sum = np.zeros((n, n_bins))
     phase_count = np.zeros((n, n_bins))
-    n_phase = tables.shape[2]
     for j in numba.prange(n):
-        p, tab = par[j], tables[j]
-        x, v = x0[j], 0.0
-        inv_m = 1.0 / p[MASS]
-        n_tab = float(n_phase)
-        n_per = p[CELLS_PER_PERIOD]  # table cells per mesh period
-        # mesh phase advance per step, in table cells
-        inc = p[ROLL_SPEED] * dt / p[BASE_PITCH] * n_per
-        pos = (inc * step0) % n_tab
-        # e''(t) = -E_l w1^2 sin(w1 t) - E_s wm^2 sin(wm t): sines advanced by exact rotations
-        a_l, a_s = p[LONG_ERROR] * p[OMEGA1] ** 2, p[SHORT_ERROR] * p[OMEGA_MESH] ** 2
-        cl, sl = math.cos(0.5 * p[OMEGA1] * dt), math.sin(0.5 * p[OMEGA1] * dt)
-        cs, ss = math.cos(0.5 * p[OMEGA_MESH] * dt), math.sin(0.5 * p[OMEGA_MESH] * dt)
-        t0 = step0 * dt
-        # sin, cos of w1 t and wm t
-        s1, c1 = math.sin(p[OMEGA1] * t0), math.cos(p[OMEGA1] * t0)
-        s2, c2 = math.sin(p[OMEGA_MESH] * t0), math.cos(p[OMEGA_MESH] * t0)
-        total = n_transient + k_last + 1  # the last recorded step's force needs its stages
-        mu_c = p[PINION_MODULATION] * math.cos(p[PINION_MODULATION_PHASE])
-        mu_s = p[PINION_MODULATION] * math.sin(p[PINION_MODULATION_PHASE])
-        # the time terms and the mesh state at the step's start: each instant's are evaluated
-        # once (the end of a step is the start of the next)
-        x0e, w0, da0, kf0 = _extra(p, t0)
-        st0 = _mesh_state(p, tab, pos, da0, kf0 * _pinion_factor(mu_c, mu_s, s1, c1))
-        for step in range(step0, total + 1):
-            # the mesh at (t, x) serves both the record of the state reached and stage 1 of RK4
-            l_a, l_b, f_a, f_b, f_x = _mesh(p, st0, x, v)
-            k = step - n_transient
-            f = f_a + f_b + f_x
-            recorded = k_first <= k <= k_last
-            if recorded:
-                dte[j, k - k_first] = x
-                if 0 < k <= n_out * n_sub:
-                    b = int((pos % n_per) / n_per * n_bins)
-                    if b >= n_bins:
-                        b = n_bins - 1
-                    phase_sum[j, b] += max(f, 0.0)  # drive flanks only (coast impacts: < 0)
-                    phase_count[j, b] += 1.0
-                    if k % n_sub == 0:
-                        i = k // n_sub - 1
-                        load_a[j, i] = f_a
-                        load_b[j, i] = f_b
-            if step == total:
-                break
-            s1h, c1h = s1 * cl + c1 * sl, c1 * cl - s1 * sl  # at t + dt/2
-            s2h, c2h = s2 * cs + c2 * ss, c2 * cs - s2 * ss
-            s1n, c1n = s1h * cl + c1h * sl, c1h * cl - s1h * sl  # at t + dt
-            s2n, c2n = s2h * cs + c2h * ss, c2h * cs - s2h * ss
-            t = step * dt
-            xhe, wh, dah, kfh = _extra(p, t + 0.5 * dt)
-            x1e, w1, da1, kf1 = _extra(p, t + dt)
-            e0 = x0e - (a_l * s1 + a_s * s2)
-            eh = xhe - (a_l * s1h + a_s * s2h)
-            e1 = x1e - (a_l * s1n + a_s * s2n)
-            a1 = (w0 - l_a * f_a - l_b * f_b - f_x) * inv_m - e0
-            pos_h = _wrap(pos + 0.5 * inc, n_tab)
-            pos_1 = _wrap(pos + inc, n_tab)
-            st_h = _mesh_state(p, tab, pos_h, dah, kfh * _pinion_factor(mu_c, mu_s, s1h, c1h))
-            st1 = _mesh_state(p, tab, pos_1, da1, kf1 * _pinion_factor(mu_c, mu_s, s1n, c1n))
-            a2, f2 = _accel(p, st_h, x + 0.5 * dt * v, v + 0.5 * dt * a1, eh, wh, inv_m)
-            a3, f3 = _accel(p, st_h, x + 0.5 * dt * (v + 0.5 * dt * a1), v + 0.5 * dt * a2, eh,
-                            wh, inv_m)
-            a4, f4 = _accel(p, st1, x + dt * (v + 0.5 * dt * a2), v + dt * a3, e1, w1, inv_m)
-            if recorded:
-                force[j, k - k_first] = (f + 2.0 * (f2 + f3) + f4) / 6.0
-            x += dt * (v + dt * (a1 + a2 + a3) / 6.0)
-            v += dt * (a1 + 2.0 * a2 + 2.0 * a3 + a4) / 6.0
-            pos = pos_1
-            x0e, w0, st0 = x1e, w1, st1
-            s1, c1, s2, c2 = s1n, c1n, s2n, c2n
-            if step % 4096 == 0:  # keep the rotations on the unit circle
-                r1, r2 = math.hypot(s1, c1), math.hypot(s2, c2)
-                s1, c1, s2, c2 = s1 / r1, c1 / r1, s2 / r2, c2 / r2
+        _integrate_one(par[j], tables[j], x0[j], dt, n_transient, n_sub, n_out, n_bins, half,
+                       step0, dte[j], force[j], load_a[j], load_b[j], phase_sum[j],
+                       phase_count[j])
     return dte, force, load_a, load_b, phase_sum, phase_count
+
+
+@numba.njit(cache=True, fastmath=True, nogil=True)
+def _integrate_one(p, tab, x0, dt, n_transient, n_sub, n_out, n_bins, half, step0, dte, force,
+                   load_a, load_b, phase_sum, phase_count):
+    """One scenario of :func:`integrate` (parameters ``p``, tables ``tab``, start ``x0``) into
+    its rows of the outputs. Compiled on its own: the parallel loop around it then stays small,
+    which numba's parallel pass compiles in a fraction of the time it takes over this body."""
+    k_first = n_sub - half * n_sub
+    k_last = n_out * n_sub + half * n_sub
+    n_phase = tab.shape[1]
+    x, v = x0, 0.0
+    inv_m = 1.0 / p[MASS]
+    n_tab = float(n_phase)
+    n_per = p[CELLS_PER_PERIOD]  # table cells per mesh period
+    # mesh phase advance per step, in table cells
+    inc = p[ROLL_SPEED] * dt / p[BASE_PITCH] * n_per
+    pos = (inc * step0) % n_tab
+    # e''(t) = -E_l w1^2 sin(w1 t) - E_s wm^2 sin(wm t): sines advanced by exact rotations
+    a_l, a_s = p[LONG_ERROR] * p[OMEGA1] ** 2, p[SHORT_ERROR] * p[OMEGA_MESH] ** 2
+    cl, sl = math.cos(0.5 * p[OMEGA1] * dt), math.sin(0.5 * p[OMEGA1] * dt)
+    cs, ss = math.cos(0.5 * p[OMEGA_MESH] * dt), math.sin(0.5 * p[OMEGA_MESH] * dt)
+    t0 = step0 * dt
+    # sin, cos of w1 t and wm t
+    s1, c1 = math.sin(p[OMEGA1] * t0), math.cos(p[OMEGA1] * t0)
+    s2, c2 = math.sin(p[OMEGA_MESH] * t0), math.cos(p[OMEGA_MESH] * t0)
+    total = n_transient + k_last + 1  # the last recorded step's force needs its stages
+    mu_c = p[PINION_MODULATION] * math.cos(p[PINION_MODULATION_PHASE])
+    mu_s = p[PINION_MODULATION] * math.sin(p[PINION_MODULATION_PHASE])
+    # the time terms and the mesh state at the step's start: each instant's are evaluated
+    # once (the end of a step is the start of the next)
+    x0e, w0, da0, kf0 = _extra(p, t0)
+    st0 = _mesh_state(p, tab, pos, da0, kf0 * _pinion_factor(mu_c, mu_s, s1, c1))
+    for step in range(step0, total + 1):
+        # the mesh at (t, x) serves both the record of the state reached and stage 1 of RK4
+        l_a, l_b, f_a, f_b, f_x = _mesh(p, st0, x, v)
+        k = step - n_transient
+        f = f_a + f_b + f_x
+        recorded = k_first <= k <= k_last
+        if recorded:
+            dte[k - k_first] = x
+            if 0 < k <= n_out * n_sub:
+                b = int((pos % n_per) / n_per * n_bins)
+                if b >= n_bins:
+                    b = n_bins - 1
+                phase_sum[b] += max(f, 0.0)  # drive flanks only (coast impacts: < 0)
+                phase_count[b] += 1.0
+                if k % n_sub == 0:
+                    i = k // n_sub - 1
+                    load_a[i] = f_a
+                    load_b[i] = f_b
+        if step == total:
+            break
+        s1h, c1h = s1 * cl + c1 * sl, c1 * cl - s1 * sl  # at t + dt/2
+        s2h, c2h = s2 * cs + c2 * ss, c2 * cs - s2 * ss
+        s1n, c1n = s1h * cl + c1h * sl, c1h * cl - s1h * sl  # at t + dt
+        s2n, c2n = s2h * cs + c2h * ss, c2h * cs - s2h * ss
+        t = step * dt
+        xhe, wh, dah, kfh = _extra(p, t + 0.5 * dt)
+        x1e, w1, da1, kf1 = _extra(p, t + dt)
+        e0 = x0e - (a_l * s1 + a_s * s2)
+        eh = xhe - (a_l * s1h + a_s * s2h)
+        e1 = x1e - (a_l * s1n + a_s * s2n)
+        a1 = (w0 - l_a * f_a - l_b * f_b - f_x) * inv_m - e0
+        pos_h = _wrap(pos + 0.5 * inc, n_tab)
+        pos_1 = _wrap(pos + inc, n_tab)
+        st_h = _mesh_state(p, tab, pos_h, dah, kfh * _pinion_factor(mu_c, mu_s, s1h, c1h))
+        st1 = _mesh_state(p, tab, pos_1, da1, kf1 * _pinion_factor(mu_c, mu_s, s1n, c1n))
+        a2, f2 = _accel(p, st_h, x + 0.5 * dt * v, v + 0.5 * dt * a1, eh, wh, inv_m)
+        a3, f3 = _accel(p, st_h, x + 0.5 * dt * (v + 0.5 * dt * a1), v + 0.5 * dt * a2, eh,
+                        wh, inv_m)
+        a4, f4 = _accel(p, st1, x + dt * (v + 0.5 * dt * a2), v + dt * a3, e1, w1, inv_m)
+        if recorded:
+            force[k - k_first] = (f + 2.0 * (f2 + f3) + f4) / 6.0
+        x += dt * (v + dt * (a1 + a2 + a3) / 6.0)
+        v += dt * (a1 + 2.0 * a2 + 2.0 * a3 + a4) / 6.0
+        pos = pos_1
+        x0e, w0, st0 = x1e, w1, st1
+        s1, c1, s2, c2 = s1n, c1n, s2n, c2n
+        if step % 4096 == 0:  # keep the rotations on the unit circle
+            r1, r2 = math.hypot(s1, c1), math.hypot(s2, c2)
+            s1, c1, s2, c2 = s1 / r1, c1 / r1, s2 / r2, c2 / r2
