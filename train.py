@@ -46,7 +46,7 @@ def task(cfg: DictConfig) -> float:
     return run_command(cfg, prepare, fit, kept)
 
 
-main = entry(task, check="surrogate.training:prepare")
+main = entry(task, check="surrogate.training:prepare", quick=settings.check_run)
 
 
 if __name__ == "__main__":

@@ -27,13 +27,14 @@
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import dataclasses
 import logging
 import os
 import shutil
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -319,15 +320,16 @@ def run_command(cfg: DictConfig, prepare: Callable[[DictConfig], Plan],
 
 # --- the console entry -------------------------------------------------------------------
 
-def entry(task: Callable[[], Any], check: Callable[[DictConfig], Any] | str | None = None
-          ) -> Callable[[], Any]:
+def entry(task: Callable[[], Any], check: Callable[[DictConfig], Any] | str | None = None,
+          quick: Callable[[DictConfig], Any] | None = None) -> Callable[[], Any]:
     """The console entry of an app around its ``@hydra.main`` function ``task``: Ctrl-C and
     SIGTERM as :func:`physics.interrupt.guard` ends them. ``check(cfg)`` (or
     ``"module:function"``) validates a job's config without side effects: a sweep's jobs are
-    checked with it before any starts (:class:`RunRecord`)."""
+    checked with it before any starts (:class:`RunRecord`); ``quick(cfg)``, checks that need
+    no slow import, runs on every job before the first job's ``check``."""
     def main() -> Any:
-        global _CHECK
-        _CHECK = check
+        global _CHECK, _QUICK
+        _CHECK, _QUICK = check, quick
         try:
             check_spelling(sys.argv[1:])
         except ValueError as err:
@@ -418,8 +420,10 @@ def _undo_unstarted() -> None:
 
 #: the record a failed job of a sweep leaves in its folder: one line, why it failed
 FAILED = "failed.txt"
-#: the check of a job's config for a sweep (set by :func:`entry`)
+#: the check of a job's config for a sweep, and its part that needs no slow import (set by
+#: :func:`entry`)
 _CHECK: Callable[[DictConfig], Any] | str | None = None
+_QUICK: Callable[[DictConfig], Any] | None = None
 
 
 class JobFailed(Exception):
@@ -507,9 +511,11 @@ def check_launcher(config: DictConfig) -> None:
 
 
 def check_sweep(config: DictConfig) -> None:
-    """Compose every job of the sweep ``config`` and check it (:func:`check_keys` and the
-    app's check) before any job starts; a bad job refuses the whole sweep in one line naming
-    its overrides (exit code 2). Also notes each job's folder for the sweep's summary."""
+    """Compose every job of the sweep ``config`` and check it before any job starts: first
+    every job by :func:`check_keys`, :func:`check_case` and the app's quick check, then every
+    job by the app's check (a bad value in the last job is refused before the slow imports
+    the first job's check may need); a bad job refuses the whole sweep in one line naming its
+    overrides (exit code 2). Also notes each job's folder for the sweep's summary."""
     from hydra.core.global_hydra import GlobalHydra
     from hydra.core.hydra_config import HydraConfig
 
@@ -519,10 +525,10 @@ def check_sweep(config: DictConfig) -> None:
         return
     loader = GlobalHydra.instance().config_loader()
     saved = HydraConfig.instance().cfg
-    check = _resolve(_CHECK) if _CHECK is not None else None
+    composed = []
     try:
         for job in jobs:
-            try:
+            with _refusing_the_sweep(job):
                 cfg = loader.load_sweep_config(config, list(job.overrides))
                 with open_dict(cfg):
                     cfg.hydra.job.num = job.num
@@ -536,16 +542,28 @@ def check_sweep(config: DictConfig) -> None:
                     del task["hydra"]
                 check_keys(task)
                 check_case(task, job.overrides)
-                if check is not None:
-                    check(task)
-            except ValueError as err:
-                overrides = " ".join(job.overrides) or "no overrides"
-                print(f"error: job {job.num} of the sweep ({overrides}): {err}; no job was "
-                      "started: fix or drop that value and run the sweep again",
-                      file=sys.stderr)
-                raise SystemExit(2) from None
+                if _QUICK is not None:
+                    _QUICK(task)
+                composed.append((job, cfg, task))
+        check = _resolve(_CHECK) if _CHECK is not None else None
+        for job, cfg, task in composed if check is not None else ():
+            with _refusing_the_sweep(job):
+                HydraConfig.instance().set_config(cfg)
+                check(task)
     finally:
         HydraConfig.instance().cfg = saved
+
+
+@contextlib.contextmanager
+def _refusing_the_sweep(job: SweepJob) -> Iterator[None]:
+    """A ValueError of the block refuses the sweep in one line naming ``job`` (exit code 2)."""
+    try:
+        yield
+    except ValueError as err:
+        overrides = " ".join(job.overrides) or "no overrides"
+        print(f"error: job {job.num} of the sweep ({overrides}): {err}; no job was "
+              "started: fix or drop that value and run the sweep again", file=sys.stderr)
+        raise SystemExit(2) from None
 
 
 def sweep_kept(sweep: Path) -> str:

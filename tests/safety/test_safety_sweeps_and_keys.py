@@ -54,9 +54,14 @@ def test_a_failing_job_does_not_stop_the_others(tmp_path, launcher):
 
 
 def test_train_sweep_with_a_bad_case_is_refused_before_the_good_one_starts(tmp_path):
-    run = subprocess.run([sys.executable, str(ROOT / "train.py"), "-m", "case=3,9"],
-                         cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    """Every job's settings that need no data are judged before the first job's full check,
+    which imports Lightning and torch (-X importtime lists every module imported)."""
+    run = subprocess.run([sys.executable, "-X", "importtime", str(ROOT / "train.py"), "-m",
+                          "case=3,9"], cwd=tmp_path, capture_output=True, text=True, timeout=300)
     assert run.returncode == 2, run.stderr[-2000:]
+    imported = {line.split("|")[-1].strip() for line in run.stderr.splitlines()
+                if line.startswith("import time:")}
+    assert "surrogate.settings" in imported and not {"lightning", "torch"} & imported
     errors = [ln for ln in run.stderr.splitlines() if ln.startswith("error:")]
     assert len(errors) == 1 and "job 1 of the sweep (case=9)" in errors[0]
     assert "case = '9' is not an operating case" in errors[0]
