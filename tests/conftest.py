@@ -99,13 +99,15 @@ def config_store() -> ConfigStore:
 def _group(item: pytest.Item) -> str:
     """A test's group in a parallel run: a README command or snippet with the first command of
     the chain it starts from (what a chain makes is made once, on one worker; chains run side
-    by side); any other test with the rest of its file (its module fixtures are made once)."""
+    by side); any other test with the rest of its file (its module fixtures are made once). A
+    test that reads a README command's run without naming it as its ``key`` parameter names it
+    in its module's ``README_KEY``."""
     if "readme_folder" not in item.fixturenames:
         return item.nodeid.split("::")[0]
-    from tests.acceptance.readme import ALL, TRAIN_CASE3
+    from tests.acceptance.readme import ALL
 
     key = getattr(item, "callspec", None) and item.callspec.params.get("key")
-    key = key if key in ALL else TRAIN_CASE3
+    key = key if key in ALL else item.module.README_KEY
     while ALL[key].start is not None:
         key = ALL[key].start
     return f"readme: {key}"

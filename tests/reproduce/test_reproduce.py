@@ -21,11 +21,16 @@ TABLES = ["table02_speed", "table03_torque", "table04_roughness", "table05_lubri
           "table12_evolution_fits_case3", "table14_dte_features_case3"]
 
 
+#: the README command whose run these tests read (:func:`tests.conftest._group` keeps them on
+#: the worker that runs it)
+README_KEY = "python -m physics.reproduce"
+
+
 @pytest.fixture
 def out(readme_folder):
     """The tables and figures of the README's ``python -m physics.reproduce``, run once per
     session at the acceptance tests' size (``tests/acceptance/readme.py``, ``FAST_REPRO``)."""
-    folder, _ = readme_folder("python -m physics.reproduce")
+    folder, _ = readme_folder(README_KEY)
     return next(folder.glob("outputs/*/*"))
 
 
