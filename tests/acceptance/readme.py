@@ -357,5 +357,7 @@ def copy_start(source: Path, folder: Path, only: tuple[str, ...] = ()) -> None:
             shutil.copy2(src, dst)
 
 
-#: the commands and snippets that others start from: each runs once per test session
-STARTS = sorted({c.start for c in ALL.values() if c.start is not None})
+#: the reproduction's run, which the tests of its tables read (``tests/reproduce``)
+REPRODUCE = "python -m physics.reproduce"
+#: the commands and snippets that others start from or read: each runs once per test session
+STARTS = sorted({c.start for c in ALL.values() if c.start is not None} | {REPRODUCE})

@@ -62,8 +62,8 @@ def _params(*tables: dict) -> list:
 
 
 def _ran(key: str, tmp_path: Path, readme_folder):
-    """The folder ``key`` ran in and its process: the session's, if others start from it, else
-    a run in ``tmp_path`` from a copy of its start."""
+    """The folder ``key`` ran in and its process: the session's, if others start from it or
+    read it, else a run in ``tmp_path`` from a copy of its start."""
     if key in STARTS:
         return readme_folder(key)
     case = ALL[key]

@@ -11,6 +11,7 @@ import pandas as pd
 import pytest
 
 from physics.reference import THESIS_TABLES
+from tests.acceptance.readme import REPRODUCE
 
 REF = THESIS_TABLES
 FAST = ["solver.n_points=101", "stiffness.fem_refine=1", "stiffness.fem_refines=[1]",
@@ -23,7 +24,7 @@ TABLES = ["table02_speed", "table03_torque", "table04_roughness", "table05_lubri
 
 #: the README command whose run these tests read (:func:`tests.conftest._group` keeps them on
 #: the worker that runs it)
-README_KEY = "python -m physics.reproduce"
+README_KEY = REPRODUCE
 
 
 @pytest.fixture
