@@ -32,12 +32,13 @@ import pandas as pd
 import torch
 from omegaconf import OmegaConf
 
-from physics.files import atomic_write, existing_file
+from physics.files import atomic_write
 from surrogate.candidates import Candidate
 from surrogate.conformal import cv_plus, exchangeable_quantile
 from surrogate.network import Network, mixture
 from surrogate.novelty import Novelty, difficulty
 from surrogate.schema import FeatureSchema, real_columns
+from surrogate.settings import model_file
 
 if TYPE_CHECKING:  # the training module imports Lightning, which inference does without
     from surrogate.model import WearRegressor
@@ -279,8 +280,7 @@ class Surrogate:
     def load(cls, path: str | Path, key: str = "checkpoint") -> Surrogate:
         """The model exported to ``path`` (checked whole; a refusal names it as ``key``: the
         option or argument that gave it)."""
-        path = existing_file(path, key, "pass the wear_surrogate.pt of a training run "
-                                        "(`python train.py` writes it in its run folder)")
+        path = model_file(path, key)
         named, fix = f"{key} = {str(path)!r}", "pass the wear_surrogate.pt a training run exported"
         try:
             payload = torch.load(path, map_location="cpu", weights_only=True)

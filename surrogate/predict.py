@@ -24,7 +24,7 @@ From Python::
 # ruff: noqa: E402 (the imports after the handlers: see install_at_start)
 from __future__ import annotations
 
-from physics.interrupt import install_at_start
+from physics.interrupt import deferred, install_at_start
 
 install_at_start(__name__)  # Ctrl-C and SIGTERM handled from here on, during the slow imports
 
@@ -33,6 +33,7 @@ import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import hydra
 import pandas as pd
@@ -40,8 +41,10 @@ from omegaconf import DictConfig
 
 from physics.command import entry, run_command
 from physics.files import atomic_write, check_unrepeated, check_writable, existing_file
-from surrogate.inference import Surrogate, check_gearboxes, gearbox_columns
-from surrogate.novelty import envelope_report
+from surrogate.settings import model_file
+
+if TYPE_CHECKING:
+    from surrogate.inference import Surrogate
 
 log = logging.getLogger(__name__)
 
@@ -106,14 +109,18 @@ def prepare(cfg: DictConfig) -> PredictJob:
 def checked_job(ckpt: object, source: object, target: object, gearbox: object,
                 overwrite: object) -> PredictJob:
     """The model, the table and the output checked (:func:`check_output`) before any work,
-    each refusal naming the option (``ckpt``, ``input``, ``output``, ``gearbox``)."""
-    surrogate = Surrogate.load(ckpt, key="ckpt")
+    each refusal naming the option (``ckpt``, ``input``, ``output``, ``gearbox``). The files
+    are judged before the model's reader (torch, about 2 s) is imported."""
+    model = model_file(ckpt, "ckpt")
     table = read_table(source)
+    output = check_output(target, Path(source), overwrite, model)
+    with deferred():  # a signal during the import is raised after it
+        from surrogate.inference import Surrogate, check_gearboxes, gearbox_columns
+    surrogate = Surrogate.load(model, key="ckpt")
     columns = gearbox_columns(gearbox)
     if surrogate.schema.baseline:
         check_gearboxes(table, list(columns), surrogate.schema.target, f"input = {source}")
     surrogate.schema.check(surrogate.schema.network_rows(table, list(columns)))
-    output = check_output(target, Path(source), overwrite, Path(ckpt))
     return PredictJob(surrogate, table, output, columns)
 
 
@@ -128,6 +135,8 @@ def predict_file(ckpt: str | Path, source: str | Path, target: str | Path,
 
 
 def execute(job: PredictJob) -> pd.DataFrame:
+    from surrogate.novelty import envelope_report  # imported with the model's reader
+
     df = job.table
     pred = job.surrogate.predict(df, list(job.gearbox))
     keep = [c for c in df.columns if c not in job.surrogate.schema.columns

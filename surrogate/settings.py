@@ -16,7 +16,7 @@ from typing import Any
 from omegaconf import MISSING, OmegaConf
 
 from physics.command import register_schema
-from physics.files import check_inside
+from physics.files import check_inside, existing_file
 from physics.params import operating_cases
 
 
@@ -176,6 +176,13 @@ def check_run(cfg: Any) -> None:
     OmegaConf.to_object(cfg.model).check()
     OmegaConf.to_object(cfg.trainer).check()
     cases_of(cfg.data.case)
+
+
+def model_file(value: object, key: str) -> Path:
+    """``value`` as the path of an existing file, for an exported model given as ``key``
+    (:func:`physics.files.existing_file`): judged before torch is imported to read it."""
+    return existing_file(value, key, "pass the wear_surrogate.pt of a training run "
+                                     "(`python train.py` writes it in its run folder)")
 
 
 def run_name(table: str | None, case) -> str:

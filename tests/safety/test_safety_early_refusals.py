@@ -158,3 +158,27 @@ def test_train_refuses_what_needs_no_data_before_importing_lightning(tmp_path, b
     assert "surrogate.settings" in imported  # the listing is read
     assert not {"lightning", "torch"} & imported, sorted({"lightning", "torch"} & imported)
     assert not any(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("args, says", [
+    (["ckpt=missing.pt", "input=in.csv"], "ckpt = 'missing.pt' does not exist"),
+    (["ckpt=model.pt", "input=missing.csv"], "input = 'missing.csv' does not exist"),
+    (["ckpt=model.pt", "input=in.csv", "output=in.csv"], "is the input file itself"),
+])
+def test_predict_refuses_its_files_before_importing_torch(tmp_path, args, says):
+    """The files predict reads and writes are judged before the model's reader (torch) is
+    imported (-X importtime lists every module imported): one line, exit 2, the files as
+    they were."""
+    (tmp_path / "model.pt").write_bytes(b"not read")
+    (tmp_path / "in.csv").write_text("a\n1\n")
+    proc = subprocess.run([sys.executable, "-X", "importtime", "-m", "surrogate.predict", *args,
+                           "hydra.run.dir=run"], cwd=tmp_path, capture_output=True, text=True,
+                          timeout=120)
+    imported = {line.split("|")[-1].strip() for line in proc.stderr.splitlines()
+                if line.startswith("import time:")}
+    errors = [line for line in proc.stderr.splitlines() if line.startswith("error:")]
+    assert proc.returncode == 2 and len(errors) == 1 and says in errors[0], proc.stderr[-2000:]
+    assert "surrogate.settings" in imported  # the listing is read
+    assert "torch" not in imported
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["in.csv", "model.pt"]
+    assert (tmp_path / "in.csv").read_text() == "a\n1\n"

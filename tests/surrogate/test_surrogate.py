@@ -35,12 +35,13 @@ from surrogate.inference import (
     Surrogate,
     conformal_scale,
     export,
+    gearbox_columns,
     torch_predict,
 )
 from surrogate.inputs import DEFAULT_INPUTS
 from surrogate.model import WearRegressor
 from surrogate.network import EnsembleMLP, mixture
-from surrogate.predict import gearbox_columns, predict_file
+from surrogate.predict import predict_file
 from surrogate.schema import FeatureSchema, baseline_changes, vector_magnitudes
 from surrogate.splits import split_trajectories, validation_count
 from surrogate.training import prepare, train
