@@ -5,12 +5,19 @@ Prints:
   >= 10), and on all cores for a batch, beside a ``scipy.integrate.solve_ivp`` (DOP853)
   integration of the same equations in their two-inertia form, measured in the same run;
 - one case's dynamically coupled wear evolution to 1.5e7 cycles (target: <= 20 s) and all five
-  cases of Table 11 (target: <= 60 s).
+  cases of Table 11 (target: <= 60 s);
+- the first simulation of a fresh process with an empty numba cache (what every fresh install,
+  test worker and dataset worker pays once: the kernels' compilation) beside the same in a
+  second process that loads the cache the first wrote.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import os
+import subprocess
+import sys
+import tempfile
 import time
 import warnings
 
@@ -32,7 +39,32 @@ from physics.params import Scenario, scenario_from_config
 warnings.simplefilter("ignore", SainsotRangeWarning)
 
 
+#: a fresh process's first simulation, timed inside it (the imports before the clock starts)
+FIRST_RUN = """
+import time
+from physics.dynamics.model import build_model, simulate
+from physics.params import Scenario
+scn = Scenario()
+model = build_model(scn)
+t = time.perf_counter()
+simulate(model, scn.dynamics)
+print(time.perf_counter() - t)
+"""
+
+
+def first_simulation_s(cache: str) -> float:
+    """Seconds of a fresh process's first simulation with the numba cache folder ``cache``."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": cache}
+    run = subprocess.run([sys.executable, "-c", FIRST_RUN], env=env, check=True,
+                         capture_output=True, text=True)
+    return float(run.stdout.split()[-1])
+
+
 def main() -> None:
+    with tempfile.TemporaryDirectory() as cache:
+        cold = first_simulation_s(cache)
+        warm = first_simulation_s(cache)
+
     scn = Scenario()
     model = build_model(scn)
     long_run = dataclasses.replace(scn.dynamics, duration_s=10.0, transient_s=0.0)
@@ -79,6 +111,8 @@ def main() -> None:
     print(f"largest DTE difference           : {diff * 100:9.3f} % of its peak-to-peak")
     print(f"case 3 coupled evolution to 1.5e7: {one_case:9.2f} s (target <= 20 s)")
     print(f"all five cases                   : {five:9.2f} s (target <= 60 s)")
+    print(f"first simulation, empty cache    : {cold:9.2f} s (the kernels' compilation)")
+    print(f"first simulation, cache loaded   : {warm:9.2f} s (reference; {cold / warm:.0f} x)")
 
 
 if __name__ == "__main__":

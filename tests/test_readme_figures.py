@@ -152,3 +152,12 @@ def test_main_job_paragraph_of_the_benchmark_page():
              f"{m['test_rmse'] * 1e3:.2f} um; its 95 % interval covers "
              f"{m['test_interval_coverage']:.2f} of them")
     assert quote in doc
+
+
+def test_rig_calibration_quote():
+    first = pd.read_csv(FIGURES / "rig_calibration.csv").iloc[0]
+    quote = (f"load calibrated at one stage ({first.calibration_wear_mm:g} mm): "
+             f"{first.torque_Nm:g} N m, rank correlation {first.rank_correlation:.2f}, rises "
+             f"{first['model_over_measured_0.4mm']:.2f} and "
+             f"{first['model_over_measured_0.9mm']:.2f} times the rig's at 0.4 and 0.9 mm")
+    assert quote in readme_row("Housing vibration against wear beside a real rig")

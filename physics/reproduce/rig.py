@@ -10,7 +10,11 @@ here, each choice named:
   defaults (:mod:`physics.params`);
 - load: not stated. The model runs at each torque of ``TORQUES_NM`` (a plausible range for a
   module-3 pair of this size, 20-200 N m); ``rms_model`` is the 100 N m one and every torque
-  has a column of its own. Nothing is calibrated to the rig;
+  has a column of its own. Nothing of this sweep is calibrated to the rig. Beside it the load
+  of the contact on the path is calibrated once, on one stage (:func:`calibrations`): the
+  torque of ``CALIBRATION_TORQUES_NM`` whose rise at the stage nearest ``CALIBRATE_AT_MM``
+  is nearest the rig's (``rms_calibrated``), judged on the other stages; every stage of
+  ``CALIBRATION_RANGE_MM`` taken in turn as that one stage shows what the choice does;
 - wear state of a stage: the pair worn from new under the dry Archard law by the contact its
   worn flanks make (:func:`physics.tribology.contact_wear.simulate_contact_wear`, at the
   stage's torque) until the deepest point of either active profile reaches the stage's depth
@@ -48,6 +52,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 from scipy import stats
+from tqdm import tqdm
 
 from physics.dynamics.model import EXACT_PHASES, PairModel, build_model, simulate
 from physics.files import (
@@ -75,6 +80,14 @@ TORQUES_NM = (20.0, 50.0, 100.0, 200.0)
 DURATION_S = 0.5
 #: stages whose rises the summary compares [mm]
 RISE_AT_MM = (0.4, 0.9)
+#: the grid the path contact's load is calibrated on [N m] (ratios of at most 1.25: a torque
+#: within about 12 % of the best), the sweep's 20, 50 and 100 N m among them
+CALIBRATION_TORQUES_NM = (20.0, 25.0, 30.0, 35.0, 40.0, 45.0, 50.0, 60.0, 70.0, 85.0, 100.0)
+#: the one stage the load is calibrated on [mm]: below both compared depths, above the first
+#: stages' relief (40-120 um), where neither contact follows the rig
+CALIBRATE_AT_MM = 0.2
+#: the stages each taken in turn as that one stage, to show what the choice does [mm]
+CALIBRATION_RANGE_MM = (0.15, 0.35)
 COLUMNS = ("stage", "wear_mm", "acc_rms_g", "stage_order")
 
 
@@ -82,7 +95,8 @@ COLUMNS = ("stage", "wear_mm", "acc_rms_g", "stage_order")
 #: (the rig's stages lie 0.01-0.05 mm apart), else it is left empty
 RISE_TOLERANCE_MM = 0.025
 #: what the command writes into ``--out``
-OUTPUT_FILES = ("rig_comparison.csv", "rig_summary.csv", "rig_comparison.png",
+OUTPUT_FILES = ("rig_comparison.csv", "rig_summary.csv", "rig_calibration.csv",
+                "rig_comparison.png",
                 "rig_loop_table/rig_stage_means.csv", "rig_loop_table/gear.yaml",
                 "rig_loop_table/operating.yaml")
 
@@ -174,13 +188,14 @@ def worn_models(scn: Scenario, contact: str, s: np.ndarray | None,
             for w1, w2 in states]
 
 
-def model_rms(torque_Nm: float, depths_mm: np.ndarray) -> dict[str, np.ndarray]:
+def model_rms(torque_Nm: float, depths_mm: np.ndarray,
+              contacts: Sequence[str] = ("exact", "path")) -> dict[str, np.ndarray]:
     """Housing-acceleration RMS of the rig's pair worn to each depth, over the new pair's, with
-    the exact and the path contact (keys ``exact``, ``path``)."""
+    each of ``contacts`` (``exact``, ``path``: the keys)."""
     scn = rig_scenario(torque_Nm)
     s, states = worn_states(scn, depths_mm)
     out = {}
-    for contact in ("exact", "path"):
+    for contact in contacts:
         spread = simulate(worn_models(scn, contact, s, states), scn.dynamics,
                           every_phase=False).force.std(axis=1)
         out[contact] = spread / spread[np.flatnonzero(depths_mm == 0)[0]]
@@ -206,37 +221,81 @@ def unread_rises(depths: np.ndarray) -> str | None:
             "are left empty")
 
 
-def rig_comparison(table: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """One row per stage (``wear_mm``, ``rms_measured``, ``rms_model`` and one column per
-    torque and contact) and the summary per contact and torque (rank correlation, rises at
-    ``RISE_AT_MM``)."""
+def _judged(measured: pd.Series, model: pd.Series, depths: np.ndarray,
+            left_out: int | None = None) -> dict[str, float]:
+    """Spearman's rank correlation of ``model`` with ``measured`` over the stages (but the
+    stage ``left_out``), and the rises at ``RISE_AT_MM``, model beside rig."""
+    keep = np.arange(len(depths)) != (-1 if left_out is None else left_out)
+    row = {"rank_correlation": stats.spearmanr(measured[keep], model[keep]).statistic}
+    for at in RISE_AT_MM:
+        i = rise_stage(depths, at)
+        row[f"rise_measured_{at:g}mm"] = np.nan if i is None else measured.iloc[i]
+        row[f"rise_model_{at:g}mm"] = np.nan if i is None else model.iloc[i]
+        row[f"model_over_measured_{at:g}mm"] = (row[f"rise_model_{at:g}mm"]
+                                                / row[f"rise_measured_{at:g}mm"])
+    return row
+
+
+def calibrations(measured: pd.Series, depths: np.ndarray, curves: dict[float, np.ndarray],
+                 stages: Sequence[int]) -> pd.DataFrame:
+    """The path contact's load calibrated on one stage, each of ``stages`` in turn: the torque
+    of ``curves`` (RMS over new by torque) whose rise there is nearest the rig's (in ratio),
+    whether it is an end of the grid, and the curve judged on the other stages
+    (:func:`_judged`)."""
+    torques = np.array(sorted(curves))
+    rows = []
+    for i in stages:
+        misfit = [abs(np.log(curves[t][i] / measured.iloc[i])) for t in torques]
+        best = int(np.argmin(misfit))
+        rows.append({"calibration_wear_mm": depths[i], "torque_Nm": torques[best],
+                     "at_grid_end": best in (0, len(torques) - 1),
+                     "calibration_rise_measured": measured.iloc[i],
+                     "calibration_rise_model": curves[torques[best]][i],
+                     **_judged(measured, pd.Series(curves[torques[best]]), depths, i)})
+    return pd.DataFrame(rows)
+
+
+def rig_comparison(table: pd.DataFrame, progress: bool = False
+                   ) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame]:
+    """One row per stage (``wear_mm``, ``rms_measured``, ``rms_model``, ``rms_calibrated`` and
+    one column per torque and contact of the sweep), the sweep's summary per contact and torque
+    (rank correlation, rises at ``RISE_AT_MM``) and the one-stage calibrations of the path
+    contact's load (:func:`calibrations`; the first row is the one at ``CALIBRATE_AT_MM``, the
+    others each stage of ``CALIBRATION_RANGE_MM``); ``progress``: a bar over the torques."""
     means = stage_means(table)
     depths = means["wear_mm"].to_numpy(dtype=float)
-    for torque in TORQUES_NM:
-        rms = model_rms(torque, depths)
-        means[f"rms_model_{torque:g}Nm"] = rms["exact"]
-        means[f"rms_path_{torque:g}Nm"] = rms["path"]
+    path = {}
+    for torque in tqdm(sorted({*TORQUES_NM, *CALIBRATION_TORQUES_NM}), desc="torques",
+                       unit="torque", disable=not progress):
+        swept = torque in TORQUES_NM
+        rms = model_rms(torque, depths, ("exact", "path") if swept else ("path",))
+        path[torque] = rms["path"]
+        if swept:
+            means[f"rms_model_{torque:g}Nm"] = rms["exact"]
+            means[f"rms_path_{torque:g}Nm"] = rms["path"]
     means["rms_model"] = means["rms_model_100Nm"]
     rows = []
     for contact, prefix in (("exact", "rms_model"), ("path", "rms_path")):
         for torque in TORQUES_NM:
-            col = means[f"{prefix}_{torque:g}Nm"]
-            row = {"contact": contact, "torque_Nm": torque,
-                   "rank_correlation": stats.spearmanr(means["rms_measured"], col).statistic}
-            for at in RISE_AT_MM:
-                i = rise_stage(depths, at)
-                measured = np.nan if i is None else means["rms_measured"].iloc[i]
-                model = np.nan if i is None else col.iloc[i]
-                row[f"rise_measured_{at:g}mm"] = measured
-                row[f"rise_model_{at:g}mm"] = model
-                row[f"model_over_measured_{at:g}mm"] = model / measured
-            rows.append(row)
-    return means, pd.DataFrame(rows)
+            rows.append({"contact": contact, "torque_Nm": torque,
+                         **_judged(means["rms_measured"], means[f"{prefix}_{torque:g}Nm"],
+                                   depths)})
+    grid = {t: path[t] for t in CALIBRATION_TORQUES_NM}
+    low, high = CALIBRATION_RANGE_MM
+    chosen = rise_stage(depths, CALIBRATE_AT_MM)
+    others = [i for i in np.flatnonzero((depths >= low) & (depths <= high)) if i != chosen]
+    calibrated = calibrations(means["rms_measured"], depths, grid,
+                              ([] if chosen is None else [chosen]) + others)
+    if chosen is not None:
+        means["rms_calibrated"] = grid[calibrated["torque_Nm"].iloc[0]]
+    return means, pd.DataFrame(rows), calibrated
 
 
-def plot_rig_comparison(means: pd.DataFrame, path: Path) -> None:
+def plot_rig_comparison(means: pd.DataFrame, path: Path,
+                        torque_calibrated: float | None = None) -> None:
     """Measured and modelled RMS rise against wear, one line per torque; the exact contact on
-    the left, the path contact on the right."""
+    the left, the path contact on the right, with its load calibrated at one stage
+    (``torque_calibrated``, ``rms_calibrated``) where there is one."""
     plt = pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.0), sharey=True)
     for ax, (prefix, title) in zip(axes, (("rms_model", "flanks as they meet (exact)"),
@@ -246,6 +305,10 @@ def plot_rig_comparison(means: pd.DataFrame, path: Path) -> None:
         for torque in TORQUES_NM:
             ax.plot(means["wear_mm"], means[f"{prefix}_{torque:g}Nm"], ".-",
                     label=f"model, {torque:g} N m")
+        if prefix == "rms_path" and torque_calibrated is not None:
+            ax.plot(means["wear_mm"], means["rms_calibrated"], "r-", lw=2.5,
+                    label=f"model, {torque_calibrated:g} N m (calibrated at one stage)")
+            ax.legend(fontsize=8)
         ax.set_title(title)
         ax.set_xlabel("wear depth of the stage [mm]")
         ax.set_yscale("log")
@@ -267,7 +330,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         description="The model's housing vibration against wear beside a real rig's stage "
                     "means, the rig's unknown load swept over 20-200 N m.",
         epilog="writes rig_comparison.csv (one row per stage), rig_summary.csv (one row per "
-               "torque), rig_comparison.png and the loop's feature table rig_loop_table/ "
+               "torque), rig_calibration.csv (the path contact's load calibrated on one stage, "
+               "then on each stage of 0.15-0.35 mm in turn), rig_comparison.png and the loop's "
+               "feature table rig_loop_table/ "
                "(rig_stage_means.csv, gear.yaml, operating.yaml) into --out")
     ap.add_argument("--table", type=Path, default=default_table(),
                     help="the rig's records (stage, stage_order, wear_mm, acc_rms_g); default: "
@@ -299,10 +364,12 @@ def _run(table: pd.DataFrame, out: Path) -> int:
     unread = unread_rises(stage_means(table)["wear_mm"].to_numpy(dtype=float))
     if unread is not None:
         print(f"note: {unread}", file=sys.stderr)
-    stages, summary = rig_comparison(table)
+    stages, summary, calibrated = rig_comparison(table, progress=True)
     write_csv(stages, out / "rig_comparison.csv")
     write_csv(summary, out / "rig_summary.csv")
-    plot_rig_comparison(stages, out / "rig_comparison.png")
+    write_csv(calibrated, out / "rig_calibration.csv")
+    torque = calibrated["torque_Nm"].iloc[0] if "rms_calibrated" in stages else None
+    plot_rig_comparison(stages, out / "rig_comparison.png", torque)
     loop_table(table, out / "rig_loop_table")
     print(summary.to_string(index=False, float_format=lambda v: f"{v:.3g}"))
     return 0

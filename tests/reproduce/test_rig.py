@@ -6,6 +6,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -115,3 +116,67 @@ def test_the_loop_table_is_the_stage_means_with_the_rigs_stated_data(tmp_path):
     assert (scn.gear.module_mm, scn.gear.z1, scn.gear.z2, scn.operating.n1_rpm) == (
         3.0, 18, 35, 900.0)
     assert table.torque_unknown
+
+
+def test_a_one_stage_calibration_takes_the_torque_nearest_in_ratio_and_judges_the_rest():
+    """By hand: at stage 2 the rig reads 2.0; the 10, 20 and 40 N m curves read 4.0, 2.2 and
+    1.0 there, so 20 N m is nearest in ratio (2.2 / 2 against 2 / 1 and 4 / 2) and inside the
+    grid; its rank correlation is over the other stages (stage 2 left out: a curve that only
+    misorders stage 2 ranks perfectly), and its rises are read at 0.4 and 0.9 mm."""
+    depths = np.array([0.0, 0.1, 0.2, 0.4, 0.9])
+    measured = pd.Series([1.0, 1.5, 2.0, 3.0, 6.0])
+    curves = {10.0: np.array([1.0, 3.0, 4.0, 5.0, 9.0]),
+              20.0: np.array([1.0, 1.2, 9.9, 2.7, 6.6]),
+              40.0: np.array([1.0, 0.5, 1.0, 0.8, 1.2])}
+    curves[20.0][2] = 2.2
+    row = rig.calibrations(measured, depths, curves, [2]).iloc[0]
+    assert row.torque_Nm == 20.0 and not row.at_grid_end
+    assert row.calibration_rise_model == 2.2 and row.calibration_rise_measured == 2.0
+    assert row.rank_correlation == pytest.approx(1.0)
+    assert row["model_over_measured_0.4mm"] == pytest.approx(2.7 / 3.0)
+    assert row["model_over_measured_0.9mm"] == pytest.approx(6.6 / 6.0)
+    end = rig.calibrations(measured, depths, curves, [1]).iloc[0]  # 1.5: 40 N m's 0.5 is 3x off
+    assert end.torque_Nm == 20.0 and not end.at_grid_end
+    low = rig.calibrations(pd.Series([1.0, 0.4, 2.0, 3.0, 6.0]), depths, curves, [1]).iloc[0]
+    assert low.torque_Nm == 40.0 and low.at_grid_end  # the rig below every curve: a grid end
+
+
+def test_the_docs_one_stage_calibration_is_the_files(stages):
+    """docs/reproduction.md's one-stage calibration, from rig_calibration.csv (first row: the
+    stage nearest CALIBRATE_AT_MM; the others each stage of CALIBRATION_RANGE_MM) and the
+    stages' curves, to the digits printed; "not met" stands where a target is missed."""
+    cal = pd.read_csv(FIGURES / "rig_calibration.csv")
+    text = " ".join(_section().split())
+    first, rest = cal.iloc[0], cal
+    assert abs(first.calibration_wear_mm - rig.CALIBRATE_AT_MM) <= rig.RISE_TOLERANCE_MM
+    low, high = rig.CALIBRATION_RANGE_MM
+    assert cal.calibration_wear_mm.between(low, high).iloc[1:].all()
+    ratio = [f"model_over_measured_{a:g}mm" for a in rig.RISE_AT_MM]
+    meets = (cal.rank_correlation >= 0.9) & cal[ratio].apply(
+        lambda c: c.between(1 / 1.5, 1.5)).all(axis=1)
+
+    def span(col: str, fmt: str = ".2f") -> str:
+        return f"{rest[col].min():{fmt}}-{rest[col].max():{fmt}}"
+
+    def at(mm: float) -> pd.Series:  # the stage nearest mm
+        return stages.iloc[int((stages.wear_mm - mm).abs().argmin())]
+
+    quoted = [
+        f"It takes {first.torque_Nm:g} N m (rig {first.calibration_rise_measured:.2f} at "
+        f"{first.calibration_wear_mm:g} mm, model {first.calibration_rise_model:.2f})",
+        f"rank correlation {first.rank_correlation:.2f}, rise at 0.4 mm "
+        f"{first['rise_model_0.4mm']:.2f} against {first['rise_measured_0.4mm']:.2f} "
+        f"({first['model_over_measured_0.4mm']:.2f}), at 0.9 mm {first['rise_model_0.9mm']:.2f} "
+        f"against {first['rise_measured_0.9mm']:.2f} ({first['model_over_measured_0.9mm']:.2f})",
+        f"gives {span('torque_Nm', 'g')} N m, rank correlations {span('rank_correlation')}",
+        f"rises {span(ratio[0])} (0.4 mm) and {span(ratio[1])} (0.9 mm) times the rig's",
+        f"{int(meets.sum())} of the {len(cal)} meet all three",
+        f"at 0.85 mm {at(0.85)['rms_calibrated']:.2f} times new at {first.torque_Nm:g} N m, "
+        f"{at(0.85)['rms_path_50Nm']:.2f} at 50; rig {at(0.85)['rms_measured']:.2f}",
+        f"{at(0.89)['rms_path_50Nm']:.2f} at 0.89 mm beside "
+        f"{at(0.85)['rms_path_50Nm']:.2f} and {at(0.93)['rms_path_50Nm']:.2f}",
+    ]
+    missing = [q for q in quoted if q not in text]
+    assert not missing, missing
+    assert not meets.iloc[0] and "the target is not met as stated" in text
+    assert stages.loc[stages.wear_mm == 0, "rms_calibrated"].item() == pytest.approx(1.0)

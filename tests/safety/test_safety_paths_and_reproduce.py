@@ -285,10 +285,10 @@ def test_rig_depths_beyond_the_pairs_tip_are_refused_before_work(tmp_path, capsy
 def test_rises_at_depths_no_stage_stands_for_are_left_empty_and_said(monkeypatch):
     """G08b: a table of stages 0 and 0.04 mm gave 'rises at 0.9 mm' from its 0.04 mm stage."""
     ones = {"exact": np.array([1.0, 2.0]), "path": np.array([1.0, 3.0])}
-    monkeypatch.setattr(rig, "model_rms", lambda torque, depths: ones)
+    monkeypatch.setattr(rig, "model_rms", lambda torque, depths, contacts=(): ones)
     records = pd.read_csv(rig.default_table())
     two = records[records.stage_order <= 1]
-    _, summary = rig.rig_comparison(two)
+    _, summary, _ = rig.rig_comparison(two)
     for at in rig.RISE_AT_MM:
         for col in ("rise_measured", "rise_model", "model_over_measured"):
             assert summary[f"{col}_{at:g}mm"].isna().all()
