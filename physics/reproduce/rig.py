@@ -297,7 +297,7 @@ def plot_rig_comparison(means: pd.DataFrame, path: Path,
     the left, the path contact on the right, with its load calibrated at one stage
     (``torque_calibrated``, ``rms_calibrated``) where there is one."""
     plt = pyplot()
-    fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.0), sharey=True)
+    fig, axes = plt.subplots(1, 2, figsize=(10.0, 5.0), sharey=True, layout="constrained")
     for ax, (prefix, title) in zip(axes, (("rms_model", "flanks as they meet (exact)"),
                                           ("rms_path", "contact on the path (thesis 2.2)")),
                                    strict=True):
@@ -306,9 +306,9 @@ def plot_rig_comparison(means: pd.DataFrame, path: Path,
             ax.plot(means["wear_mm"], means[f"{prefix}_{torque:g}Nm"], ".-",
                     label=f"model, {torque:g} N m")
         if prefix == "rms_path" and torque_calibrated is not None:
-            ax.plot(means["wear_mm"], means["rms_calibrated"], "r-", lw=2.5,
+            ax.plot(means["wear_mm"], means["rms_calibrated"], "-", color="tab:purple", lw=2.5,
                     label=f"model, {torque_calibrated:g} N m (calibrated at one stage)")
-            ax.legend(fontsize=8)
+            ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2)
         ax.set_title(title)
         ax.set_xlabel("wear depth of the stage [mm]")
         ax.set_yscale("log")
