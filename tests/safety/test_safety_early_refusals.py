@@ -138,6 +138,19 @@ def test_help_whose_reader_left_ends_without_a_traceback():
     assert "Traceback" not in err and "BrokenPipe" not in err, err
 
 
+def imports_of_a_refusal(args: list[str], cwd: Path, says: str) -> set[str]:
+    """The modules ``python -X importtime <args>`` imported (``-X importtime`` lists every one)
+    before its refusal: one line saying ``says``, exit 2, no traceback."""
+    proc = subprocess.run([sys.executable, "-X", "importtime", *args], cwd=cwd,
+                          capture_output=True, text=True, timeout=120)
+    imported = {line.split("|")[-1].strip() for line in proc.stderr.splitlines()
+                if line.startswith("import time:")}
+    errors = [line for line in proc.stderr.splitlines() if line.startswith("error:")]
+    assert proc.returncode == 2 and len(errors) == 1 and says in errors[0], proc.stderr[-2000:]
+    assert "Traceback" not in proc.stderr and "surrogate.settings" in imported  # listing read
+    return imported
+
+
 @pytest.mark.parametrize("bad, says", [
     ("case=9", "case = '9' is not an operating case"),
     ("model.lr=-1", "model.lr = -1.0 must lie in (0, 1)"),
@@ -148,14 +161,8 @@ def test_train_refuses_what_needs_no_data_before_importing_lightning(tmp_path, b
     """The settings judged without data or a model (surrogate.settings.check_run) are refused
     before train.py imports Lightning and torch (-X importtime lists every module imported):
     one line, exit 2, nothing left."""
-    proc = subprocess.run([sys.executable, "-X", "importtime", str(ROOT / "train.py"), bad,
-                           "hydra.run.dir=run"], cwd=tmp_path, capture_output=True, text=True,
-                          timeout=120)
-    imported = {line.split("|")[-1].strip() for line in proc.stderr.splitlines()
-                if line.startswith("import time:")}
-    errors = [line for line in proc.stderr.splitlines() if line.startswith("error:")]
-    assert proc.returncode == 2 and len(errors) == 1 and says in errors[0], proc.stderr[-2000:]
-    assert "surrogate.settings" in imported  # the listing is read
+    imported = imports_of_a_refusal([str(ROOT / "train.py"), bad, "hydra.run.dir=run"],
+                                    tmp_path, says)
     assert not {"lightning", "torch"} & imported, sorted({"lightning", "torch"} & imported)
     assert not any(tmp_path.iterdir())
 
@@ -171,14 +178,8 @@ def test_predict_refuses_its_files_before_importing_torch(tmp_path, args, says):
     they were."""
     (tmp_path / "model.pt").write_bytes(b"not read")
     (tmp_path / "in.csv").write_text("a\n1\n")
-    proc = subprocess.run([sys.executable, "-X", "importtime", "-m", "surrogate.predict", *args,
-                           "hydra.run.dir=run"], cwd=tmp_path, capture_output=True, text=True,
-                          timeout=120)
-    imported = {line.split("|")[-1].strip() for line in proc.stderr.splitlines()
-                if line.startswith("import time:")}
-    errors = [line for line in proc.stderr.splitlines() if line.startswith("error:")]
-    assert proc.returncode == 2 and len(errors) == 1 and says in errors[0], proc.stderr[-2000:]
-    assert "surrogate.settings" in imported  # the listing is read
+    imported = imports_of_a_refusal(["-m", "surrogate.predict", *args, "hydra.run.dir=run"],
+                                    tmp_path, says)
     assert "torch" not in imported
     assert sorted(p.name for p in tmp_path.iterdir()) == ["in.csv", "model.pt"]
     assert (tmp_path / "in.csv").read_text() == "a\n1\n"

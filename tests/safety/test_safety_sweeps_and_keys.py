@@ -15,6 +15,7 @@ from hydra.core.hydra_config import HydraConfig
 from omegaconf import open_dict
 
 from physics import command
+from tests.safety.test_safety_early_refusals import imports_of_a_refusal
 
 ROOT = Path(__file__).resolve().parents[2]
 APP = Path(__file__).parent / "apps" / "sweep_app.py"
@@ -56,16 +57,11 @@ def test_a_failing_job_does_not_stop_the_others(tmp_path, launcher):
 def test_train_sweep_with_a_bad_case_is_refused_before_the_good_one_starts(tmp_path):
     """Every job's settings that need no data are judged before the first job's full check,
     which imports Lightning and torch (-X importtime lists every module imported)."""
-    run = subprocess.run([sys.executable, "-X", "importtime", str(ROOT / "train.py"), "-m",
-                          "case=3,9"], cwd=tmp_path, capture_output=True, text=True, timeout=300)
-    assert run.returncode == 2, run.stderr[-2000:]
-    imported = {line.split("|")[-1].strip() for line in run.stderr.splitlines()
-                if line.startswith("import time:")}
-    assert "surrogate.settings" in imported and not {"lightning", "torch"} & imported
-    errors = [ln for ln in run.stderr.splitlines() if ln.startswith("error:")]
-    assert len(errors) == 1 and "job 1 of the sweep (case=9)" in errors[0]
-    assert "case = '9' is not an operating case" in errors[0]
-    assert "Traceback" not in run.stderr and not list(tmp_path.iterdir())
+    imported = imports_of_a_refusal(
+        [str(ROOT / "train.py"), "-m", "case=3,9"], tmp_path,
+        "job 1 of the sweep (case=9): case = '9' is not an operating case")
+    assert not {"lightning", "torch"} & imported
+    assert not list(tmp_path.iterdir())
 
 
 APPS = {"dataset": ("gearwear_conf.dataset", "dataset"),
