@@ -39,11 +39,11 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property, lru_cache
 
+import numba
 import numpy as np
 from scipy.interpolate import make_interp_spline
 from scipy.linalg import toeplitz
 
-from physics.blas import one_blas_thread
 from physics.gear import contact
 from physics.params import OutOfScope
 
@@ -87,53 +87,115 @@ def solve_gap_contact(gap: np.ndarray, dX: float, load: float = math.pi / 2,
     Every row is a contact on cells of width ``dX``; ``gap`` is ``g / (b^2/R)``; the pressure
     ``P`` (over ``p_max`` of Hertz) carries ``int P dX = load`` (pi/2 for the Hertz load) and
     satisfies the contact conditions with the deflection ``-(1/pi) int P ln|X - X'|``.
-    Polonsky & Keer's constrained conjugate gradient, vectorised over rows; returns ``P`` and
-    the iterations taken. Raises ``RuntimeError`` when a row does not converge.
+    Polonsky & Keer's constrained conjugate gradient (:func:`_polonsky_keer`), row by row in
+    compiled code; returns ``P`` and the most iterations a row took. Raises ``RuntimeError``
+    when a row does not converge.
     """
-    gap = np.atleast_2d(np.asarray(gap, dtype=float))
+    gap = np.ascontiguousarray(np.atleast_2d(np.asarray(gap, dtype=float)))
+    K = influence_matrix(gap.shape[1], float(dX))
+    P, iterations, change = _polonsky_keer(gap, K, float(dX), float(load), float(tol),
+                                           int(max_iter))
+    failed = np.flatnonzero(iterations < 0)
+    if failed.size:
+        worst = int(failed[np.argmax(change[failed])])
+        raise RuntimeError(f"the worn contact did not converge in {max_iter} iterations (row "
+                           f"{worst}: relative change {change[worst]:.2g})")
+    return P, int(iterations.max(initial=0))
+
+
+@numba.njit(cache=True, nogil=True, fastmath=True)
+def _polonsky_keer(gap, K, dX, load, tol, max_iter):
+    """Each row of ``gap`` by :func:`_polonsky_keer_row`: the pressures, the iterations taken
+    (-1 where a row did not converge) and the last relative change of each row."""
     m, n = gap.shape
-    K = influence_matrix(n, float(dX))
-    # start from a uniform pressure where the rigid gap is within the Hertz approach of its minimum
-    near = gap - gap.min(axis=1, keepdims=True) < 0.5
-    P = np.where(near, 1.0, 0.0)
-    P *= load / (P.sum(axis=1, keepdims=True) * dX)
-    t = np.zeros_like(P)
-    g_old = np.ones(m)
-    delta = np.zeros(m)
-    active = np.arange(m)  # rows still iterating: a converged row is left alone
-    change = np.zeros(m)
-    with one_blas_thread():  # products this small
-        for it in range(1, max_iter + 1):
-            Pa, ta, ga = P[active], t[active], gap[active]
-            on = Pa > 0
-            count = on.sum(axis=1)
-            g_raw = Pa @ K + ga
-            g_mean = np.where(on, g_raw, 0.0).sum(axis=1) / count
-            g = np.where(on, g_raw - g_mean[:, None], 0.0)
-            G = (g * g).sum(axis=1)
-            ta = np.where(on, g + (delta[active] * G / g_old[active])[:, None] * ta, 0.0)
-            g_old[active] = np.where(G > 0, G, 1.0)
-            r = ta @ K
-            r_mean = np.where(on, r, 0.0).sum(axis=1) / count
-            r = np.where(on, r - r_mean[:, None], 0.0)
-            rt = (r * ta).sum(axis=1)
-            tau = np.where(rt > 0, (g * ta).sum(axis=1) / np.where(rt > 0, rt, 1.0), 0.0)
-            new = np.maximum(Pa - tau[:, None] * ta, 0.0)
-            # open cells that interpenetrate join the contact (the method's overlap step, on the
-            # gap of this iteration's start)
-            open_gap = g_raw - g_mean[:, None]
-            overlap = (new == 0) & (open_gap < 0)
-            delta[active] = np.where(overlap.any(axis=1), 0.0, 1.0)
-            new = np.where(overlap, -tau[:, None] * open_gap, new)
-            new *= load / (new.sum(axis=1, keepdims=True) * dX)
-            change[active] = np.abs(new - Pa).sum(axis=1) / new.sum(axis=1)
-            P[active], t[active] = new, ta
-            active = active[change[active] >= tol]
-            if active.size == 0:
-                return P, it
-    worst = int(active[np.argmax(change[active])])
-    raise RuntimeError(f"the worn contact did not converge in {max_iter} iterations (row {worst}: "
-                       f"relative change {change[worst]:.2g})")
+    P = np.empty((m, n))
+    iterations = np.empty(m, np.int64)
+    change = np.empty(m)
+    for k in range(m):
+        iterations[k], change[k] = _polonsky_keer_row(gap[k], K, dX, load, tol, max_iter, P[k])
+    return P, iterations, change
+
+
+@numba.njit(cache=True, nogil=True, fastmath=True)
+def _polonsky_keer_row(gap, K, dX, load, tol, max_iter, P):
+    """One contact of :func:`solve_gap_contact` into ``P`` (Polonsky & Keer, Wear 231 (1999)
+    206-219, without the FFT: the influence matrix ``K`` is symmetric and small). Starts from a
+    uniform pressure where the rigid gap lies within half a Hertz approach of its least value;
+    each iteration takes a conjugate-gradient step on the cells in contact, with the gap's mean
+    over them as the approach, clips the pressure at zero, lets open cells that interpenetrate
+    join the contact (the method's overlap step, which restarts the conjugate directions) and
+    scales the pressure to carry ``load``. Returns the iterations taken (-1 when ``max_iter``
+    end without the relative change of the pressure falling below ``tol``) and that change."""
+    n = gap.size
+    least = gap.min()
+    total = 0.0
+    for i in range(n):
+        P[i] = 1.0 if gap[i] - least < 0.5 else 0.0
+        total += P[i]
+    for i in range(n):
+        P[i] *= load / (total * dX)
+    t = np.zeros(n)
+    g = np.empty(n)
+    g_raw = np.empty(n)
+    r = np.empty(n)
+    new = np.empty(n)
+    g_old, delta, change = 1.0, 0.0, np.inf
+    for it in range(1, max_iter + 1):
+        count, g_mean = 0, 0.0
+        for i in range(n):  # the gap under the present pressure (K symmetric: K[i] is column i)
+            acc = gap[i]
+            for j in range(n):
+                acc += P[j] * K[i, j]
+            g_raw[i] = acc
+            if P[i] > 0:
+                count += 1
+                g_mean += acc
+        g_mean /= count
+        G = 0.0
+        for i in range(n):
+            g[i] = g_raw[i] - g_mean if P[i] > 0 else 0.0
+            G += g[i] * g[i]
+        beta = delta * G / g_old
+        for i in range(n):
+            t[i] = g[i] + beta * t[i] if P[i] > 0 else 0.0
+        g_old = G if G > 0 else 1.0
+        r_mean = 0.0
+        for i in range(n):
+            acc = 0.0
+            for j in range(n):
+                acc += t[j] * K[i, j]
+            r[i] = acc
+            if P[i] > 0:
+                r_mean += acc
+        r_mean /= count
+        rt, gt = 0.0, 0.0
+        for i in range(n):
+            r[i] = r[i] - r_mean if P[i] > 0 else 0.0
+            rt += r[i] * t[i]
+            gt += g[i] * t[i]
+        tau = gt / rt if rt > 0 else 0.0
+        overlap = False
+        for i in range(n):
+            new[i] = max(P[i] - tau * t[i], 0.0)
+            if new[i] == 0.0 and g_raw[i] - g_mean < 0.0:
+                overlap = True
+        delta = 0.0 if overlap else 1.0
+        total = 0.0
+        for i in range(n):
+            if new[i] == 0.0 and g_raw[i] - g_mean < 0.0:
+                new[i] = -tau * (g_raw[i] - g_mean)
+            total += new[i]
+        scale = load / (total * dX)
+        moved, total = 0.0, 0.0
+        for i in range(n):
+            new[i] *= scale
+            moved += abs(new[i] - P[i])
+            total += new[i]
+            P[i] = new[i]
+        change = moved / total
+        if change < tol:
+            return it, change
+    return -1, change
 
 
 def hertz_cumulative(X: np.ndarray) -> np.ndarray:
@@ -248,15 +310,28 @@ def flank_profile(s: np.ndarray, wear: np.ndarray, arc: np.ndarray, level: float
     corners of straight segments, each a wedge with a log-singular pressure (Johnson, 5.2).
     """
     if level > 0:
-        cell = np.gradient(arc)  # arc length each point stands for (|d arc| on either flank)
-        weight = np.exp(-0.5 * ((arc[:, None] - arc[None, :]) / level)**2) * np.abs(cell)
-        wear = weight @ wear / weight.sum(axis=1)
+        weight, total = _levelling_weights(np.ascontiguousarray(arc, dtype=float).tobytes(),
+                                           float(level))
+        wear = weight @ wear / total
     spline = make_interp_spline(s, wear, k=3)
 
     def h(x: np.ndarray) -> np.ndarray:
         return spline(np.clip(x, s[0], s[-1]))
 
     return h
+
+
+@lru_cache(maxsize=8)
+def _levelling_weights(arc: bytes, level: float) -> tuple[np.ndarray, np.ndarray]:
+    """The Gaussian weights of :func:`flank_profile` on the arc lengths ``arc`` (the bytes of a
+    float array: one grid serves every wear update of a run) and their row sums."""
+    a = np.frombuffer(arc)
+    cell = np.gradient(a)  # arc length each point stands for (|d arc| on either flank)
+    weight = np.exp(-0.5 * ((a[:, None] - a[None, :]) / level)**2) * np.abs(cell)
+    weight.setflags(write=False)
+    total = weight.sum(axis=1)
+    total.setflags(write=False)
+    return weight, total
 
 
 def solve_worn_contact(s: np.ndarray, load_per_width: np.ndarray, R1: np.ndarray,
