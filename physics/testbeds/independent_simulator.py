@@ -113,6 +113,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from fractions import Fraction
+from functools import lru_cache
 from pathlib import Path
 
 import numba
@@ -792,9 +793,25 @@ def simulate_record(pair: IndependentPair | None = None, n1_rpm: float = 2000.0,
     else:  # the pinion's angle at t = 0, the record's first sample lying its lead after it
         theta0 = float(start_angle_rad) - 2 * np.pi * n1_rpm / 60.0 * _lead_samples(
             pair, fs_hz) / fs_hz
-    dte, acc = _respond(pair, float(n1_rpm), float(torque_Nm), float(wear_mm), float(fs_hz),
-                        float(duration_s), name, values, phases, theta0)
-    return _finish(dte, acc, quantity, pair, name, values, snr_db, rng)[0]
+    dte, acc = _clean_record(pair, float(n1_rpm), float(torque_Nm), float(wear_mm),
+                             float(fs_hz), float(duration_s), name,
+                             tuple(sorted(values.items())), phases, theta0)
+    return np.array(_finish(dte, acc, quantity, pair, name, values, snr_db, rng)[0])
+
+
+@lru_cache(maxsize=2)
+def _clean_record(pair: IndependentPair, n1_rpm: float, torque_Nm: float, wear_mm: float,
+                  fs_hz: float, duration_s: float, name: str | None,
+                  values: tuple[tuple[str, float], ...], phases: _Phases, theta0: float
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_respond` for :func:`simulate_record`, read-only and kept for the same record's
+    other quantity: a caller that asks for a record's DTE and then its acceleration (one gear
+    set, one start angle) simulates it once."""
+    dte, acc = _respond(pair, n1_rpm, torque_Nm, wear_mm, fs_hz, duration_s, name,
+                        dict(values), phases, theta0)
+    dte.setflags(write=False)
+    acc.setflags(write=False)
+    return dte, acc
 
 
 def make_independent_bundle(
