@@ -50,7 +50,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import signal
 
 from physics.dynamics.kernels import (
     BASE_PITCH,
@@ -323,6 +322,8 @@ def anti_aliasing_filter(n_sub: int) -> np.ndarray:
     Schafer, Discrete-Time Signal Processing, 3rd ed., 7.6): pass band to ``PASS_EDGE fs``,
     stop band from ``(1 - PASS_EDGE) fs``, ``2 L n_sub + 1`` taps (a whole number ``L`` of
     output samples either side). Designed once per ``n_sub`` (read-only)."""
+    from scipy import signal  # imported on first use: a refusal need not wait for it
+
     width = (1 - 2 * PASS_EDGE) * 2 / n_sub  # transition, as a fraction of the fine Nyquist
     taps, beta = signal.kaiserord(STOP_DB, width)
     half = math.ceil((taps - 1) / (2 * n_sub))

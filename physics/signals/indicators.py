@@ -58,8 +58,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy import signal as sps
-from scipy import stats
 
 from physics.signals.features import _name
 from physics.signals.order_analysis import synchronous_average
@@ -306,6 +304,7 @@ def na4(residual: np.ndarray, prior_variances: np.ndarray | None = None, *,
     1.0
     """
     r = np.asarray(residual, dtype=float)
+    from scipy import stats  # imported on first use: a refusal need not wait for it
     m2 = stats.moment(r, 2, axis=-1)
     m4 = stats.moment(r, 4, axis=-1)
     if prior_variances is not None and run_axis is not None:
@@ -422,6 +421,7 @@ def indicators(x: np.ndarray, fs: float, f_shaft: float, z: int, *, bins: int | 
     parts, amp, masks = _decompose(x, fs, f_shaft, z, bins, shaft_orders)
     tsa, d, r, reg = parts["tsa"], parts["difference"], parts["residual"], parts["regular"]
     floor = _ZERO * np.var(tsa, axis=-1)
+    from scipy import stats  # imported on first use: a refusal need not wait for it
     m2 = stats.moment(d, 2, axis=-1)
     has_d = m2 > floor
     mesh_power = np.sum(amp[..., masks["mesh"]] ** 2, axis=-1)
@@ -475,6 +475,7 @@ def shaft_rate_from_spectrum(x: np.ndarray, fs: float, z: int, f_nominal: float,
                          "faster, narrow rel_band or check z and f_nominal")
     n = x.shape[-1]
     centred = x - x.mean(axis=-1, keepdims=True)
+    from scipy import signal as sps  # imported on first use: a refusal need not wait for it
     mag = np.abs(np.fft.rfft(centred * sps.get_window("hann", n), axis=-1))
     freqs = np.fft.rfftfreq(n, 1.0 / fs)
     band = np.flatnonzero((freqs >= lo) & (freqs <= hi))

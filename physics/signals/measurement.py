@@ -18,7 +18,6 @@ from functools import lru_cache
 from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy import signal
 
 if TYPE_CHECKING:
     from physics.dynamics.model import Response
@@ -145,6 +144,8 @@ def transfer_path(x: np.ndarray, fs: float, fn_hz: float, zeta: float,
     if not 0 < fn_hz < fs / 2 or not 0 < zeta < 1:
         raise ValueError(f"transfer path fn_hz = {fn_hz!r} must lie in (0, fs/2 = {fs / 2:g}) and "
                          f"zeta = {zeta!r} in (0, 1)")
+    from scipy import signal  # imported on first use: a refusal need not wait for it
+
     return signal.lfilter(*_resonance_filter(float(fs), float(fn_hz), float(zeta),
                                              float(residue)), x, axis=-1)
 
@@ -154,6 +155,8 @@ def _resonance_filter(fs: float, fn_hz: float, zeta: float, residue: float
                       ) -> tuple[np.ndarray, np.ndarray]:
     """The digital filter of :func:`transfer_path` (``scipy.signal.bilinear`` takes a
     millisecond; the loop applies one path to every record of an evaluation)."""
+    from scipy import signal
+
     wn = 2 * fs * math.tan(math.pi * fn_hz / fs)
     return signal.bilinear([1 - residue, 2 * zeta * wn, wn**2], [1.0, 2 * zeta * wn, wn**2], fs)
 

@@ -34,7 +34,6 @@ import math
 from functools import lru_cache
 
 import numpy as np
-from scipy import signal as sps
 
 from physics.signals.features import features
 
@@ -237,6 +236,7 @@ def white_noise_std(x: np.ndarray, fs: float, f_low: float) -> float:
     so the 10 % quantile of the bins is noise, and for white noise each bin is exponentially
     distributed: mean = q10 / -ln(0.9).
     """
+    from scipy import signal as sps  # imported on first use: a refusal need not wait for it
     f, p = sps.periodogram(x, fs=fs, window="blackmanharris", detrend="constant")
     band = p[(f > f_low) & (f < 0.45 * fs)]
     return math.sqrt(np.quantile(band, 0.1) / -math.log(0.9) * fs / 2)

@@ -24,8 +24,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy import ndimage, signal
-from scipy.stats import binom
 
 #: bins of the running median that is each record's local floor
 FLOOR_BINS = 61
@@ -58,6 +56,7 @@ def crossing_probability(windows: int, records: int, need: int, rate: float) -> 
     width = 2 * MATCH_BINS + 1
 
     def false_rate(p: float) -> float:
+        from scipy.stats import binom  # imported on first use: a refusal need not wait for it
         return windows * binom.sf(need - 1, records, min(1.0, width * p))
 
     lo, hi = -60.0, 0.0
@@ -70,6 +69,7 @@ def crossing_probability(windows: int, records: int, need: int, rate: float) -> 
 def record_spectrum(x: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Frequencies, power per bin (a line of amplitude ``A`` on a bin: ``A^2 / 2``) and the
     local mean floor of the white noise of record ``x``."""
+    from scipy import ndimage, signal  # imported on first use: a refusal need not wait for it
     f, p = signal.periodogram(x, fs=fs, window="blackmanharris", detrend="constant",
                               scaling="spectrum")
     floor = ndimage.median_filter(p, size=FLOOR_BINS, mode="nearest") / math.log(2)

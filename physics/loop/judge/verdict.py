@@ -29,7 +29,6 @@ import re
 from pathlib import Path
 
 import numpy as np
-from scipy.stats import norm
 
 from physics.files import atomic_write, pyplot
 from physics.loop.judge.lines import record_spectrum, unexplained_lines
@@ -78,6 +77,7 @@ def unexplained_entries(judged: Records, idx: np.ndarray, signals: list[np.ndarr
     res = residuals_db(judged, idx, signals)
     pos = by_group(judged, idx)
     n = sum(len(judged.groups[k].names) for k in pos)
+    from scipy.stats import norm  # imported on first use: a refusal need not wait for it
     crit = float(norm.isf(rate / (2 * max(n, 1))))
     out = {}
     for k, mine in pos.items():

@@ -16,7 +16,6 @@ import dataclasses
 import re
 
 import numpy as np
-from scipy.stats import chi2
 
 from physics.loop.measured.records import Group, Records, by_group
 from physics.loop.model.comparison import residuals_db
@@ -89,4 +88,5 @@ def discrepancy_allowance(k: int, n_candidates: int, rate: float) -> float:
     ``rate``, the false-add rate per bundle (so each may be judged, the best passing one
     adopted).
     """
+    from scipy.stats import chi2  # imported on first use: a refusal need not wait for it
     return float(chi2.isf(rate / max(n_candidates, 1), max(k, 1)))

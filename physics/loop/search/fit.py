@@ -24,7 +24,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import optimize
-from scipy.stats import qmc
 
 from physics.loop.config import LoopSettings
 from physics.loop.effects import Effect
@@ -238,6 +237,7 @@ def explore(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[
     # the true pit's 26 um, 0.41, 1.18 mm giving 1.24)
     per_dynamics = 2 ** max(len(params) - 1, 0)
     n_points = rec.settings.explore * (CALIBRATION_EXPLORE if eff is None else per_dynamics)
+    from scipy.stats import qmc  # imported on first use: a refusal need not wait for it
     pts = (qmc.Sobol(dim, seed=rec.settings.seed).random(n_points) if dim and n_points
            else np.empty((0, 0)))
     # a measurement stage leaves the dynamics alone: its extra points share the dynamic
