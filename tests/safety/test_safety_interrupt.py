@@ -73,14 +73,16 @@ def interrupt(cmd: list[str], cwd: Path, signum: int, delay: float,
               env: dict[str, str] | None = None) -> subprocess.CompletedProcess:
     proc = subprocess.Popen(cmd, cwd=cwd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                             text=True, start_new_session=True, env=env)
-    time.sleep(delay)
-    try:
-        if signum == signal.SIGINT:
-            os.killpg(proc.pid, signum)  # as a terminal sends Ctrl-C: to the whole group
-        else:
-            os.kill(proc.pid, signum)  # as kill(1) or a process manager sends it
-    except ProcessLookupError:
-        pass
+    try:  # a run that ends before the moment has nothing left to interrupt: not waited for
+        proc.wait(timeout=delay)
+    except subprocess.TimeoutExpired:
+        try:
+            if signum == signal.SIGINT:
+                os.killpg(proc.pid, signum)  # as a terminal sends Ctrl-C: to the whole group
+            else:
+                os.kill(proc.pid, signum)  # as kill(1) or a process manager sends it
+        except ProcessLookupError:
+            pass
     _, err = proc.communicate(timeout=300)
     return subprocess.CompletedProcess(cmd, proc.returncode, "", err)
 

@@ -123,6 +123,8 @@ def test_a_run_that_fails_after_starting_exports_nothing(tmp_path, monkeypatch):
     assert (run / "wear_surrogate.pt").is_file()
 
 
+@pytest.mark.slow  # its check: test_a_bad_table_is_refused_in_one_line; a train.py refusal
+# after Lightning's import, as typed: the fine-tune's in test_safety_unhonoured_settings.py
 def test_acceptance_train_refuses_a_table_of_1e300_before_training(tmp_path):
     """The user's probe through the command line: exit 2, one line, nothing trained."""
     df = _at(table(), 7, "acc_crest", 1e300)
