@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import logging
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -172,19 +173,16 @@ def test_splits_name_groups_by_value_and_refuse_in_the_users_terms(tmp_path):
         prepare(cfg(tmp_path, "data.table=null", "data.group_by=speed"))
 
 
-def test_acceptance_leave_one_group_out_prints_each_fold_and_the_mean(tmp_path):
-    """The command line, in a folder of its own: a run named after the table, one fold per
-    speed, cv.csv and metrics.json with each fold's and the mean figures."""
+def test_leave_one_group_out_logs_each_fold_and_the_mean(tmp_path, caplog):
+    """One fold per speed, each fold's model kept, cv.csv and metrics.json with each fold's and
+    the mean figures (in-process: a refusal's and a run's command-line path are the
+    acceptance tests' own)."""
     write(tmp_path, sidecar="fme15: m/s^2\nwear_mm: mm\n")
-    run = subprocess.run([sys.executable, str(ROOT / "train.py"), "data.table=rig.csv",
-                          INPUTS, "data.target=wear_mm", "data.group=stage",
-                          "data.group_by=speed", "data.cv=logo", "data.val_replicates=3",
-                          "trainer.max_epochs=3", "trainer.min_epochs=1", "model.members=2",
-                          "model.folds=2", "logger=csv", "trainer.enable_progress_bar=false"],
-                         capture_output=True, text=True, timeout=600, cwd=tmp_path)
-    assert run.returncode == 0, run.stderr[-3000:]
-    out = run.stdout + run.stderr
-    (folder,) = (tmp_path / "logs" / "train" / "runs").glob("rig_*")  # named after the table
+    with caplog.at_level(logging.INFO, logger="surrogate"):
+        train(cfg(tmp_path, "data.group=stage", "data.group_by=speed", "data.cv=logo",
+                  "data.val_replicates=3", "model.folds=2"))
+    out = "\n".join(r.getMessage() for r in caplog.records)
+    folder = tmp_path / "run"
     assert "fold speed = 15 (24 test rows): model kept" in out
     assert "fold speed = 45 (24 test rows): model kept" in out
     assert "leave-one-group-out over speed (2 folds)" in out
@@ -200,6 +198,17 @@ def test_acceptance_leave_one_group_out_prints_each_fold_and_the_mean(tmp_path):
     pred = pd.read_csv(folder / "test_predictions.csv")
     assert len(pred) == 48 and set(pred.speed) == {15, 45}
     assert (folder / "parity.png").is_file()
+
+
+def test_a_run_on_a_users_table_is_named_after_the_table():
+    """The run folder Hydra makes for ``data.table=.../rig.csv``: logs/train/runs/rig_<time>
+    (and case3_<time> for the physics dataset)."""
+    settings.register()
+    for table, name in (("/anywhere/rig.csv", "rig"), ("null", "case3")):
+        with initialize_config_module("gearwear_conf.train", version_base="1.3"):
+            run = compose("train", overrides=[f"data.table={table}"],
+                          return_hydra_config=True).hydra.run.dir
+        assert re.fullmatch(rf"logs/train/runs/{name}_\d{{4}}-\d\d-\d\d_\d\d-\d\d-\d\d", run), run
 
 
 # -- 3. baselines beside the network ------------------------------------------------------------
