@@ -224,8 +224,8 @@ def _judged(measured: pd.Series, model: pd.Series, depths: np.ndarray,
             left_out: int | None = None) -> dict[str, float]:
     """Spearman's rank correlation of ``model`` with ``measured`` over the stages (but the
     stage ``left_out``), and the rises at ``RISE_AT_MM``, model beside rig."""
-    keep = np.arange(len(depths)) != (-1 if left_out is None else left_out)
     from scipy import stats  # imported on first use: a refusal need not wait for it
+    keep = np.arange(len(depths)) != (-1 if left_out is None else left_out)
     row = {"rank_correlation": stats.spearmanr(measured[keep], model[keep]).statistic}
     for at in RISE_AT_MM:
         i = rise_stage(depths, at)

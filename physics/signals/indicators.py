@@ -303,8 +303,8 @@ def na4(residual: np.ndarray, prior_variances: np.ndarray | None = None, *,
     >>> round(float(na4(2 * r) / na4(r)), 3)
     1.0
     """
-    r = np.asarray(residual, dtype=float)
     from scipy import stats  # imported on first use: a refusal need not wait for it
+    r = np.asarray(residual, dtype=float)
     m2 = stats.moment(r, 2, axis=-1)
     m4 = stats.moment(r, 4, axis=-1)
     if prior_variances is not None and run_axis is not None:
@@ -418,10 +418,10 @@ def indicators(x: np.ndarray, fs: float, f_shaft: float, z: int, *, bins: int | 
     >>> bool(indicators(faulty, fs, f_shaft, z)["fm4"] > 30)
     True
     """
+    from scipy import stats  # imported on first use: a refusal need not wait for it
     parts, amp, masks = _decompose(x, fs, f_shaft, z, bins, shaft_orders)
     tsa, d, r, reg = parts["tsa"], parts["difference"], parts["residual"], parts["regular"]
     floor = _ZERO * np.var(tsa, axis=-1)
-    from scipy import stats  # imported on first use: a refusal need not wait for it
     m2 = stats.moment(d, 2, axis=-1)
     has_d = m2 > floor
     mesh_power = np.sum(amp[..., masks["mesh"]] ** 2, axis=-1)
@@ -461,6 +461,7 @@ def shaft_rate_from_spectrum(x: np.ndarray, fs: float, z: int, f_nominal: float,
         ``rel_band`` outside (0, 1), a band reaching fs / 2, or a band holding fewer than three
         spectral bins (the record is too short).
     """
+    from scipy import signal as sps  # imported on first use: a refusal need not wait for it
     x = _records(x)
     fs = _positive("fs", fs, "give the sampling rate in Hz")
     z = _teeth(z)
@@ -475,7 +476,6 @@ def shaft_rate_from_spectrum(x: np.ndarray, fs: float, z: int, f_nominal: float,
                          "faster, narrow rel_band or check z and f_nominal")
     n = x.shape[-1]
     centred = x - x.mean(axis=-1, keepdims=True)
-    from scipy import signal as sps  # imported on first use: a refusal need not wait for it
     mag = np.abs(np.fft.rfft(centred * sps.get_window("hann", n), axis=-1))
     freqs = np.fft.rfftfreq(n, 1.0 / fs)
     band = np.flatnonzero((freqs >= lo) & (freqs <= hi))

@@ -29,7 +29,7 @@ _SOURCES = {
         "MeshForce", "WearRate", "WearResult", "simulate_wear", "wear_rate", "film_deficiency",
         "wear_coefficient", "Flank", "flank_grid", "check_shakedown", "quasi_static_force"),
     "physics.tribology.worn_contact": (
-        "WornContact", "solve_worn_contact", "solve_gap_contact", "hertz_cumulative",
-        "worn_gap", "flank_profile", "band_reach", "levelling_length"),
+        "WornContact", "solve_worn_contact", "solve_gap_contact", "worn_gap", "flank_profile",
+        "band_reach", "levelling_length"),
 }
 __all__, __getattr__, __dir__ = lazy_exports(__name__, _SOURCES)

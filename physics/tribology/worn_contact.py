@@ -44,6 +44,7 @@ import numpy as np
 from scipy.interpolate import make_interp_spline
 from scipy.linalg import toeplitz
 
+from physics.blas import one_blas_thread
 from physics.gear import contact
 from physics.params import OutOfScope
 
@@ -87,14 +88,15 @@ def solve_gap_contact(gap: np.ndarray, dX: float, load: float = math.pi / 2,
     Every row is a contact on cells of width ``dX``; ``gap`` is ``g / (b^2/R)``; the pressure
     ``P`` (over ``p_max`` of Hertz) carries ``int P dX = load`` (pi/2 for the Hertz load) and
     satisfies the contact conditions with the deflection ``-(1/pi) int P ln|X - X'|``.
-    Polonsky & Keer's constrained conjugate gradient (:func:`_polonsky_keer`), row by row in
-    compiled code; returns ``P`` and the most iterations a row took. Raises ``RuntimeError``
+    Polonsky & Keer's constrained conjugate gradient (:func:`_polonsky_keer`), compiled, every
+    row at once; returns ``P`` and the most iterations a row took. Raises ``RuntimeError``
     when a row does not converge.
     """
     gap = np.ascontiguousarray(np.atleast_2d(np.asarray(gap, dtype=float)))
     K = influence_matrix(gap.shape[1], float(dX))
-    P, iterations, change = _polonsky_keer(gap, K, float(dX), float(load), float(tol),
-                                           int(max_iter))
+    with one_blas_thread():  # products this small
+        P, iterations, change = _polonsky_keer(gap, K, float(dX), float(load), float(tol),
+                                               int(max_iter))
     failed = np.flatnonzero(iterations < 0)
     if failed.size:
         worst = int(failed[np.argmax(change[failed])])
@@ -103,105 +105,116 @@ def solve_gap_contact(gap: np.ndarray, dX: float, load: float = math.pi / 2,
     return P, int(iterations.max(initial=0))
 
 
-@numba.njit(cache=True, nogil=True, fastmath=True)
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def _polonsky_keer(gap, K, dX, load, tol, max_iter):
-    """Each row of ``gap`` by :func:`_polonsky_keer_row`: the pressures, the iterations taken
-    (-1 where a row did not converge) and the last relative change of each row."""
+    """Polonsky & Keer (Wear 231 (1999) 206-219) on every row of ``gap``, without the FFT: the
+    influence matrix ``K`` is symmetric and small, and each iteration's deflections of all rows
+    still iterating are one matrix product. From a uniform pressure where the rigid gap lies
+    within half a Hertz approach of its least value, an iteration takes a conjugate-gradient
+    step on the cells in contact (the gap's mean over them the approach), clips the pressure
+    at zero, lets open cells that interpenetrate join the contact (the method's overlap step,
+    which restarts the conjugate directions) and scales the pressure to carry ``load``; a row
+    whose pressure moved by less than ``tol`` (relative) is left alone. Returns the pressures,
+    the iterations each row took (-1: not converged in ``max_iter``) and its last relative
+    change. IEEE arithmetic in a fixed order (no fast-math): the same on every run, whether
+    compiled or read from the cache."""
     m, n = gap.shape
-    P = np.empty((m, n))
-    iterations = np.empty(m, np.int64)
-    change = np.empty(m)
+    P = np.zeros((m, n))
     for k in range(m):
-        iterations[k], change[k] = _polonsky_keer_row(gap[k], K, dX, load, tol, max_iter, P[k])
+        least = gap[k].min()
+        total = 0.0
+        for i in range(n):
+            if gap[k, i] - least < 0.5:
+                P[k, i] = 1.0
+                total += 1.0
+        for i in range(n):
+            P[k, i] *= load / (total * dX)
+    t = np.zeros((m, n))
+    g = np.zeros(n)
+    new = np.zeros(n)
+    g_old = np.ones(m)
+    delta = np.zeros(m)
+    change = np.full(m, np.inf)
+    iterations = np.full(m, -1)
+    active = np.arange(m)
+    for it in range(1, max_iter + 1):
+        na = active.size
+        Pa = np.empty((na, n))
+        ta = np.empty((na, n))
+        for a in range(na):
+            Pa[a] = P[active[a]]
+            ta[a] = t[active[a]]
+        g_raw = np.dot(Pa, K)  # the deflections (K symmetric)
+        approach = np.empty(na)
+        for a in range(na):
+            k = active[a]
+            count, mean = 0, 0.0
+            for i in range(n):
+                g_raw[a, i] += gap[k, i]
+                if Pa[a, i] > 0:
+                    count += 1
+                    mean += g_raw[a, i]
+            approach[a] = mean / count
+            G = 0.0
+            for i in range(n):
+                g[i] = g_raw[a, i] - approach[a] if Pa[a, i] > 0 else 0.0
+                G += g[i] * g[i]
+            beta = delta[k] * G / g_old[k]
+            for i in range(n):
+                ta[a, i] = g[i] + beta * ta[a, i] if Pa[a, i] > 0 else 0.0
+            g_old[k] = G if G > 0 else 1.0
+        r = np.dot(ta, K)
+        kept = 0
+        for a in range(na):
+            k = active[a]
+            count, mean = 0, 0.0
+            for i in range(n):
+                if Pa[a, i] > 0:
+                    count += 1
+                    mean += r[a, i]
+            mean /= count
+            rt, gt = 0.0, 0.0
+            for i in range(n):
+                ri = r[a, i] - mean if Pa[a, i] > 0 else 0.0
+                gi = g_raw[a, i] - approach[a] if Pa[a, i] > 0 else 0.0
+                rt += ri * ta[a, i]
+                gt += gi * ta[a, i]
+            tau = gt / rt if rt > 0 else 0.0
+            overlap, total = False, 0.0
+            for i in range(n):
+                v = max(Pa[a, i] - tau * ta[a, i], 0.0)
+                opened = g_raw[a, i] - approach[a]
+                if v == 0.0 and opened < 0.0:
+                    overlap = True
+                    v = -tau * opened
+                new[i] = v
+                total += v
+            delta[k] = 0.0 if overlap else 1.0
+            scale = load / (total * dX)
+            moved, total = 0.0, 0.0
+            for i in range(n):
+                v = new[i] * scale
+                moved += abs(v - Pa[a, i])
+                total += v
+                P[k, i] = v
+                t[k, i] = ta[a, i]
+            change[k] = moved / total
+            if change[k] < tol:
+                iterations[k] = it
+            else:
+                active[kept] = k
+                kept += 1
+        active = active[:kept]
+        if kept == 0:
+            break
     return P, iterations, change
 
 
-@numba.njit(cache=True, nogil=True, fastmath=True)
-def _polonsky_keer_row(gap, K, dX, load, tol, max_iter, P):
-    """One contact of :func:`solve_gap_contact` into ``P`` (Polonsky & Keer, Wear 231 (1999)
-    206-219, without the FFT: the influence matrix ``K`` is symmetric and small). Starts from a
-    uniform pressure where the rigid gap lies within half a Hertz approach of its least value;
-    each iteration takes a conjugate-gradient step on the cells in contact, with the gap's mean
-    over them as the approach, clips the pressure at zero, lets open cells that interpenetrate
-    join the contact (the method's overlap step, which restarts the conjugate directions) and
-    scales the pressure to carry ``load``. Returns the iterations taken (-1 when ``max_iter``
-    end without the relative change of the pressure falling below ``tol``) and that change."""
-    n = gap.size
-    least = gap.min()
-    total = 0.0
-    for i in range(n):
-        P[i] = 1.0 if gap[i] - least < 0.5 else 0.0
-        total += P[i]
-    for i in range(n):
-        P[i] *= load / (total * dX)
-    t = np.zeros(n)
-    g = np.empty(n)
-    g_raw = np.empty(n)
-    r = np.empty(n)
-    new = np.empty(n)
-    g_old, delta, change = 1.0, 0.0, np.inf
-    for it in range(1, max_iter + 1):
-        count, g_mean = 0, 0.0
-        for i in range(n):  # the gap under the present pressure (K symmetric: K[i] is column i)
-            acc = gap[i]
-            for j in range(n):
-                acc += P[j] * K[i, j]
-            g_raw[i] = acc
-            if P[i] > 0:
-                count += 1
-                g_mean += acc
-        g_mean /= count
-        G = 0.0
-        for i in range(n):
-            g[i] = g_raw[i] - g_mean if P[i] > 0 else 0.0
-            G += g[i] * g[i]
-        beta = delta * G / g_old
-        for i in range(n):
-            t[i] = g[i] + beta * t[i] if P[i] > 0 else 0.0
-        g_old = G if G > 0 else 1.0
-        r_mean = 0.0
-        for i in range(n):
-            acc = 0.0
-            for j in range(n):
-                acc += t[j] * K[i, j]
-            r[i] = acc
-            if P[i] > 0:
-                r_mean += acc
-        r_mean /= count
-        rt, gt = 0.0, 0.0
-        for i in range(n):
-            r[i] = r[i] - r_mean if P[i] > 0 else 0.0
-            rt += r[i] * t[i]
-            gt += g[i] * t[i]
-        tau = gt / rt if rt > 0 else 0.0
-        overlap = False
-        for i in range(n):
-            new[i] = max(P[i] - tau * t[i], 0.0)
-            if new[i] == 0.0 and g_raw[i] - g_mean < 0.0:
-                overlap = True
-        delta = 0.0 if overlap else 1.0
-        total = 0.0
-        for i in range(n):
-            if new[i] == 0.0 and g_raw[i] - g_mean < 0.0:
-                new[i] = -tau * (g_raw[i] - g_mean)
-            total += new[i]
-        scale = load / (total * dX)
-        moved, total = 0.0, 0.0
-        for i in range(n):
-            new[i] *= scale
-            moved += abs(new[i] - P[i])
-            total += new[i]
-            P[i] = new[i]
-        change = moved / total
-        if change < tol:
-            return it, change
-    return -1, change
-
-
-def hertz_cumulative(X: np.ndarray) -> np.ndarray:
+@numba.njit(cache=True, nogil=True, inline="always")
+def _hertz_passed(X):
     """``int_{-inf}^X sqrt(1 - t^2) dt`` of the Hertz ellipse (Hertz units): 0 to pi/2."""
-    c = np.clip(X, -1.0, 1.0)
-    return 0.5 * (c * np.sqrt(1.0 - c * c) + np.arcsin(c)) + math.pi / 4
+    c = min(max(X, -1.0), 1.0)
+    return 0.5 * (c * math.sqrt(1.0 - c * c) + math.asin(c)) + math.pi / 4
 
 
 @dataclass(frozen=True)
@@ -237,20 +250,6 @@ class WornContact:
         return np.concatenate([np.zeros((self.P.shape[0], 1)),
                                np.cumsum(self.P, axis=1) * self.dX], axis=1)
 
-    def cumulative(self, X: np.ndarray) -> np.ndarray:
-        """Load passed up to offset ``X`` (rows: positions; Hertz units, 0 to pi/2)."""
-        out = hertz_cumulative(X - self.centre[:, None])
-        if self.solved.any():
-            rows = np.flatnonzero(self.solved)
-            Q = self._passed
-            k = (X[rows] - self.centre[rows, None]) / self.dX
-            i = np.clip(np.floor(k).astype(int), 0, Q.shape[1] - 2)
-            f = np.clip(k - i, 0.0, 1.0)
-            lo = np.take_along_axis(Q, i, axis=1)
-            hi = np.take_along_axis(Q, i + 1, axis=1)
-            out[rows] = lo + f * (hi - lo)
-        return out
-
     def sweep(self, s: np.ndarray, points: np.ndarray, scale: np.ndarray, weight: np.ndarray
               ) -> np.ndarray:
         """Per-pass integral ``sum_j weight_j int p_j dx`` over the band's sweep of each flank
@@ -258,7 +257,6 @@ class WornContact:
         at ``s``: ``scale_j = R_j / r_b`` maps a roll offset to an arc offset of the flank.
         Contact centres are cells ``[s_{j-1/2}, s_{j+1/2}]``, cut at the path's ends;
         ``points`` may reach beyond them, where the band still presses the flank."""
-        edges = np.concatenate([[s[0]], 0.5 * (s[1:] + s[:-1]), [s[-1]]])
         b = np.where(self.half_width > 0, self.half_width, 1.0)
         to_X = scale / b
         # each position presses the points within its window's reach (a band of the matrix)
@@ -270,17 +268,51 @@ class WornContact:
         # an unloaded position (no band; b stands at 1 m) presses nothing and sets no reach
         reach = np.where(self.half_width > 0, span / to_X, 0.0)
         k = int(np.ceil(np.max(reach) / step)) + 1
-        near = np.clip(np.rint((s - points[0]) / step).astype(int)[:, None]
-                       + np.arange(-k, k + 1), 0, points.size - 1)
-        at = points[near]
-        hi = self.cumulative((at - edges[:-1, None]) * to_X[:, None])
-        lo = self.cumulative((at - edges[1:, None]) * to_X[:, None])
-        load = (self.p_hertz * self.half_width * weight)[:, None]  # p_max b carries P
-        part = load * (hi - lo)
-        # a clipped index repeats an end point: count each point once per position
-        first = np.ones_like(near, dtype=bool)
-        first[:, 1:] = near[:, 1:] != near[:, :-1]
-        return np.bincount(near[first], weights=part[first], minlength=points.size)
+        row = np.full(s.size, -1)
+        row[self.solved] = np.arange(int(self.solved.sum()))
+        load = self.p_hertz * self.half_width * weight  # p_max b carries P
+        return _sweep(np.asarray(s, dtype=float), np.asarray(points, dtype=float),
+                      np.asarray(to_X, dtype=float), self.centre, row, self._passed,
+                      float(self.dX), np.asarray(load, dtype=float), k)
+
+
+@numba.njit(cache=True, nogil=True)
+def _sweep(s, points, to_X, centre, row, Q, dX, load, k):
+    """:meth:`WornContact.sweep` compiled: each position ``i`` adds to the ``2 k + 1`` points
+    nearest it (clipped at the grid's ends, each point once) the load its band passes over the
+    point's stretch, ``load_i`` times the passed share at the cell's lower edge less that at
+    its upper edge; the share is the Hertz ellipse's (``row[i] < 0``) or the solved cells'
+    cumulative pressure ``Q[row[i]]``, linear within a cell."""
+    n, m = points.size, s.size
+    step = points[1] - points[0]
+    out = np.zeros(n)
+    for i in range(m):
+        low = s[0] if i == 0 else 0.5 * (s[i] + s[i - 1])
+        high = s[m - 1] if i == m - 1 else 0.5 * (s[i + 1] + s[i])
+        c = int(np.rint((s[i] - points[0]) / step))
+        last = -1
+        for j in range(-k, k + 1):
+            at = min(max(c + j, 0), n - 1)
+            if at == last:
+                continue
+            last = at
+            passed = _passed_at(row[i], Q, (points[at] - low) * to_X[i] - centre[i], dX) \
+                - _passed_at(row[i], Q, (points[at] - high) * to_X[i] - centre[i], dX)
+            out[at] += load[i] * passed
+    return out
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _passed_at(r, Q, X, dX):
+    """Load passed up to offset ``X`` from a band's centre (Hertz units): the ellipse's where
+    ``r < 0``, else row ``r`` of the cumulative cell loads ``Q``, linear within a cell."""
+    if r < 0:
+        return _hertz_passed(X)
+    q = Q[r]
+    f = X / dX
+    cell = min(max(math.floor(f), 0), q.size - 2)
+    f = min(max(f - cell, 0.0), 1.0)
+    return q[cell] + f * (q[cell + 1] - q[cell])
 
 
 def worn_gap(at: np.ndarray, X: np.ndarray, half_width: np.ndarray, R: np.ndarray,

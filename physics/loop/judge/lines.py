@@ -53,10 +53,10 @@ def crossing_probability(windows: int, records: int, need: int, rate: float) -> 
     ``windows`` windows of ``2 MATCH_BINS + 1`` bins is ``rate``: a record crosses somewhere in
     a window with probability at most ``(2 MATCH_BINS + 1) p``, and ``need`` of ``records`` must
     (binomial tail), by bisection on ``log p``."""
+    from scipy.stats import binom  # imported on first use: a refusal need not wait for it
     width = 2 * MATCH_BINS + 1
 
     def false_rate(p: float) -> float:
-        from scipy.stats import binom  # imported on first use: a refusal need not wait for it
         return windows * binom.sf(need - 1, records, min(1.0, width * p))
 
     lo, hi = -60.0, 0.0

@@ -74,10 +74,10 @@ def unexplained_entries(judged: Records, idx: np.ndarray, signals: list[np.ndarr
     held-out records (module text), largest first: entry, kind, mean residual [dB], z (the
     median over the records of the residual over its allowed scatter), its bound, and where the
     entry lies."""
+    from scipy.stats import norm  # imported on first use: a refusal need not wait for it
     res = residuals_db(judged, idx, signals)
     pos = by_group(judged, idx)
     n = sum(len(judged.groups[k].names) for k in pos)
-    from scipy.stats import norm  # imported on first use: a refusal need not wait for it
     crit = float(norm.isf(rate / (2 * max(n, 1))))
     out = {}
     for k, mine in pos.items():

@@ -219,6 +219,7 @@ def explore(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[
     A missing effect drags the calibration (to the bounds, at worst), and least squares from a
     single start stays in its basin; the declared values are the prior that does not depend on
     the fit."""
+    from scipy.stats import qmc  # imported on first use: a refusal need not wait for it
     params = eff.params if eff is not None else ()
     dyn = [n for n in free_nuisance if n in EXPLORED]
     # the scenario's nuisance (and support mode) around its declared values; the model form
@@ -237,7 +238,6 @@ def explore(rec: Records, eff: Effect | None, c: Candidate, free_nuisance: list[
     # the true pit's 26 um, 0.41, 1.18 mm giving 1.24)
     per_dynamics = 2 ** max(len(params) - 1, 0)
     n_points = rec.settings.explore * (CALIBRATION_EXPLORE if eff is None else per_dynamics)
-    from scipy.stats import qmc  # imported on first use: a refusal need not wait for it
     pts = (qmc.Sobol(dim, seed=rec.settings.seed).random(n_points) if dim and n_points
            else np.empty((0, 0)))
     # a measurement stage leaves the dynamics alone: its extra points share the dynamic
