@@ -177,3 +177,22 @@ def test_a_contact_that_does_not_settle_is_a_stated_scope_end(monkeypatch):
         simulate_wear(Scenario(), 5e7)
     s, cycles, pinion, gear = err.value.history
     assert cycles.size == pinion.shape[0] == gear.shape[0] >= 1 and pinion.shape[1] == s.size
+
+
+
+def test_the_compiled_contact_gives_the_same_digits_compiled_anew_and_from_the_cache():
+    """Numba compiles the solver once and reads it from its cache after (a fresh clone's first
+    run, then every later one): a fresh compilation of the same source gives the same pressures
+    to the last bit, or a dataset rebuilt would not be byte-identical (fast-math reductions
+    did differ)."""
+    import numba
+
+    X, dX = _cells(2.5, 64)
+    rng = np.random.default_rng(0)
+    gap = (X**2 / 2 + 0.3 * np.exp(-(X - rng.uniform(-1, 1, (40, 1)))**2 / 0.1)
+           + rng.uniform(-0.5, 0.5, (40, 1)) * X)
+    K = wc.influence_matrix(X.size, dX)
+    args = (gap, K, dX, math.pi / 2, wc.TOL, wc.MAX_ITER)
+    anew = numba.njit(cache=False, nogil=True, error_model="numpy")(wc._polonsky_keer.py_func)
+    for ours, theirs in zip(wc._polonsky_keer(*args), anew(*args), strict=True):
+        assert ours.tobytes() == theirs.tobytes()
