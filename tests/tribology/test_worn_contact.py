@@ -180,19 +180,10 @@ def test_a_contact_that_does_not_settle_is_a_stated_scope_end(monkeypatch):
 
 
 
-def test_the_compiled_contact_gives_the_same_digits_compiled_anew_and_from_the_cache():
-    """Numba compiles the solver once and reads it from its cache after (a fresh clone's first
-    run, then every later one): a fresh compilation of the same source gives the same pressures
-    to the last bit, or a dataset rebuilt would not be byte-identical (fast-math reductions
-    did differ)."""
-    import numba
 
-    X, dX = _cells(2.5, 64)
-    rng = np.random.default_rng(0)
-    gap = (X**2 / 2 + 0.3 * np.exp(-(X - rng.uniform(-1, 1, (40, 1)))**2 / 0.1)
-           + rng.uniform(-0.5, 0.5, (40, 1)) * X)
-    K = wc.influence_matrix(X.size, dX)
-    args = (gap, K, dX, math.pi / 2, wc.TOL, wc.MAX_ITER)
-    anew = numba.njit(cache=False, nogil=True, error_model="numpy")(wc._polonsky_keer.py_func)
-    for ours, theirs in zip(wc._polonsky_keer(*args), anew(*args), strict=True):
-        assert ours.tobytes() == theirs.tobytes()
+def test_the_compiled_contact_kernels_keep_ieee_arithmetic():
+    """Fast-math lets the compiler reorder sums, and it did: the solver's pressures differed
+    between a fresh compilation and numba's cache, so a dataset rebuilt in a fresh clone was
+    not byte-identical (tests/dataset). Its kernels keep IEEE arithmetic."""
+    for kernel in (wc._polonsky_keer, wc._sweep, wc._passed_at, wc._hertz_passed):
+        assert not kernel.targetoptions.get("fastmath"), kernel.py_func.__name__
