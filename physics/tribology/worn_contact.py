@@ -111,27 +111,16 @@ def _polonsky_keer(gap, K, dX, load, tol, max_iter):
     influence matrix ``K`` is symmetric and small, and each iteration's deflections of all rows
     still iterating are one matrix product. From a uniform pressure where the rigid gap lies
     within half a Hertz approach of its least value, an iteration takes a conjugate-gradient
-    step on the cells in contact (the gap's mean over them the approach), clips the pressure
-    at zero, lets open cells that interpenetrate join the contact (the method's overlap step,
-    which restarts the conjugate directions) and scales the pressure to carry ``load``; a row
-    whose pressure moved by less than ``tol`` (relative) is left alone. Returns the pressures,
-    the iterations each row took (-1: not converged in ``max_iter``) and its last relative
-    change. IEEE arithmetic in a fixed order (no fast-math): the same on every run, whether
-    compiled or read from the cache."""
+    step on the cells in contact (:func:`_direction`, :func:`_step`) and leaves a row alone
+    once its pressure moved by less than ``tol`` (relative). Returns the pressures, the
+    iterations each row took (-1: not converged in ``max_iter``) and its last relative change.
+    IEEE arithmetic in a fixed order (no fast-math): the same on every run, whether compiled or
+    read from the cache."""
     m, n = gap.shape
     P = np.zeros((m, n))
     for k in range(m):
-        least = gap[k].min()
-        total = 0.0
-        for i in range(n):
-            if gap[k, i] - least < 0.5:
-                P[k, i] = 1.0
-                total += 1.0
-        for i in range(n):
-            P[k, i] *= load / (total * dX)
+        _start(gap[k], load, dX, P[k])
     t = np.zeros((m, n))
-    g = np.zeros(n)
-    new = np.zeros(n)
     g_old = np.ones(m)
     delta = np.zeros(m)
     change = np.full(m, np.inf)
@@ -148,57 +137,14 @@ def _polonsky_keer(gap, K, dX, load, tol, max_iter):
         approach = np.empty(na)
         for a in range(na):
             k = active[a]
-            count, mean = 0, 0.0
-            for i in range(n):
-                g_raw[a, i] += gap[k, i]
-                if Pa[a, i] > 0:
-                    count += 1
-                    mean += g_raw[a, i]
-            approach[a] = mean / count
-            G = 0.0
-            for i in range(n):
-                g[i] = g_raw[a, i] - approach[a] if Pa[a, i] > 0 else 0.0
-                G += g[i] * g[i]
-            beta = delta[k] * G / g_old[k]
-            for i in range(n):
-                ta[a, i] = g[i] + beta * ta[a, i] if Pa[a, i] > 0 else 0.0
-            g_old[k] = G if G > 0 else 1.0
+            approach[a], g_old[k] = _direction(g_raw[a], gap[k], Pa[a], ta[a], delta[k],
+                                               g_old[k])
         r = np.dot(ta, K)
         kept = 0
         for a in range(na):
             k = active[a]
-            count, mean = 0, 0.0
-            for i in range(n):
-                if Pa[a, i] > 0:
-                    count += 1
-                    mean += r[a, i]
-            mean /= count
-            rt, gt = 0.0, 0.0
-            for i in range(n):
-                ri = r[a, i] - mean if Pa[a, i] > 0 else 0.0
-                gi = g_raw[a, i] - approach[a] if Pa[a, i] > 0 else 0.0
-                rt += ri * ta[a, i]
-                gt += gi * ta[a, i]
-            tau = gt / rt if rt > 0 else 0.0
-            overlap, total = False, 0.0
-            for i in range(n):
-                v = max(Pa[a, i] - tau * ta[a, i], 0.0)
-                opened = g_raw[a, i] - approach[a]
-                if v == 0.0 and opened < 0.0:
-                    overlap = True
-                    v = -tau * opened
-                new[i] = v
-                total += v
-            delta[k] = 0.0 if overlap else 1.0
-            scale = load / (total * dX)
-            moved, total = 0.0, 0.0
-            for i in range(n):
-                v = new[i] * scale
-                moved += abs(v - Pa[a, i])
-                total += v
-                P[k, i] = v
-                t[k, i] = ta[a, i]
-            change[k] = moved / total
+            delta[k], change[k] = _step(g_raw[a], approach[a], r[a], Pa[a], ta[a], load, dX,
+                                        P[k], t[k])
             if change[k] < tol:
                 iterations[k] = it
             else:
@@ -208,6 +154,84 @@ def _polonsky_keer(gap, K, dX, load, tol, max_iter):
         if kept == 0:
             break
     return P, iterations, change
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _start(gap, load, dX, P):
+    """A uniform pressure carrying ``load`` where ``gap`` lies within half a Hertz approach of
+    its least value, into ``P``."""
+    least = gap.min()
+    total = 0.0
+    for i in range(gap.size):
+        if gap[i] - least < 0.5:
+            P[i] = 1.0
+            total += 1.0
+    for i in range(gap.size):
+        P[i] *= load / (total * dX)
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _direction(g_raw, gap, P, t, delta, g_old):
+    """The gap under pressure ``P`` (``g_raw``, deflections in, gap added in place) and the
+    conjugate direction ``t`` (in place) on the cells in contact; returns the approach (the
+    gap's mean over them) and the squared gap norm for the next step's ``beta``."""
+    n = gap.size
+    count, mean = 0, 0.0
+    for i in range(n):
+        g_raw[i] += gap[i]
+        if P[i] > 0:
+            count += 1
+            mean += g_raw[i]
+    approach = mean / count
+    G = 0.0
+    for i in range(n):
+        g = g_raw[i] - approach if P[i] > 0 else 0.0
+        G += g * g
+    beta = delta * G / g_old
+    for i in range(n):
+        t[i] = (g_raw[i] - approach) + beta * t[i] if P[i] > 0 else 0.0
+    return approach, (G if G > 0 else 1.0)
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _step(g_raw, approach, r, P, t, load, dX, P_out, t_out):
+    """The step along ``t`` (``r``: its deflections), clipped at zero, open cells that
+    interpenetrate joining the contact (the method's overlap step, which restarts the conjugate
+    directions: returned ``delta`` 0), scaled to carry ``load``, into ``P_out`` and ``t_out``;
+    returns ``delta`` and the pressure's relative change."""
+    n = P.size
+    count, mean = 0, 0.0
+    for i in range(n):
+        if P[i] > 0:
+            count += 1
+            mean += r[i]
+    mean /= count
+    rt, gt = 0.0, 0.0
+    for i in range(n):
+        ri = r[i] - mean if P[i] > 0 else 0.0
+        gi = g_raw[i] - approach if P[i] > 0 else 0.0
+        rt += ri * t[i]
+        gt += gi * t[i]
+    tau = gt / rt if rt > 0 else 0.0
+    overlap, total = False, 0.0
+    new = np.empty(n)
+    for i in range(n):
+        v = max(P[i] - tau * t[i], 0.0)
+        opened = g_raw[i] - approach
+        if v == 0.0 and opened < 0.0:
+            overlap = True
+            v = -tau * opened
+        new[i] = v
+        total += v
+    scale = load / (total * dX)
+    moved, total = 0.0, 0.0
+    for i in range(n):
+        v = new[i] * scale
+        moved += abs(v - P[i])
+        total += v
+        P_out[i] = v
+        t_out[i] = t[i]
+    return (0.0 if overlap else 1.0), moved / total
 
 
 @numba.njit(cache=True, nogil=True, inline="always")

@@ -185,5 +185,6 @@ def test_the_compiled_contact_kernels_keep_ieee_arithmetic():
     """Fast-math lets the compiler reorder sums, and it did: the solver's pressures differed
     between a fresh compilation and numba's cache, so a dataset rebuilt in a fresh clone was
     not byte-identical (tests/dataset). Its kernels keep IEEE arithmetic."""
-    for kernel in (wc._polonsky_keer, wc._sweep, wc._passed_at, wc._hertz_passed):
+    for kernel in (wc._polonsky_keer, wc._start, wc._direction, wc._step, wc._sweep,
+                   wc._passed_at, wc._hertz_passed):
         assert not kernel.targetoptions.get("fastmath"), kernel.py_func.__name__
