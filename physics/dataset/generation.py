@@ -213,6 +213,10 @@ class NuisanceRanges:
         return out
 
 
+#: chunks of a dataset where ``data.chunks`` is not given (fewer where it has fewer units)
+CHUNKS = 5
+
+
 @dataclass(frozen=True)
 class DatasetSpec:
     """What a dataset holds; validated on construction."""
@@ -225,7 +229,8 @@ class DatasetSpec:
     replicates: int = bounded(64, 1, 100_000, whole=True)
     nuisance: NuisanceRanges = field(default_factory=NuisanceRanges)
     seed: int = bounded(0, 0, 2**32 - 1, whole=True)
-    chunks: int = bounded(5, 1, 100_000, "independent jobs", whole=True)
+    #: independent jobs; None: :data:`CHUNKS`, or one per unit where there are fewer
+    chunks: int | None = bounded(None, 1, 100_000, "independent jobs", whole=True)
 
     def __post_init__(self) -> None:
         validate_fields(self, "data")
@@ -237,6 +242,8 @@ class DatasetSpec:
             raise ValueError(f"data.cases = {list(self.cases)} must be distinct, from {valid}")
         if isinstance(self.nuisance, Mapping):  # a dict or a Hydra DictConfig
             object.__setattr__(self, "nuisance", NuisanceRanges(**self.nuisance))
+        if self.chunks is None:
+            object.__setattr__(self, "chunks", min(CHUNKS, self.units))
         if self.chunks > self.units:
             raise ValueError(f"data.chunks = {self.chunks} must lie in [1, {self.units}] (one "
                              "unit is a case-replicate pair)")

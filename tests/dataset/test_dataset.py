@@ -119,6 +119,15 @@ def test_ranges_are_refused_outside_their_limits():
         NuisanceRanges(snr_db=[float("nan"), 30.0])
 
 
+def test_the_default_chunk_count_follows_a_smaller_unit_count():
+    """Five chunks by default, one per unit where there are fewer (two replicates of one
+    case: two chunks); a count given beyond the units is refused naming them."""
+    assert DatasetSpec().chunks == 5
+    assert DatasetSpec(cases=(3,), replicates=2).chunks == 2
+    with pytest.raises(ValueError, match=r"data.chunks = 5 must lie in \[1, 2\]"):
+        DatasetSpec(cases=(3,), replicates=2, chunks=5)
+
+
 def test_chunked_equals_single_and_rerun_is_byte_identical(tmp_path, single):
     path = generate(tmp_path / "a", chunks=3, jobs=2)
     pd.testing.assert_frame_equal(pd.read_parquet(path), pd.read_parquet(single))
