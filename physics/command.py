@@ -115,10 +115,12 @@ class RunRecord(Callback):
         check_single_run(config)
         check_run_folder(_RUN_DIR, "hydra.run.dir")
         _record_before(_RUN_DIR)
+        interrupt.started()
 
     def on_multirun_start(self, config: DictConfig, **kwargs: Any) -> None:
         check_run_folder(Path(str(config.hydra.sweep.dir)), "hydra.sweep.dir")
         _record_before(Path(str(config.hydra.sweep.dir)))
+        interrupt.started()
         try:
             check_launcher(config)
         except ValueError as err:
@@ -269,6 +271,7 @@ def run_command(cfg: DictConfig, prepare: Callable[[DictConfig], Plan],
     printed by :func:`entry`. In a sweep's job a refusal or failure is recorded and raised as
     an ordinary exception, so that Hydra marks that job failed and runs the others.
     """
+    interrupt.started()  # (an app without the run_record callback)
     folder = _run_folder()
     job = _sweep_job()
     if job is not None and folder is not None:
@@ -336,7 +339,7 @@ def entry(task: Callable[[], Any], check: Callable[[DictConfig], Any] | str | No
             print(f"error: {err}", file=sys.stderr)
             raise SystemExit(2) from None
         try:
-            return interrupt.guard(task, undo=_undo_unstarted)
+            return interrupt.guard(task, undo=_undo_unstarted, composing=True)
         except BrokenPipeError:  # the reader of the output left (python train.py --help | head)
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no flush error
             raise SystemExit(1) from None

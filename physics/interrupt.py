@@ -38,8 +38,9 @@ _SIGNAL: int | None = None
 _NOTE: Callable[[], str] | None = None
 
 
-#: where the app is: "start" (its imports, before :func:`guard`), "run" (inside it), "done"
-#: (the app's entry returned: its work is written, and a signal then is let be)
+#: where the app is: "start" (its imports, before :func:`guard`), "compose" (a Hydra app's
+#: config being composed, until :func:`started`), "run" (its work), "done" (the app's entry
+#: returned: its work is written, and a signal then is let be)
 _PHASE = "start"
 #: inside :func:`deferred`: a signal is noted and raised at the next :func:`check` instead
 _DEFERRED = False
@@ -49,9 +50,9 @@ def _on_signal(signum: int, frame: Any) -> None:
     global _SIGNAL
     if _SIGNAL is None:
         _SIGNAL = signum
-    if _PHASE == "start":  # nothing to clean up yet: end here, wherever the imports were,
-        _report()          # at once: an exception raised inside a compiled module's import
-        os._exit(EXIT_CODES[signum])  # (torch's) aborts the interpreter instead
+    if _PHASE in ("start", "compose"):  # nothing to clean up yet: end here at once; raised
+        _report()  # inside a compiled module's import (torch's) it aborts the interpreter,
+        os._exit(EXIT_CODES[signum])  # inside OmegaConf's composition it left a traceback
     if _PHASE == "done" or _DEFERRED:  # done (exit 0), or raised at the next check()
         return
     _raise(signum)
@@ -278,13 +279,23 @@ def end() -> None:
     raise SystemExit(EXIT_CODES.get(_SIGNAL, 130))
 
 
-def guard(main: Callable[[], Any], undo: Callable[[], None] | None = None) -> Any:
+def started() -> None:
+    """The app's config is composed and nothing is made yet (:func:`guard`'s ``composing``):
+    from now on a signal is raised where the program is, for its cleanups to run."""
+    global _PHASE
+    if _PHASE == "compose":
+        _PHASE = "run"
+
+
+def guard(main: Callable[[], Any], undo: Callable[[], None] | None = None, *,
+          composing: bool = False) -> Any:
     """Run an app's entry ``main()``; an interrupted run ends with :func:`end`, also one that
     the code on its way swallowed the interruption of; ``undo()`` runs first (an app removes
-    what a run interrupted before its work made)."""
+    what a run interrupted before its work made). ``composing``: ``main`` composes a Hydra
+    config first, which a signal ends at once, until :func:`started`."""
     global _PHASE
     install_signal_handlers()
-    _PHASE = "run"
+    _PHASE = "compose" if composing else "run"
     try:
         try:
             result = main()

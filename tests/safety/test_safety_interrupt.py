@@ -206,3 +206,34 @@ def test_an_interruption_raised_during_garbage_collection_prints_no_traceback(mo
 
     assert "Traceback" not in collected(interrupt.Terminated())
     assert "ValueError: another error" in collected(ValueError("another error"))
+
+
+DURING_COMPOSITION = """
+import os, signal, sys
+from hydra._internal import config_loader_impl as loader
+from physics import interrupt
+interrupt.install_at_start("__main__")
+compose = loader.ConfigLoaderImpl._load_configuration_impl
+def interrupted(self, *args, **kwargs):
+    try:
+        os.kill(os.getpid(), signal.SIGINT)  # Ctrl-C while Hydra composes the config
+        return compose(self, *args, **kwargs)
+    except KeyboardInterrupt:
+        print("raised inside the composition", file=sys.stderr)
+        raise
+loader.ConfigLoaderImpl._load_configuration_impl = interrupted
+sys.argv = ["surrogate.predict", *sys.argv[1:]]
+from surrogate.predict import main
+main()
+"""
+
+
+def test_ctrl_c_while_hydra_composes_the_config_ends_in_one_line(tmp_path):
+    """A signal raised inside OmegaConf's composition once left its config half-set, and Hydra
+    printed the error that followed with its traceback: until the config is composed a signal
+    is not raised there, the run ends at once with its line."""
+    run = subprocess.run([sys.executable, "-c", DURING_COMPOSITION, "ckpt=m.pt", "input=x.csv"],
+                         cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert run.returncode == 130 and "Traceback" not in run.stderr, run.stderr[-3000:]
+    assert run.stderr.splitlines() == ["interrupted: nothing was written; run the command again"]
+    assert not any(tmp_path.iterdir())
