@@ -179,8 +179,6 @@ def test_a_contact_that_does_not_settle_is_a_stated_scope_end(monkeypatch):
     assert cycles.size == pinion.shape[0] == gear.shape[0] >= 1 and pinion.shape[1] == s.size
 
 
-
-
 def test_the_compiled_contact_kernels_keep_ieee_arithmetic():
     """Fast-math lets the compiler reorder sums, and it did: the solver's pressures differed
     between a fresh compilation and numba's cache, so a dataset rebuilt in a fresh clone was
