@@ -47,7 +47,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
-from scipy.stats import spearmanr
 from threadpoolctl import threadpool_limits
 
 from physics.estimators.empirical_inverse import EmpiricalInverse
@@ -133,6 +132,8 @@ def _linear_rows(p: dict, x: np.ndarray, raw: np.ndarray | None) -> np.ndarray:
 
 
 def _directions(x: np.ndarray, y: np.ndarray) -> list[int]:
+    from scipy.stats import spearmanr  # imported on first use: a prediction need not wait for it
+
     out = []
     for j in range(x.shape[1]):
         rho = spearmanr(x[:, j], y).statistic if np.ptp(x[:, j]) > 0 else 0.0

@@ -5,12 +5,12 @@ hyperparameters, the :class:`~surrogate.schema.FeatureSchema`, the conformal int
 and the :class:`~surrogate.novelty.Novelty` (training rows and threshold); it is read with
 ``torch.load(weights_only=True)``, so loading it runs no code.
 
-Predictions run in ONNX Runtime (:func:`onnx_session`): the input scaling, the five members and
-their mixture as one graph, built from the loaded weights on first use. On this machine it runs
-at 3.1-3.8 times torch's batch rate on two threads and a seventh of its single-row latency
-(``bench/bench_surrogate.py``, docs/benchmark.md, Training and inference time);
-:func:`torch_predict` is the same computation in torch, the reference the tests and the
-benchmark hold it to.
+Predictions run in torch (:func:`torch_predict`: the input scaling, the members and their
+mixture as one module, :class:`ScaledEnsemble`). A caller that predicts many times from one
+loaded model (a monitoring service) calls :meth:`Surrogate.serve`: the same graph exported to
+ONNX Runtime (:func:`onnx_session`), faster per call, after a one-off export and import that
+take longer than torch needs for a million rows (``bench/bench_surrogate.py`` measures both;
+docs/benchmark.md, Training and inference time).
 """
 
 from __future__ import annotations
@@ -27,7 +27,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
-import onnxruntime as ort
 import pandas as pd
 import torch
 from omegaconf import OmegaConf
@@ -41,6 +40,8 @@ from surrogate.schema import FeatureSchema, real_columns
 from surrogate.settings import model_file
 
 if TYPE_CHECKING:  # the training module imports Lightning, which inference does without
+    import onnxruntime as ort
+
     from surrogate.model import WearRegressor
 
 log = logging.getLogger(__name__)
@@ -169,9 +170,14 @@ def onnx_session(model: Network | WearRegressor, schema: FeatureSchema, threads:
                  ) -> ort.InferenceSession:
     """:class:`ScaledEnsemble` as an ONNX Runtime session on ``threads`` threads.
 
+    ONNX and ONNX Runtime are imported here: about a second, which a single prediction does
+    without.
+
     Exported in memory by torch's TorchScript-based exporter (the torch.export-based one is
     many times slower for the same graph); ONNX Runtime fuses each ``x sigmoid(x)`` into one
     kernel and the first layer's product with its bias."""
+    import onnxruntime as ort
+
     n_in = len(schema.inputs)
     graph = ScaledEnsemble(model, schema).eval()
     buf = io.BytesIO()
@@ -275,6 +281,7 @@ class Surrogate:
         #: the training rows and the flag's threshold (None: a network not yet calibrated,
         #: whose rows get no novelty score and whose interval is of the ensemble's spread)
         self.novelty = novelty
+        self._session: ort.InferenceSession | None = None  # serve()
 
     @classmethod
     def load(cls, path: str | Path, key: str = "checkpoint") -> Surrogate:
@@ -326,11 +333,26 @@ class Surrogate:
         return "network" if self.chosen is None else self.chosen.model.kind
 
     @cached_property
-    def session(self) -> ort.InferenceSession:
-        """The ONNX Runtime session (:func:`onnx_session`), built on first use from the weights
-        as they are then, with as many threads as torch uses in this process (a caller that
-        limits torch limits this too)."""
-        return onnx_session(self.model, self.schema, torch.get_num_threads())
+    def graph(self) -> ScaledEnsemble:
+        """The network with its input scaling and mixture, in torch (:class:`ScaledEnsemble`),
+        built on first use from the weights as they are then."""
+        return ScaledEnsemble(self.model, self.schema).eval()
+
+    def serve(self, threads: int | None = None) -> Surrogate:
+        """Predict from now on in ONNX Runtime (:func:`onnx_session`, on ``threads`` threads;
+        as many as torch uses in this process where not given) and return this model: for a
+        caller that predicts many times from one loaded model. The export and the import cost
+        about 2 s once; each call then takes about a seventh of torch's time for one row and
+        half of it for many (docs/benchmark.md). A model other than the network has no graph
+        to export and is returned as it is."""
+        if threads is not None and (isinstance(threads, bool) or not isinstance(threads, int)
+                                    or threads < 1):
+            raise ValueError(f"serve(threads = {threads!r}): the threads must be a whole number "
+                             "of at least 1 (or None: as many as torch uses)")
+        if self.chosen is None and self._session is None:
+            self._session = onnx_session(self.model, self.schema,
+                                         torch.get_num_threads() if threads is None else threads)
+        return self
 
     def predict_array(self, x: np.ndarray, batch: int = 16384) -> tuple[np.ndarray, np.ndarray]:
         """Mean and standard deviation of wear for an unscaled input matrix (no checks).
@@ -345,9 +367,11 @@ class Surrogate:
         if self.chosen is not None:  # its reading, and the fold models' spread about it
             mean, folds = self.chosen.readings(np.asarray(x, float))
             return mean, folds.std(axis=1)
+        if self._session is None:
+            return torch_predict(self.graph, xs, batch)
         mean, std = np.empty(len(xs), np.float32), np.empty(len(xs), np.float32)
         for lo in range(0, len(xs), batch):
-            mean[lo:lo + batch], std[lo:lo + batch] = self.session.run(
+            mean[lo:lo + batch], std[lo:lo + batch] = self._session.run(
                 None, {"x": xs[lo:lo + batch]})
         return mean, std
 

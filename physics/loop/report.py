@@ -24,6 +24,8 @@ STABLE_KEYS = ("mode", "verdict", "unexplained", "partial", "chosen_effect", "ch
                "nuisance_after", "null_bic", "ranking", "decision_rule")
 
 
+#: residuals.png shows this many signature entries per group: those the model misses most
+RESIDUALS_SHOWN = 25
 #: how a verdict writes each condition: its value, then its bound
 CONDITION_WORDS = {"gain": ("held-out error cut by {value:.0%}", "needs >= {bound:.0%}"),
                    "delta_bic": ("dBIC {value:.4g}", "needs <= {bound:g}"),
@@ -344,8 +346,8 @@ def _flat(per_group: dict[str, dict[str, float]]) -> dict[str, float]:
 
 
 def figures(report: LoopReport, out: Path) -> None:
-    """order_spectra.png (one held-out record) and residuals.png (per signature entry), or
-    feature_trends.png for a feature table."""
+    """order_spectra.png (one held-out record) and residuals.png (the signature entries the
+    model misses most, before and after), or feature_trends.png for a feature table."""
     plt = pyplot()
     if report.mode == "feature_table":
         _feature_trends(report.to_dict(), out)
@@ -369,15 +371,19 @@ def figures(report: LoopReport, out: Path) -> None:
     atomic_write(out / "order_spectra.png", lambda p: fig.savefig(p, dpi=110, format="png"))
     plt.close(fig)
     groups = list(report["residual_before"])
-    fig, axes = plt.subplots(len(groups), 1, figsize=(12, 4.5 * len(groups)), squeeze=False)
-    for ax, g in zip(axes[:, 0], groups, strict=True):
+    fig, axes = plt.subplots(1, len(groups), figsize=(6.5 * len(groups), 6.5), squeeze=False)
+    for ax, g in zip(axes[0], groups, strict=True):
         before, after = report["residual_before"][g], report["residual_after"][g]
-        pos = np.arange(len(before))
-        ax.bar(pos - 0.2, list(before.values()), 0.4, label="before")
-        ax.bar(pos + 0.2, [after[k] for k in before], 0.4, label="after")
-        ax.set_xticks(pos, list(before), rotation=90, fontsize=6)
-        ax.set(ylabel="measured - model [dB]", title=f"signature residual, held-out records, {g}")
-        ax.legend()
+        names = sorted(before, key=lambda k: -max(abs(before[k]), abs(after[k])))[:RESIDUALS_SHOWN]
+        pos = np.arange(len(names))[::-1]  # the largest on top
+        ax.barh(pos + 0.2, [before[k] for k in names], 0.4, label="before")
+        ax.barh(pos - 0.2, [after[k] for k in names], 0.4, label="after")
+        ax.axvline(0.0, color="k", lw=0.6)
+        ax.set_yticks(pos, names, fontsize=7)
+        ax.set(xlabel="measured - model [dB]",
+               title=f"largest {len(names)} of {len(before)} signature residuals\n"
+                     f"held-out records, {g}")
+        ax.legend(fontsize=8)
     fig.tight_layout()
     atomic_write(out / "residuals.png", lambda p: fig.savefig(p, dpi=110, format="png"))
     plt.close(fig)

@@ -271,10 +271,11 @@ def test_ensemble_members_differ_and_the_mixture_is_right():
 
 
 def test_onnx_runtime_predicts_what_torch_predicts():
-    """The ONNX Runtime graph (scaling folded into the first layer, members, mixture) against
-    the same graph in torch and against the unfolded computation (inputs scaled, then the
-    network), on a row count that is not a multiple of the batch, one row and none; a matrix
-    of the wrong width is refused before any work."""
+    """A loaded model predicts in torch (:class:`ScaledEnsemble`: scaling folded into the first
+    layer, members, mixture); served (``serve()``), the same graph in ONNX Runtime gives the
+    same readings, and both the unfolded computation's (inputs scaled, then the network), on a
+    row count that is not a multiple of the batch, one row and none; a matrix of the wrong
+    width, or a thread count that is not one, is refused before any work."""
     torch.manual_seed(1)
     rng = np.random.default_rng(1)
     cols = [f"f{i}" for i in range(4)]
@@ -283,10 +284,17 @@ def test_onnx_runtime_predicts_what_torch_predicts():
     train["y"] = rng.uniform(0.0, 0.02, 64)
     schema = FeatureSchema.fit(train, cols, dict.fromkeys([*cols, "y"], "1"), "y")
     model = WearRegressor(4, schema.to_dict(), width=8, depth=2, members=3)
-    s = Surrogate(model, interval_scale=1.645)
+    loaded = Surrogate(model, interval_scale=1.645)
     x = rng.normal(3.0, 3.0, (1000, 4)) * [1, 1, 1, 50] + offset
-    mean, std = s.predict_array(x, batch=384)
     ref_mean, ref_std = torch_predict(ScaledEnsemble(model, schema), x)
+    as_loaded = loaded.predict_array(x, batch=384)
+    assert np.array_equal(as_loaded[0], ref_mean) and np.array_equal(as_loaded[1], ref_std)
+    for bad in (0, 1.5, True):
+        with pytest.raises(ValueError, match=rf"serve\(threads = {bad!r}\)"):
+            loaded.serve(bad)
+    s = Surrogate(model, interval_scale=1.645).serve(1)
+    assert s.serve() is s and s._session is not None
+    mean, std = s.predict_array(x, batch=384)
     scale = schema.target_scale
     assert np.allclose(mean, ref_mean, rtol=1e-5, atol=1e-6 * scale)
     assert np.allclose(std, ref_std, rtol=1e-4, atol=1e-6 * scale)
