@@ -8,6 +8,7 @@ import json
 import logging
 import math
 import os
+import time
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -264,7 +265,9 @@ def fit_metrics(job: TrainJob) -> dict:
     L.seed_everything(cfg.seed, workers=True)
     if cfg.get("threads"):
         torch.set_num_threads(int(cfg.threads))
-    dm.setup()
+    start = time.perf_counter()
+    dm.setup()  # the dataset read, or built where missing
+    data_s = time.perf_counter() - start
     if job.init is None:
         model = new_network(cfg, dm)
     else:  # fine-tune: the pre-trained network, its input scaling and its architecture
@@ -276,7 +279,7 @@ def fit_metrics(job: TrainJob) -> dict:
              if dm.fold_label is not None else "", dm.split_summary())
     envelope = job_envelope(job, dm)  # said before training, kept in metrics.json
     try:
-        return _fit_and_export(job, dm, trainer, model, out, envelope)
+        return _fit_and_export(job, dm, trainer, model, out, envelope, data_s)
     except Exception:
         set_aside_checkpoints(out)
         raise
@@ -316,8 +319,11 @@ def compares(cfg: DictConfig, dm: WearDataModule) -> bool:
 
 
 def _fit_and_export(job: TrainJob, dm: WearDataModule, trainer: L.Trainer, model, out: Path,
-                    envelope: dict) -> dict:
+                    envelope: dict, data_s: float) -> dict:
+    """Train, calibrate, choose, export and test; the metrics (``data_s``: the time [s] the
+    dataset took to read or build; ``train_s``: the time of all that follows)."""
     cfg = job.cfg
+    start = time.perf_counter()
     val, test = train_network(trainer, model, dm)
     scale, novelty = calibrate(model, dm, float(cfg.model.interval))
     choice = select(job, dm, model, out) if compares(cfg, dm) else None
@@ -343,6 +349,7 @@ def _fit_and_export(job: TrainJob, dm: WearDataModule, trainer: L.Trainer, model
                    "model_kind": surrogate.kind, **chosen}
         if len(dm.frames["test"]):
             metrics.update(report_test(surrogate, dm, out, network, choice))
+        metrics.update(data_s=data_s, train_s=time.perf_counter() - start)
         value = metrics.get(cfg.optimized_metric)
         if value is None:
             raise ValueError(f"optimized_metric = {cfg.optimized_metric!r} is not among the "

@@ -142,7 +142,7 @@ def test_loop_time_quotes():
 
 def test_main_job_paragraph_of_the_benchmark_page():
     """docs/benchmark.md's main-job paragraph, from the same metrics.json (its RMSE in mm, the
-    target's unit)."""
+    target's unit), and the run's time there and in docs/dataset.md."""
     import json
 
     m = json.loads((FIGURES / "main_job_case3_metrics.json").read_text())
@@ -155,6 +155,13 @@ def test_main_job_paragraph_of_the_benchmark_page():
              f"{m['test_rmse'] * 1e3:.2f} um; its 95 % interval covers "
              f"{m['test_interval_coverage']:.2f} of them")
     assert quote in doc
+    assert (f"| dataset {m['data_s']:.0f} s, then training ({m['epochs']} epochs, seed 0), "
+            f"calibration and test {m['train_s']:.0f} s |") in doc
+    dataset = (ROOT / "docs" / "dataset.md").read_text()
+    assert f"| {m['data_s']:.0f} s on 2 cores from a clean folder |" in dataset
+    readme = " ".join((ROOT / "README.md").read_text().split())
+    assert (f"into `data/` ({m['data_s']:.0f} s on two cores), then a deep ensemble of five "
+            f"Gaussian MLPs ({m['train_s']:.0f} s with its test)") in readme
 
 
 def test_rig_calibration_quote():
