@@ -20,11 +20,15 @@ settings.register()
 
 
 def prepare(cfg: DictConfig):
-    """The settings that need no data and no Lightning first (refused before the slow import),
+    """The settings that need no data and no Lightning first (refused before the slow imports),
+    then a fine-tune's network and the settings it would not honour (torch alone: about 2 s),
     then the whole run's checks (:func:`surrogate.training.prepare`, whose import loads
-    Lightning and torch: about 4 s)."""
+    Lightning: about 4 s more)."""
     settings.check_run(cfg)
-    with deferred():  # a signal during the import is raised after it
+    with deferred():  # a signal during an import is raised after it
+        from surrogate import fine_tune
+    fine_tune.check_honoured(cfg, fine_tune.network(cfg))
+    with deferred():
         from surrogate import training
     return training.prepare(cfg)
 

@@ -24,7 +24,7 @@ from omegaconf import DictConfig, OmegaConf
 from physics import interrupt
 from physics.estimators.empirical_inverse import wear_errors
 from physics.files import atomic_write, pyplot
-from surrogate import baselines, candidates, settings
+from surrogate import baselines, candidates, fine_tune, settings
 from surrogate.conformal import attainable
 from surrogate.data import WearDataModule
 from surrogate.figures import add_baselines, parity_figure
@@ -88,13 +88,9 @@ def prepare(cfg: DictConfig) -> TrainJob:
     quiet_lightning()
     settings.check_run(cfg)
     trainer = make_trainer(cfg)
-    init = Surrogate.load(cfg.init_from, key="init_from") if cfg.get("init_from") else None
-    if init is not None and init.model is None:
-        raise ValueError(f"init_from = {cfg.init_from} holds a {init.kind} model, not a "
-                         "network; fine-tune from a run that kept the network "
-                         "(its wear_surrogate.pt, or network_surrogate.pt beside another kind)")
-    check_honoured(cfg, init)
-    data = _instantiate(cfg.data if init is None else read_as(cfg.data, init), "data")
+    init = fine_tune.network(cfg)
+    fine_tune.check_honoured(cfg, init)
+    data = _instantiate(cfg.data if init is None else fine_tune.read_as(cfg.data, init), "data")
     if init is None and cfg.model.get("trainable", "all") != "all":
         raise ValueError(f"model.trainable = {cfg.model.trainable!r} trains the output layers of "
                          "a pre-trained network and needs init_from=<run>/wear_surrogate.pt; "
@@ -136,84 +132,6 @@ def prepare(cfg: DictConfig) -> TrainJob:
                              f"and a cycle count; data.inputs lack {missing}: add them, or "
                              "choose another model.kind")
     return TrainJob(cfg, data, trainer, Path(cfg.paths.output_dir), init)
-
-
-def _given(node: DictConfig, schema: type, keys: tuple[str, ...]) -> dict[str, object]:
-    """The ``keys`` of ``node`` set to other values than their schema's defaults (so asked
-    for: by the command line, an experiment or the Python API), as plain values."""
-    default = schema()
-    values = {k: OmegaConf.to_container(node[k]) if OmegaConf.is_config(node[k]) else node[k]
-              for k in keys}
-    return {k: v for k, v in values.items() if v != getattr(default, k)}
-
-
-def _shown(given: dict[str, object], prefix: str) -> str:
-    return " and ".join(f"{prefix}.{k} = {v!r}" for k, v in given.items())
-
-
-def check_honoured(cfg: DictConfig, init: Surrogate | None) -> None:
-    """Refuse (ValueError, one line) a setting this run would silently not honour, naming it and
-    the fix:
-
-    - ``data.sensors`` and ``data.operating_point`` choose the default inputs: not where
-      ``data.inputs`` names them, nor in a fine-tune (``init_from``) whose network reads
-      other inputs (a fine-tune reads its network's: :func:`read_as`);
-    - ``model.width``, ``model.depth`` and ``model.members`` of a fine-tune: it keeps its
-      network's shape;
-    - ``data.generate`` and ``data.gearboxes`` build the physics dataset: not with a table of
-      one's own (``data.table``).
-
-    A setting counts as given where it differs from its schema's default
-    (:mod:`surrogate.settings`)."""
-    data = cfg.data
-    choose = _given(data, settings.DataConfig, ("sensors", "operating_point"))
-    if choose and data.get("inputs") is not None:
-        raise ValueError(f"{_shown(choose, 'data')} choose the default inputs, but data.inputs "
-                         f"names the inputs ({list(data.inputs)}): drop "
-                         f"{' and '.join(f'data.{k}' for k in choose)}, or data.inputs")
-    if choose and init is not None:
-        from surrogate.inputs import input_columns
-
-        baseline = init.schema.baseline if data.get("baseline") is None else data.baseline
-        try:
-            chosen = input_columns(list(data.sensors), bool(data.operating_point),
-                                   bool(baseline))
-        except ValueError:  # no inputs of that reading: not the network's either
-            chosen = None
-        if chosen != list(init.schema.inputs):
-            raise ValueError(f"init_from = {cfg.init_from}: a fine-tune reads that network's "
-                             f"inputs {list(init.schema.inputs)}, and {_shown(choose, 'data')} "
-                             f"asks for others: drop {' and '.join(f'data.{k}' for k in choose)}"
-                             ", or train from scratch on them (without init_from)")
-    if init is not None:
-        shape = _given(cfg.model, settings.ModelConfig, ("width", "depth", "members"))
-        other = {k: v for k, v in shape.items() if v != init.model.hparams[k]}
-        if other:
-            theirs = ", ".join(f"{k} {init.model.hparams[k]}" for k in other)
-            raise ValueError(f"{_shown(other, 'model')}: a fine-tune keeps the shape of its "
-                             f"network (init_from = {cfg.init_from}: {theirs}); drop "
-                             f"{' and '.join(f'model.{k}' for k in other)}, or train from "
-                             "scratch (without init_from)")
-    if data.get("table") is not None:
-        physics = _given(data, settings.DataConfig, ("generate", "gearboxes"))
-        if physics:
-            raise ValueError(f"{_shown(physics, 'data')} set how the physics dataset is built, "
-                             f"and this run reads your table (data.table = {data.table}): drop "
-                             f"{' and '.join(f'data.{k}' for k in physics)}")
-
-
-def read_as(data: DictConfig, init: Surrogate) -> DictConfig:
-    """The data settings of a fine-tune of ``init``: where ``data.inputs``, ``data.target`` or
-    ``data.baseline`` are left null, the pre-trained network's (a fine-tune reads as the
-    network it starts from; a value given is kept and checked against it by :func:`prepare`)."""
-    schema = init.schema
-    theirs = {"inputs": list(schema.inputs), "target": schema.target,
-              "baseline": bool(schema.baseline)}
-    out = data.copy()
-    for key, value in theirs.items():
-        if out.get(key) is None:
-            out[key] = value
-    return out
 
 
 class InterruptBetweenBatches(L.Callback):

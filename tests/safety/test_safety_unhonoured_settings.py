@@ -92,14 +92,19 @@ def test_an_empty_list_of_inputs_is_refused_as_such(network, tmp_path):
 
 
 def test_the_command_refuses_the_issue_s_fine_tune_in_one_line(network, tmp_path):
-    """As a user types it: exit 2, one ``error:`` line, nothing trained, no run folder left."""
+    """As a user types it: exit 2, one ``error:`` line, nothing trained, no run folder left;
+    refused before Lightning's import (``-X importtime`` lists every module imported)."""
     table().to_csv(tmp_path / "in.csv", index=False)
     env = {k: v for k, v in os.environ.items() if not k.startswith("HYDRA_")}
-    run = subprocess.run([sys.executable, str(ROOT / "train.py"), f"data.table={tmp_path}/in.csv",
-                          "data.group=rig", f"init_from={network}", "data.sensors=[dte]"],
+    run = subprocess.run([sys.executable, "-X", "importtime", str(ROOT / "train.py"),
+                          f"data.table={tmp_path}/in.csv", "data.group=rig",
+                          f"init_from={network}", "data.sensors=[dte]"],
                          cwd=tmp_path, capture_output=True, text=True, timeout=300, env=env)
     assert run.returncode == 2, run.stderr[-2000:]
     lines = [ln for ln in run.stderr.splitlines() if ln.startswith("error:")]
     assert len(lines) == 1 and "data.sensors = ['dte'] asks for others" in lines[0], run.stderr
     assert "Traceback" not in run.stderr
+    imported = {ln.split("|")[-1].strip() for ln in run.stderr.splitlines()
+                if ln.startswith("import time:")}
+    assert "torch" in imported and "lightning" not in imported
     assert sorted(p.name for p in tmp_path.iterdir()) == ["in.csv"]
