@@ -62,7 +62,9 @@ def test_table15_quote():
         "Thesis Table 15")
     kurtosis = table[table.feature == "kurtosis"]
     assert (kurtosis.rise_all_teeth < 0.5 * kurtosis.rise_measured).all()  # "not reached"
-    assert "kurtosis not reached" in readme_row("Thesis Table 15")
+    deep = kurtosis.wear_mm > 0.006  # at 10 and 15 um; at 5 um 2.21 is itself small
+    assert (kurtosis.rise_one_tooth_mode_largest[deep] < 0.5 * kurtosis.rise_measured[deep]).all()
+    assert "kurtosis not reached, nor through a housing mode" in readme_row("Thesis Table 15")
 
 
 def test_one_rig_quote():

@@ -11,7 +11,11 @@ its root depth. Each feature of the rigid-housing acceleration
 (:func:`physics.signals.measurement.housing_acceleration`; RMS, peak-to-peak, Pearson's
 kurtosis) is divided by the new pair's, beside the measured rises when the thesis's tables are
 given; and so are the condition indicators of its synchronous average that the thesis did not
-read (:mod:`physics.signals.indicators`: FM0, FM4, NA4, energy ratio, sideband level).
+read (:mod:`physics.signals.indicators`: FM0, FM4, NA4, energy ratio, sideband level). The thesis
+does not state its housing's resonances either: each one-tooth rise of Table 15's features is
+also taken through one housing mode (:func:`physics.signals.measurement.transfer_path`) at every
+point of :data:`HOUSING_MODES`, the dataset's range of them, and the least and the largest rise
+over the range are kept beside the rigid housing's.
 """
 
 from __future__ import annotations
@@ -22,6 +26,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from physics.dataset.generation import NuisanceRanges
 from physics.dynamics.model import EXACT_PHASES, build_model, simulate
 from physics.dynamics.teeth import per_tooth_model
 from physics.files import read_csv_table
@@ -30,7 +35,7 @@ from physics.params import Scenario
 from physics.reference import THESIS_TABLES
 from physics.signals.features import features
 from physics.signals.indicators import indicators
-from physics.signals.measurement import housing_acceleration
+from physics.signals.measurement import housing_acceleration, transfer_path
 from physics.tribology.wear import WearResult
 
 #: the root depths the thesis's rig was given (4.3) [um]
@@ -42,6 +47,15 @@ FEATURES = {"rms": "rms_m_per_s2", "peak_to_peak": "peak_to_peak_m_per_s2",
 INDICATOR_ROWS = ("fm0", "fm4", "na4", "energy_ratio", "sideband_level")
 #: whole pinion revolutions in each record
 REVOLUTIONS = 10
+#: one housing mode between mesh and accelerometer, (natural frequency [Hz], damping ratio,
+#: residue): over the range the datasets draw (:class:`physics.dataset.generation.NuisanceRanges`,
+#: 2-8 kHz and 2-10 %; five frequencies on a geometric grid by three damping ratios), the
+#: sensor on the mode (residue 1, the datasets' path) or the mode beside the rigid path
+#: (residue -1: twice the rigid level above the mode; :func:`transfer_path`)
+HOUSING_MODES = tuple((float(fn), float(zeta), residue)
+                      for fn in np.geomspace(*NuisanceRanges().transfer_fn_hz, 5)
+                      for zeta in np.geomspace(*NuisanceRanges().transfer_zeta, 3)
+                      for residue in (1.0, -1.0))
 MEASURED_TABLE = "table15_measured_acceleration_features.csv"
 
 
@@ -86,8 +100,10 @@ def table15_model(scn: Scenario, base: WearResult, thesis_tables: Path | None,
                   contact: str = "exact") -> pd.DataFrame:
     """One row per depth and feature (Table 15's, then the indicators): ``wear_mm``,
     ``feature``, ``rise_measured`` (NaN without the thesis's tables, and for the indicators),
-    ``rise_one_tooth``, ``rise_all_teeth`` (module doc); ``contact``: the dynamics'
-    ``flank_contact``."""
+    ``rise_one_tooth``, ``rise_all_teeth``, and for Table 15's features
+    ``rise_one_tooth_mode_least`` and ``rise_one_tooth_mode_largest``: the one-tooth rise
+    through each of :data:`HOUSING_MODES` (NaN for the indicators; module doc); ``contact``:
+    the dynamics' ``flank_contact``."""
     dyn = dataclasses.replace(scn.dynamics, flank_contact=contact,
                               duration_s=REVOLUTIONS * 60.0 / scn.operating.n1_rpm)
     scn = dataclasses.replace(scn, dynamics=dyn)
@@ -104,6 +120,11 @@ def table15_model(scn: Scenario, base: WearResult, thesis_tables: Path | None,
     accel = housing_acceleration(force, dyn.housing_mass_kg)
     values = features(accel)
     values |= indicators(accel, dyn.sample_rate_hz, scn.operating.n1_rpm / 60.0, z1)
+    one_tooth = [0, *range(1, 1 + 2 * len(DEPTHS_UM), 2)]  # new, then each depth on one tooth
+    through = [features(transfer_path(accel[one_tooth], dyn.sample_rate_hz, fn, zeta, g))
+               for fn, zeta, g in HOUSING_MODES]
+    mode_rises = {name: np.array([f[name][1:] / f[name][0] for f in through])
+                  for name in FEATURES}  # (mode, depth)
     measured = measured_rises(thesis_tables)
     rows = []
     for i, depth in enumerate(DEPTHS_UM):
@@ -112,8 +133,11 @@ def table15_model(scn: Scenario, base: WearResult, thesis_tables: Path | None,
             v = values[name]
             hit = (None if measured is None or name not in FEATURES else
                    measured.loc[np.isclose(measured["wear_mm"], wear_mm), name])
+            modes = mode_rises[name][:, i] if name in FEATURES else np.full(1, np.nan)
             rows.append({"wear_mm": wear_mm, "feature": name,
                          "rise_measured": np.nan if hit is None or hit.empty else hit.iloc[0],
                          "rise_one_tooth": v[1 + 2 * i] / v[0],
-                         "rise_all_teeth": v[2 + 2 * i] / v[0]})
+                         "rise_all_teeth": v[2 + 2 * i] / v[0],
+                         "rise_one_tooth_mode_least": modes.min(),
+                         "rise_one_tooth_mode_largest": modes.max()})
     return pd.DataFrame(rows)

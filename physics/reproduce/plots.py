@@ -149,7 +149,8 @@ def plot_ehl_pressure_film(solutions: dict[str, EHLSolution], path: Path) -> Non
 
 
 def plot_table15(table: pd.DataFrame, path: Path) -> None:
-    """Table 15's rises against induced root wear: measured (where given), one tooth, all."""
+    """Table 15's rises against induced root wear: measured (where given), one tooth (with its
+    span through the housing modes, where computed), all."""
     plt = pyplot()
     names = list(dict.fromkeys(table["feature"]))
     fig, axes = plt.subplots(1, len(names), figsize=(3.2 * len(names), 3.2))
@@ -161,6 +162,10 @@ def plot_table15(table: pd.DataFrame, path: Path) -> None:
                                   ("rise_all_teeth", "^-", "model, every tooth")):
             if df[col].notna().any():
                 ax.plot(np.r_[0, um], np.r_[1.0, df[col]], style, label=label)
+        if "rise_one_tooth_mode_least" in df and df["rise_one_tooth_mode_least"].notna().any():
+            ax.fill_between(np.r_[0, um], np.r_[1.0, df["rise_one_tooth_mode_least"]],
+                            np.r_[1.0, df["rise_one_tooth_mode_largest"]], color="C0",
+                            alpha=0.2, label="one tooth, through a housing mode")
         ax.set_title(name.replace("_", " "))
         ax.set_xlabel("pinion root wear [um]")
         ax.set_yscale("log")

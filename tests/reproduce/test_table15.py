@@ -5,10 +5,12 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from physics import reference
 from physics.params import Scenario
+from physics.reproduce import localised
 from physics.reproduce.localised import FEATURES, table15_model
 from physics.tribology.wear import simulate_wear
 
@@ -39,6 +41,10 @@ def test_the_docs_table15_is_the_models():
         assert cells[2] == f"{r.rise_measured:.2f}"
     kurtosis = table[table.feature == "kurtosis"]
     assert f"at most {kurtosis.rise_one_tooth.max():.2f}" in section
+    deepest = kurtosis.set_index("wear_mm").loc[0.015]
+    assert (f"{deepest.rise_one_tooth_mode_least:.2f}-{deepest.rise_one_tooth_mode_largest:.2f}"
+            " at 15 um (the figure's band)") in quoted
+    assert deepest.rise_one_tooth_mode_largest < 0.5 * deepest.rise_measured  # "no mode makes it"
     # the prose's claims
     rms = table[table.feature == "rms"].set_index("wear_mm")
     for depth in (0.005, 0.015):
@@ -49,11 +55,17 @@ def test_the_docs_table15_is_the_models():
     assert rms.rise_all_teeth[0.01] == pytest.approx(1.22 * rms.rise_measured[0.01], rel=0.01)
 
 
-def test_on_the_path_root_wear_is_a_relief():
+def test_on_the_path_root_wear_is_a_relief(monkeypatch):
     """The docs' contrast: with the contact on the path the root wear on every tooth lowers
-    RMS, peak-to-peak and kurtosis, and on one tooth leaves them within 2 % of new."""
+    RMS, peak-to-peak and kurtosis, and on one tooth leaves them within 2 % of new. A housing
+    mode of residue 0 is no mode at all (its transfer function is 1): its rises are the rigid
+    housing's."""
+    monkeypatch.setattr(localised, "HOUSING_MODES", ((4000.0, 0.05, 0.0),))
     scn = Scenario()
     table = table15_model(scn, simulate_wear(scn, 1e6), None, contact="path")
     features = table[table.feature.isin(list(FEATURES))]
     assert (features.rise_all_teeth < 1).all()
     assert (abs(features.rise_one_tooth - 1) < 0.02).all()
+    for column in ("rise_one_tooth_mode_least", "rise_one_tooth_mode_largest"):
+        assert np.allclose(features[column], features.rise_one_tooth, rtol=1e-9)
+    assert table.loc[~table.feature.isin(list(FEATURES)), "rise_one_tooth_mode_least"].isna().all()
