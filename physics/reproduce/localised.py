@@ -15,7 +15,9 @@ read (:mod:`physics.signals.indicators`: FM0, FM4, NA4, energy ratio, sideband l
 does not state its housing's resonances either: each one-tooth rise of Table 15's features is
 also taken through one housing mode (:func:`physics.signals.measurement.transfer_path`) at every
 point of :data:`HOUSING_MODES`, the dataset's range of them, and the least and the largest rise
-over the range are kept beside the rigid housing's.
+over the range are kept beside the rigid housing's. Nor does it state the rig's operating point:
+:func:`table15_operating_points` repeats the comparison at every speed and torque of the
+reproduction's Tables 2 and 3.
 """
 
 from __future__ import annotations
@@ -141,3 +143,23 @@ def table15_model(scn: Scenario, base: WearResult, thesis_tables: Path | None,
                          "rise_one_tooth_mode_least": modes.min(),
                          "rise_one_tooth_mode_largest": modes.max()})
     return pd.DataFrame(rows)
+
+
+def table15_operating_points(scn: Scenario, base: WearResult, speeds_rpm: list[float],
+                             torques_Nm: list[float], contact: str = "exact") -> pd.DataFrame:
+    """Table 15's features by the model at every speed and torque given (the reproduction's:
+    those of the thesis's Tables 2 and 3): the thesis does not state its rig's operating point
+    (4.3), and the rises move with it. One row per point, depth and feature: ``n1_rpm``,
+    ``torque_Nm``, ``wear_mm``, ``feature``, ``rise_one_tooth``, ``rise_all_teeth``
+    (:func:`table15_model` at that point, the same induced wear)."""
+    parts = []
+    for n1 in speeds_rpm:
+        for torque in torques_Nm:
+            at = dataclasses.replace(scn, operating=dataclasses.replace(
+                scn.operating, n1_rpm=float(n1), torque_Nm=float(torque)))
+            table = table15_model(at, base, None, contact)
+            table = table[table["feature"].isin(list(FEATURES))]
+            parts.append(table[["wear_mm", "feature", "rise_one_tooth", "rise_all_teeth"]]
+                         .assign(n1_rpm=float(n1), torque_Nm=float(torque)))
+    out = pd.concat(parts, ignore_index=True)
+    return out[["n1_rpm", "torque_Nm", "wear_mm", "feature", "rise_one_tooth", "rise_all_teeth"]]

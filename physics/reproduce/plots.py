@@ -174,3 +174,30 @@ def plot_table15(table: pd.DataFrame, path: Path) -> None:
     np.atleast_1d(axes)[0].legend(fontsize=7)
     save_figure(fig, path)
     plt.close(fig)
+
+
+
+def plot_table15_operating_points(points: pd.DataFrame, stated: pd.DataFrame,
+                                  path: Path) -> None:
+    """Table 15's kurtosis rise at its deepest induced wear against the speed, one line per
+    torque, one tooth and every tooth, the measured rise as a level."""
+    plt = pyplot()
+    deepest = points["wear_mm"].max()
+    df = points[(points["feature"] == "kurtosis") & np.isclose(points["wear_mm"], deepest)]
+    fig, axes = plt.subplots(1, 2, figsize=(8.0, 3.4), sharey=True)
+    measured = stated.loc[(stated["feature"] == "kurtosis")
+                          & np.isclose(stated["wear_mm"], deepest), "rise_measured"]
+    for ax, col, title in zip(axes, ("rise_one_tooth", "rise_all_teeth"),
+                              ("root wear on one tooth", "on every tooth"), strict=True):
+        for i, (torque, rows) in enumerate(df.groupby("torque_Nm")):
+            ax.plot(rows["n1_rpm"], rows[col], "o-", color=f"C{i}", label=f"{torque:g} N m")
+        if measured.notna().any():
+            ax.axhline(float(measured.iloc[0]), color="k", lw=1,
+                       label="measured (thesis Table 15)")
+        ax.set(title=f"kurtosis at {deepest * 1e3:g} um, {title}", xlabel="pinion speed [r/min]")
+        ax.set_yscale("log")
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("over the new pair's")
+    axes[0].legend(fontsize=7)
+    save_figure(fig, path)
+    plt.close(fig)

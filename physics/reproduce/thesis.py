@@ -79,6 +79,7 @@ from physics.reproduce.localised import (
     MEASURED_TABLE,
     measured_table,
     table15_model,
+    table15_operating_points,
     thesis_tables_fix,
 )
 from physics.scope import check_record, check_scope
@@ -481,6 +482,9 @@ class ReproduceConfig(PhysicsConfig):
         default_factory=lambda: [-0.1, 0.0, 0.1])  # Table 6
     stiffness: StiffnessStudy = field(default_factory=StiffnessStudy)
     evolution: EvolutionStudy = field(default_factory=EvolutionStudy)
+    #: Table 15 by the model also at every speed and torque of Tables 2 and 3 (the rig's
+    #: operating point is not stated): table15_operating_points.csv and .png
+    table15_operating_points: bool = True
     #: after the tables, record their sha256 in tests/reproduce/table_hashes.sha256 of the
     #: checkout (HASH_RECORD): the default run only, from a repository checkout
     record_hashes: bool = False
@@ -756,6 +760,9 @@ def run(plan: ReproducePlan) -> dict[str, pd.DataFrame]:
     tables["wear_profile"] = wear_profile_frame(base)
     tables["table15_model"] = table15_model(
         scn, base, None if plan.thesis14 is None else plan.thesis14.parent)
+    if cfg.table15_operating_points:
+        tables["table15_operating_points"] = table15_operating_points(
+            scn, base, list(cfg.speeds_rpm), list(cfg.torques_Nm))
     mixed = scn.tribology.regime == "mixed"
     regression = (simulate_wear(_with(scn, "tribology", asperity_model="regression"), 0.0)
                   if mixed and scn.tribology.asperity_model == "solver" else None)
@@ -770,6 +777,10 @@ def run(plan: ReproducePlan) -> dict[str, pd.DataFrame]:
     plots.plot_wear_evolution(tables["wear_evolution"], out / "wear_evolution.png")
     plots.plot_feature_trends(tables["table14_dte_features_case3"], out / "feature_trends.png")
     plots.plot_table15(tables["table15_model"], out / "table15_model.png")
+    if "table15_operating_points" in tables:
+        plots.plot_table15_operating_points(
+            tables["table15_operating_points"], tables["table15_model"],
+            out / "table15_operating_points.png")
     if mixed:
         plots.plot_ehl_pressure_film(ehl_profiles(scn, base), out / "ehl_pressure_film.png")
     log.info("wrote %d tables and wear_profile.png to %s", len(tables), out)

@@ -91,9 +91,11 @@ TINY_DATA = ("+data.generate.replicates=4", "+data.generate.wear_states=3",
 #: are run by tests/safety/test_safety_sweeps_and_keys.py
 ONE_AT_A_TIME = ("hydra.launcher.n_jobs=1",)
 FAST_TRAIN = ("trainer.max_epochs=3", "trainer.min_epochs=1", "model.members=2")
+#: the reproduction's: coarser grids, one case's evolution, Table 15 at its one operating point
+#: (the sweep over Tables 2 and 3's: tests/reproduce/test_table15.py)
 FAST_REPRO = ("solver.n_points=101", "stiffness.fem_refine=1", "stiffness.fem_refines=[1]",
               "stiffness.positions=40", "evolution.cases=[3]", "evolution.points=9",
-              "evolution.table14_cycles=[0,1.5e7]")
+              "evolution.table14_cycles=[0,1.5e7]", "table15_operating_points=false")
 #: the dataset app's: two cases, two replicates, two wear states, in two chunks
 SMALL_DATASET = ("data.cases=[2,3]", "data.replicates=2", "data.wear_states=2", "data.chunks=2")
 #: fewer fit evaluations, search points and candidate effects (two, one of them the bundle's)

@@ -81,7 +81,10 @@ def test_table15_by_the_model(worn_state):
     base = simulate_wear(scn, 1e6)
     table = table15_model(scn, base, THESIS_TABLES)
     assert list(table.columns) == ["wear_mm", "feature", "rise_measured", "rise_one_tooth",
-                                   "rise_all_teeth"]
+                                   "rise_all_teeth", "rise_one_tooth_mode_least",
+                                   "rise_one_tooth_mode_largest"]
+    modes = table[table["feature"].isin(list(FEATURES))]
+    assert (modes.rise_one_tooth_mode_least <= modes.rise_one_tooth_mode_largest).all()
     assert len(table) == 3 * (len(FEATURES) + len(INDICATOR_ROWS))
     fm4 = table[table["feature"] == "fm4"]
     assert np.all(fm4["rise_one_tooth"] > 5 * fm4["rise_all_teeth"])  # a local fault's mark

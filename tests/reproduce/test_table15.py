@@ -6,6 +6,7 @@ import re
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from physics import reference
@@ -69,3 +70,30 @@ def test_on_the_path_root_wear_is_a_relief(monkeypatch):
     for column in ("rise_one_tooth_mode_least", "rise_one_tooth_mode_largest"):
         assert np.allclose(features[column], features.rise_one_tooth, rtol=1e-9)
     assert table.loc[~table.feature.isin(list(FEATURES)), "rise_one_tooth_mode_least"].isna().all()
+
+
+def test_the_docs_operating_points_are_the_stored_runs():
+    """The operating-point paragraph of docs/reproduction.md against the default run's
+    ``table15_operating_points.csv`` (docs/figures/reproduce), whose row at the stated point
+    (case 3) is ``table15_model.csv``'s of the same run."""
+    stored = ROOT / "docs" / "figures" / "reproduce"
+    points = pd.read_csv(stored / "table15_operating_points.csv")
+    stated = pd.read_csv(stored / "table15_model.csv")
+    stated = stated[stated.feature.isin(list(FEATURES))].reset_index(drop=True)
+    here = points[(points.n1_rpm == 2000) & (points.torque_Nm == 300)].reset_index(drop=True)
+    for column in ("wear_mm", "feature", "rise_one_tooth", "rise_all_teeth"):
+        assert list(here[column]) == list(stated[column]), column
+    rows = points.merge(stated[["wear_mm", "feature", "rise_measured"]], on=["wear_mm", "feature"])
+    rows["off"] = np.maximum(rows.rise_measured / rows.rise_one_tooth,
+                             rows.rise_one_tooth / rows.rise_measured)
+    worst = rows.groupby(["n1_rpm", "torque_Nm"]).off.max()
+    text = (ROOT / "docs" / "reproduction.md").read_text()
+    section = " ".join(text[text.index("## Table 15 by the model alone"):].split())
+    slow = worst.loc[1000.0].loc[[250.0, 300.0]]
+    kurtosis = rows[(rows.feature == "kurtosis") & (rows.wear_mm == 0.015) & (rows.n1_rpm == 1000)]
+    k = kurtosis.set_index("torque_Nm").rise_one_tooth
+    assert (f"within a factor {slow.max():.2f} of the measured (kurtosis at 15 um {k[250.0]:.2f} "
+            f"and {k[300.0]:.2f})") in section
+    fast = worst.drop(1000.0, level="n1_rpm")
+    assert f"the worst is {fast.min():.1f}-{fast.max():.1f} times off" in section
+    assert slow.max() < 2 < fast.min()  # within the issue's factor 2 at 1000 r/min alone

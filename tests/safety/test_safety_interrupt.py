@@ -27,7 +27,7 @@ SMALL_DATASET = ["data.cases=[3]", "data.replicates=2", "data.wear_states=2", "d
                  "progress=false"]
 FAST_REPRO = ["solver.n_points=101", "stiffness.fem_refine=1", "stiffness.fem_refines=[1]",
               "stiffness.positions=40", "evolution.cases=[3]", "evolution.points=9",
-              "evolution.table14_cycles=[0,1.5e7]"]
+              "evolution.table14_cycles=[0,1.5e7]", "table15_operating_points=false"]
 SMALL_LOOP = ["loop.max_nfev=4", "loop.explore=4", "loop.candidates=[friction,tip_relief]",
               "progress=false"]
 TINY_TRAIN = ["+data.generate.replicates=4", "+data.generate.wear_states=3",
