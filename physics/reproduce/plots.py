@@ -176,7 +176,6 @@ def plot_table15(table: pd.DataFrame, path: Path) -> None:
     plt.close(fig)
 
 
-
 def plot_table15_operating_points(points: pd.DataFrame, stated: pd.DataFrame,
                                   path: Path) -> None:
     """Table 15's kurtosis rise at its deepest induced wear against the speed, one line per
