@@ -343,8 +343,8 @@ class Surrogate:
         as many as torch uses in this process where not given) and return this model: for a
         caller that predicts many times from one loaded model. The export and the import cost
         about 2 s once; each call then takes about a seventh of torch's time for one row and
-        less than half of it for many (docs/benchmark.md). A model other than the network has no graph
-        to export and is returned as it is."""
+        less than half of it for many (docs/benchmark.md). A model other than the network has
+        no graph to export and is returned as it is."""
         if threads is not None and (isinstance(threads, bool) or not isinstance(threads, int)
                                     or threads < 1):
             raise ValueError(f"serve(threads = {threads!r}): the threads must be a whole number "
