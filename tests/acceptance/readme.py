@@ -79,17 +79,11 @@ BY_CI = {
     "pytest": "the test run (this suite)",
 }
 #: train.py's dataset: 4 replicates per case, 3 wear states over the first 3e6 cycles, 2 chunks
-#: computed in the training process (the test's worker holds the other core; the dataset app's
-#: command and the main job of CI build in parallel processes); one trajectory each to validate
+#: (built in parallel processes, as the README's default does); one trajectory each to validate
 #: and test
 SMALL_SPLIT = ("data.val_replicates=1", "data.test_replicates=1")
 TINY_DATA = ("+data.generate.replicates=4", "+data.generate.wear_states=3",
-             "+data.generate.cycles_max=3e6", "+data.generate.chunks=2", "data.jobs=1",
-             *SMALL_SPLIT)
-#: a sweep's jobs one after the other in the launching process (joblib runs one job at a time
-#: there): the other core is the test's other worker's; the joblib launcher's parallel processes
-#: are run by tests/safety/test_safety_sweeps_and_keys.py
-ONE_AT_A_TIME = ("hydra.launcher.n_jobs=1",)
+             "+data.generate.cycles_max=3e6", "+data.generate.chunks=2", *SMALL_SPLIT)
 FAST_TRAIN = ("trainer.max_epochs=3", "trainer.min_epochs=1", "model.members=2")
 #: the reproduction's: coarser grids, one case's evolution, Table 15 at its one operating point
 #: (the sweep over Tables 2 and 3's: tests/reproduce/test_table15.py)
@@ -223,7 +217,7 @@ COMMANDS: dict[str, Case] = {
         "outputs/rig/rig_comparison.png")),
     "python -m physics.dataset": Case(SMALL_DATASET, check=files(
         "data/dataset.parquet", "data/dataset.json")),
-    SWEEP: Case(TINY_DATA + FAST_TRAIN + ONE_AT_A_TIME, start=TRAIN_CASE3, only=("data",),
+    SWEEP: Case(TINY_DATA + FAST_TRAIN, start=TRAIN_CASE3, only=("data",),
                 check=swept),
     "python -m surrogate.summarise logs/train/multiruns/<time>": Case(start=SWEEP,
                                                                       check=summary),
