@@ -189,8 +189,10 @@ def group_summary(rec: Records, before: list[np.ndarray], after: list[np.ndarray
 
 def assumed(bundle: Bundle, base: Scenario, nuisance: dict) -> dict:
     """What the bundle left unknown and what stood in: the torque of records without one
-    (the configured torque times the calibrated factor, its prior), gear data stated unknown
-    (the configured pair's values)."""
+    (the configured torque times the calibrated factor, its prior), the speed of records
+    without one (each one's reading off its spectrum, the height of its mesh comb over the
+    floor, the operating point's speed used), gear data stated unknown (the configured pair's
+    values)."""
     out = {}
     unknown = ~np.isfinite(bundle.manifest.torque_Nm.to_numpy(float))
     if unknown.any():
@@ -201,6 +203,12 @@ def assumed(bundle: Bundle, base: Scenario, nuisance: dict) -> dict:
                             "configured": t0, "prior": [lo * t0, hi * t0],
                             "calibrated": t0 * nuisance.get("torque_factor", 1.0),
                             "worn_teeth_at": t0}
+    if bundle.speeds:
+        man = bundle.manifest.set_index("record")
+        out["n1_rpm"] = {"records": list(bundle.speeds),
+                         "read_rpm": {r: e.rpm for r, e in bundle.speeds.items()},
+                         "comb_db": {r: e.comb_db for r, e in bundle.speeds.items()},
+                         "used_rpm": {r: float(man.n1_rpm[r]) for r in bundle.speeds}}
     if bundle.unknown_gear:
         out["gear"] = {k: getattr(base.gear, k) for k in bundle.unknown_gear}
     return out

@@ -48,9 +48,9 @@ energy ratio after N. S. Swansson, *Application of vibration signal analysis tec
 signal monitoring*, Conf. Friction and Wear in Engineering, IEAust (1980).
 
 Without a tachometer, the shaft rate is read from the record's spectrum
-(:func:`shaft_rate_from_spectrum`): the mesh line ``z f_shaft`` is the largest line within
-``rel_band`` of ``z f_nominal``, located between bins by the Hann-window interpolation of
-Grandke (IEEE Trans. Instrum. Meas. 32 (1983) 350); constant speed is assumed.
+(:func:`shaft_rate_from_spectrum`): the speed within ``rel_band`` of ``f_nominal`` whose mesh
+comb ``k z f_shaft`` the spectrum holds best, by :func:`physics.signals.shaft_speed.pinion_speed`;
+constant speed is assumed.
 """
 
 from __future__ import annotations
@@ -61,6 +61,7 @@ import numpy as np
 
 from physics.signals.features import _name
 from physics.signals.order_analysis import synchronous_average
+from physics.signals.shaft_speed import pinion_speed
 
 #: the indicators of :func:`indicators`, in its order
 INDICATORS = ("fm0", "fm4", "na4", "m6a", "m8a", "energy_ratio", "sideband_level")
@@ -443,16 +444,13 @@ def shaft_rate_from_spectrum(x: np.ndarray, fs: float, z: int, f_nominal: float,
     """The shaft rate [Hz] of each record of ``x`` (..., n) without a tachometer: the mesh
     line ``z f_shaft`` read from the record's spectrum, over ``z``; (...,).
 
-    The rule: the mesh line is the largest line of the Hann-windowed amplitude spectrum
-    (scipy's periodic Hann) within ``z f_nominal (1 +- rel_band)``, ``f_nominal`` the nominal
-    shaft rate [Hz] (a drive's set speed, or ``f_shaft`` given elsewhere to refine); its
-    frequency between bins is ``(k + delta) fs / n`` with the peak bin ``k``, its larger
-    neighbour ``k +- 1`` and ``delta = +-(2 a1 - a0) / (a0 + a1)`` from their amplitudes
-    ``a0, a1`` (exact for a single tone under a Hann window: Grandke, IEEE Trans. Instrum.
-    Meas. 32 (1983) 350). The mesh line is the strongest gear line and is shared by both gears
-    of the pair (``z1 f1 = z2 f2``), so ``z`` and ``f_nominal`` name the gear whose rate is
-    wanted. The speed must be constant over the record; ``rel_band`` must exclude other strong
-    lines (another stage's mesh, a structural resonance).
+    The rule: the speed within ``f_nominal (1 +- rel_band)`` whose mesh comb ``k z f_shaft``
+    (every harmonic below 0.45 fs) the spectrum holds best, located by the exact projection
+    on its harmonics (:func:`physics.signals.shaft_speed.pinion_speed`), ``f_nominal`` the
+    nominal shaft rate [Hz] (a drive's set speed, or ``f_shaft`` given elsewhere to refine).
+    The mesh comb is shared by both gears of the pair (``z1 f1 = z2 f2``), so ``z`` and
+    ``f_nominal`` name the gear whose rate is wanted. The speed must be constant over the
+    record; ``rel_band`` must exclude other strong combs (another stage's mesh).
 
     Raises
     ------
@@ -461,7 +459,6 @@ def shaft_rate_from_spectrum(x: np.ndarray, fs: float, z: int, f_nominal: float,
         ``rel_band`` outside (0, 1), a band reaching fs / 2, or a band holding fewer than three
         spectral bins (the record is too short).
     """
-    from scipy import signal as sps  # imported on first use: a refusal need not wait for it
     x = _records(x)
     fs = _positive("fs", fs, "give the sampling rate in Hz")
     z = _teeth(z)
@@ -475,17 +472,9 @@ def shaft_rate_from_spectrum(x: np.ndarray, fs: float, z: int, f_nominal: float,
                          f"= {fs / 2:g} Hz (z = {z}, f_nominal = {f_nominal:g} Hz); sample "
                          "faster, narrow rel_band or check z and f_nominal")
     n = x.shape[-1]
-    centred = x - x.mean(axis=-1, keepdims=True)
-    mag = np.abs(np.fft.rfft(centred * sps.get_window("hann", n), axis=-1))
-    freqs = np.fft.rfftfreq(n, 1.0 / fs)
-    band = np.flatnonzero((freqs >= lo) & (freqs <= hi))
-    if band.size < 3:
-        raise ValueError(f"the band {lo:g}-{hi:g} Hz holds {band.size} bins of fs / n = "
+    bins = int(np.floor(hi * n / fs) - np.ceil(lo * n / fs)) + 1
+    if bins < 3:
+        raise ValueError(f"the band {lo:g}-{hi:g} Hz holds {max(bins, 0)} bins of fs / n = "
                          f"{fs / n:g} Hz (n = {n}); give a longer record or widen rel_band")
-    k = band[0] + np.argmax(mag[..., band], axis=-1)
-    k = np.clip(k, 1, mag.shape[-1] - 2)[..., None]
-    a0, below, above = (np.take_along_axis(mag, k + s, axis=-1)[..., 0] for s in (0, -1, 1))
-    a1 = np.maximum(below, above)
-    delta = _ratio(2 * a1 - a0, a0 + a1)
-    delta = np.where(above >= below, delta, -delta)
-    return (k[..., 0] + np.nan_to_num(delta)) * fs / n / z
+    rates = [pinion_speed(r, fs, z, lo / z, hi / z).f1_hz for r in x.reshape(-1, n)]
+    return np.array(rates).reshape(x.shape[:-1])

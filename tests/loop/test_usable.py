@@ -111,14 +111,14 @@ def test_the_app_refuses_in_one_line_without_traceback(tmp_path):
 
 @pytest.fixture(scope="module")
 def public_like(tmp_path_factory):
-    """Acceleration records at 12.9 kHz with a housing mode, of a torque the manifest leaves
-    unknown, and a gear.yaml whose face width is unknown."""
+    """Acceleration records at 12.9 kHz with a housing mode, of a speed and a torque the
+    manifest leaves unknown, and a gear.yaml whose face width is unknown."""
     scn = scenario_from_config({"case": 3, "dynamics": {"sample_rate_hz": FS}})
     folder = tmp_path_factory.mktemp("public")
     path, truth = make_bundle(folder / "made", scn, "transfer_path", seed=2, records=6,
                               duration_s=0.75)
     b = read_bundle(path)
-    man = b.manifest.assign(torque_Nm="unknown", wear_mm="", cycles="")
+    man = b.manifest.assign(n1_rpm="unknown", torque_Nm="unknown", wear_mm="", cycles="")
     path = write_bundle(folder / "b", man, b.signals, gear={"face_width_mm": None})
     return read_bundle(path), scenario_from_config({"case": 3}), truth
 
@@ -154,12 +154,17 @@ def test_a_public_like_bundle_runs_to_the_end_and_stops_after_round_one(public_l
     assert torque["records"] == bundle.records and torque["prior"] == [60.0, 1500.0]
     assert 60 <= torque["calibrated"] <= 1500
     assert report["assumed"]["gear"] == {"face_width_mm": scn.gear.face_width_mm}
+    speed = report["assumed"]["n1_rpm"]  # made at 2000 r/min, read off the spectra
+    assert speed["records"] == bundle.records
+    assert all(abs(v / 2000 - 1) < 2e-6 for v in speed["read_rpm"].values())
+    assert set(speed["used_rpm"].values()) == {float(bundle.manifest.n1_rpm.iloc[0])}
     assert set(report["groups"]) == {"2000rpm_unknownNm_accel_m_s2_12900Hz"}
     write_report(report, tmp_path / "run", with_figures=False)
     saved = json.loads((tmp_path / "run" / "report.json").read_text())
     assert saved["partial"]["stopped"].startswith("time limit")
     md = (tmp_path / "run" / "report.md").read_text()
     assert "**Partial report:**" in md and "Torque unknown for 6 records" in md
+    assert "Speed unknown for 6 records: read off each one's spectrum" in md
 
 
 def test_an_interrupt_after_round_one_keeps_its_report(public_like, monkeypatch):

@@ -215,7 +215,7 @@ def test_na4_normalises_by_the_mean_variance_of_the_run_so_far():
 def test_the_shaft_rate_is_read_from_the_mesh_line():
     """Records at 9.7, 10.0 and 10.6 Hz (nominal 10 Hz; off-bin mesh lines), with a second mesh
     harmonic, a shaft line and noise: the speed within a fraction of the mesh line's resolution
-    fs / (n z) (the Hann interpolation of Grandke 1983)."""
+    fs / (n z) (the exact projection on its mesh comb)."""
     rng = np.random.default_rng(4)
     true = np.array([9.7, 10.0, 10.6])
     n = 4096

@@ -34,6 +34,13 @@ from physics.arguments import argument, path_argument
 from physics.files import file_problem, repeated_header
 from physics.params import GearPair, Operating, Scenario
 from physics.scope import check_scope
+from physics.signals.shaft_speed import (
+    MIN_COMB_DB,
+    MIN_LINES,
+    MIN_MARGIN_DB,
+    SpeedEstimate,
+    pinion_speed,
+)
 from physics.tribology.asperity_table import check_scenario
 
 log = logging.getLogger(__name__)
@@ -45,6 +52,11 @@ OPTIONAL_NUMERIC = ("eta0_Pa_s", "sigma_um")
 _NAME = re.compile(r"^[A-Za-z0-9_-]+$")
 #: what a manifest's torque_Nm cell or a gear.yaml value may say where it is not known
 UNKNOWN = ("", "unknown", "null", "none", "nan", "na")
+#: relative spread within which the speeds read off records of one stated torque are one
+#: operating point (their median): the loop's highest lines (0.45 fs) then
+#: lie within a tenth of a bin of a 0.25 s segment (4 Hz) at 41 kHz; the readings of one
+#: speed agree far closer (tests/signals/test_shaft_speed.py)
+SAME_SPEED = 2e-5
 #: the gear data the signature needs (its orders): never unknown
 SIGNATURE_GEAR = ("z1", "z2")
 #: the largest gear.yaml read (a gear pair's overrides are a few hundred bytes)
@@ -89,6 +101,10 @@ class Bundle:
     gear: dict
     #: gear.yaml keys stated as unknown: the configured pair's values are used
     unknown_gear: tuple[str, ...] = ()
+    #: the records whose manifest left ``n1_rpm`` unknown: each one's speed as read off its
+    #: spectrum (:func:`physics.signals.shaft_speed.pinion_speed`); the manifest holds the
+    #: speed of its operating point (:func:`estimate_speeds`)
+    speeds: dict[str, SpeedEstimate] = dataclasses.field(default_factory=dict)
 
     @property
     def records(self) -> list[str]:
@@ -141,8 +157,12 @@ def read_bundle(path: str | Path, gear: GearPair | None = None) -> Bundle:
                                 "shorten its records")
     signals = {}
     for row in man.itertuples(index=False):
+        signals[row.record] = _read_signal(path, row.record)
+        check_values(path, row.record, row.quantity, signals[row.record], pair.module_mm)
+    speeds = estimate_speeds(path, man, signals, pair)
+    for row in man.itertuples(index=False):
         rec = row.record
-        x = _read_signal(path, rec)
+        x = signals[rec]
         revs = x.size / row.fs_hz * row.n1_rpm / 60
         if revs < 10:
             raise _fail(path, rec, f"{revs:.1f} pinion revolutions; at least 10 are needed")
@@ -150,9 +170,50 @@ def read_bundle(path: str | Path, gear: GearPair | None = None) -> Bundle:
         if row.fs_hz < f_need:
             raise _fail(path, rec, f"fs_hz = {row.fs_hz:g} is below 4 x the third mesh "
                                    f"harmonic ({f_need:g} Hz)")
-        check_values(path, rec, row.quantity, x, pair.module_mm)
-        signals[rec] = x
-    return Bundle(path, man, signals, overrides, unknown)
+    return Bundle(path, man, signals, overrides, unknown, speeds)
+
+
+def estimate_speeds(path: Path, man: pd.DataFrame, signals: dict[str, np.ndarray],
+                    pair: GearPair) -> dict[str, SpeedEstimate]:
+    """Read the pinion speed of each record whose ``n1_rpm`` the manifest leaves unknown off
+    its spectrum (:func:`physics.signals.shaft_speed.pinion_speed`), sought between the
+    slowest speed its length holds 10 revolutions of and the fastest its sampling rate
+    resolves (``fs >= 12 z1 n1 / 60``), the bundle's own rules. Records of one stated torque
+    (or all of unknown torque) whose speeds agree within :data:`SAME_SPEED` form one
+    operating point at their median, written into ``man.n1_rpm``; each record's own reading
+    is returned. A record whose spectrum holds no clear mesh comb, or too short a record for
+    any speed its rate resolves, is refused, naming what was found."""
+    speeds: dict[str, SpeedEstimate] = {}
+    unknown = ~np.isfinite(man.n1_rpm.to_numpy(float))
+    for row in man[unknown].itertuples(index=False):
+        x, fs = signals[row.record], float(row.fs_hz)
+        f_low, f_high = 10 * fs / x.size, fs / (12 * pair.z1)
+        if f_low >= f_high:
+            raise _fail(path, row.record,
+                        f"n1_rpm unknown: {x.size} samples at fs_hz = {fs:g} hold 10 pinion "
+                        f"revolutions only above {60 * f_low:.4g} r/min, and the rate resolves "
+                        f"the third mesh harmonic only below {60 * f_high:.4g} r/min; give "
+                        "n1_rpm or a longer record")
+        est = pinion_speed(x, fs, pair.z1, f_low, f_high)
+        if not est.clear:
+            raise _fail(path, row.record,
+                        f"n1_rpm unknown and no clear mesh comb of z1 = {pair.z1} in its "
+                        f"spectrum between {60 * f_low:.4g} and {60 * f_high:.4g} r/min: the "
+                        f"best, at {est.rpm:.6g} r/min, has {est.lines} lines among its "
+                        f"harmonics, {est.comb_db:.1f} dB over the floor, the next speed "
+                        f"({est.runner_up_rpm:.6g} r/min) {est.runner_up_db:.1f} dB (needed: "
+                        f"{MIN_LINES} lines, {MIN_COMB_DB:g} dB, a lead of {MIN_MARGIN_DB:g} "
+                        "dB); give n1_rpm, or check z1 in gear.yaml")
+        speeds[row.record] = est
+    if speeds:
+        torque = man.torque_Nm.astype(float).fillna(-1.0)  # -1: unknown
+        for _, rows in man[unknown].groupby(torque[unknown], sort=False):
+            read = pd.Series({r: speeds[r].rpm for r in rows.record}).sort_values()
+            # a new operating point wherever the next reading lies beyond SAME_SPEED
+            point = (read.pct_change().fillna(0.0) > SAME_SPEED).cumsum()
+            for _, members in read.groupby(point):
+                man.loc[man.record.isin(members.index), "n1_rpm"] = float(members.median())
+    return speeds
 
 
 def check_values(path: Path, rec: str, quantity: str, x: np.ndarray, module_mm: float) -> None:
@@ -227,11 +288,11 @@ def _read_manifest(path: Path) -> pd.DataFrame:
     for rec in man.record:
         if not _NAME.match(rec):
             raise _fail(path, rec, "names use letters, digits, '_' and '-' only")
-    numeric = {"fs_hz": False, "n1_rpm": False, "torque_Nm": None, "wear_mm": True,
+    numeric = {"fs_hz": False, "n1_rpm": None, "torque_Nm": None, "wear_mm": True,
                "cycles": True} | {c: True for c in OPTIONAL_NUMERIC if c in man.columns}
     for col, may_be_empty in numeric.items():
         text = man[col].str.strip()
-        if may_be_empty is None:  # the torque: a positive number or unknown
+        if may_be_empty is None:  # the speed, the torque: a positive number or unknown
             text = text.where(~text.str.lower().isin(UNKNOWN), "")
         values = pd.to_numeric(text.where(text != ""), errors="coerce")
         for rec, s, v in zip(man.record, text, values, strict=True):
@@ -240,9 +301,11 @@ def _read_manifest(path: Path) -> pd.DataFrame:
             shown = repr(float(v)) if np.isfinite(v) else repr(s)
             if may_be_empty is None:
                 if not (np.isfinite(v) and v > 0):
+                    then = ("read off the record's spectrum" if col == "n1_rpm" else
+                            "calibrated")
                     raise _fail(path, rec, f"{col} = {shown} must be a positive number, or "
-                                           "empty or 'unknown' where it is not known (then "
-                                           "calibrated: docs/loop.md)")
+                                           f"empty or 'unknown' where it is not known (then "
+                                           f"{then}: docs/loop.md)")
             elif may_be_empty:
                 if not (np.isfinite(v) and v >= 0):
                     raise _fail(path, rec, f"{col} = {shown} must be empty or a number >= 0")
