@@ -243,13 +243,18 @@ def markdown(r: dict) -> str:
                      f"within {t['prior'][0]:.3g}-{t['prior'][1]:.3g} N m around the configured "
                      f"{t['configured']:.3g} N m, at {t['calibrated']:.3g} N m (worn teeth of "
                      f"{t['worn_teeth_at']:.3g} N m).")
-    if "n1_rpm" in known:
-        n = known["n1_rpm"]
+    n = known.get("n1_rpm")
+    if n and "read_rpm" in n:  # a bundle's records: read off their spectra
         used = sorted(set(n["used_rpm"].values()))
         lines.append(f"Speed unknown for {len(n['records'])} records: read off each one's "
                      f"spectrum by its mesh comb ({min(n['comb_db'].values()):.1f}-"
                      f"{max(n['comb_db'].values()):.1f} dB over the floor), used at "
                      f"{', '.join(f'{v:.6g}' for v in used)} r/min.")
+    elif n:  # a feature table's: calibrated
+        lines.append(f"Speed unknown for {n['records']}: calibrated as a nuisance within "
+                     f"{n['prior'][0]:.4g}-{n['prior'][1]:.4g} r/min around the configured "
+                     f"{n['configured']:.4g} r/min, at {n['calibrated']:.4g} r/min (worn teeth "
+                     f"of {n['worn_teeth_at']:.4g} r/min).")
     if "gear" in known:
         lines.append(f"Gear data stated unknown, the configured pair's used: "
                      f"{', '.join(f'{k} = {v:g}' for k, v in known['gear'].items())}.")

@@ -69,6 +69,7 @@ from physics.loop.measured.bundle import (
 from physics.loop.measured.worn_states import check_table_depths, table_models
 from physics.loop.model.declared import (
     SCENARIO_DYNAMIC,
+    SPEED,
     TORQUE,
     at_bounds,
     declared_nuisance,
@@ -76,6 +77,7 @@ from physics.loop.model.declared import (
     physical_nuisance,
     to_unit,
     with_nuisance,
+    with_speed,
     with_torque,
 )
 from physics.loop.model.simulation import CACHE_SIZE, SETTLE_DECAYS
@@ -192,6 +194,8 @@ class TableData:
     bounds: dict
     #: the torque is unknown: ``torque_factor`` is refitted with ``m_h`` and the noise
     torque_unknown: bool = False
+    #: the speed is unknown: ``speed_factor`` is refitted with them
+    speed_unknown: bool = False
     #: simulated responses by the parameters the dynamics see (:func:`responses`)
     cache: dict = dataclasses.field(default_factory=dict)
 
@@ -346,7 +350,7 @@ def prepare_table(table: FeatureTable, base: Scenario, settings: LoopSettings) -
     measured = np.column_stack([df[c].to_numpy(float) * s for c, (_, s) in cols.items()])
     return TableData(quantity, wear, measured, [f for f, _ in cols.values()],
                      table_models(base, wear, rows=order + 1), base, settings,
-                     physical_nuisance(base), table.torque_unknown)
+                     physical_nuisance(base), table.torque_unknown, table.speed_unknown)
 
 
 def responses(td: TableData, rows: np.ndarray, nuisance: dict, eff: Effect | None,
@@ -356,13 +360,14 @@ def responses(td: TableData, rows: np.ndarray, nuisance: dict, eff: Effect | Non
     reuses the simulation."""
     dynamic = eff is not None and eff.model is not None
     key = (tuple(int(i) for i in rows),
-           tuple(nuisance.get(n) for n in (*SCENARIO_DYNAMIC, *TORQUE)),
+           tuple(nuisance.get(n) for n in (*SCENARIO_DYNAMIC, *TORQUE, *SPEED)),
            (eff.name, tuple(sorted(values.items()))) if dynamic else None)
     if key in td.cache:
         return td.cache[key]
     dyn = td.base.dynamics
-    ms = [with_torque(with_nuisance(td.models[i], nuisance, dyn.damping_ratio), nuisance)
-          for i in rows]  # the torque before an effect: a ripple's share is of this torque
+    ms = [with_speed(with_torque(with_nuisance(td.models[i], nuisance, dyn.damping_ratio),
+                                 nuisance), nuisance)
+          for i in rows]  # torque and speed before an effect: a ripple's share is of these
     if dynamic:
         top = max(float(td.wear.max()), 1e-12)
         ms = [eff.model(m, _sized(eff, values, td.wear[i] / top))
@@ -411,7 +416,7 @@ def folds(wear: np.ndarray, k: int = TABLE_FOLDS) -> list[np.ndarray]:
 def _fit(td: TableData, rows: np.ndarray, free: list[tuple], fixed: dict, eff: Effect | None,
          option: dict) -> tuple[dict, dict, float]:
     """Fit the ``free`` (name, low, high, log) parameters on ``rows``; nuisance, values, rss."""
-    nuisance_names = set(td.bounds) | set(TORQUE) | {"noise"}
+    nuisance_names = set(td.bounds) | set(TORQUE) | set(SPEED) | {"noise"}
 
     def split(u):
         v = {n: from_unit(float(x), lo, hi, lg) for (n, lo, hi, lg), x in zip(free, u,
@@ -494,9 +499,10 @@ def run_feature_table(table: FeatureTable | pd.DataFrame, base: Scenario,
         nuisance, _, _ = _fit(td, ref, cal_free, start, None, {})
     except KeyboardInterrupt as stop:
         return stopped_table(stop, settings, None, None, [], len(searched), not_searched)
-    # refitted with every candidate and every fold; an unknown torque's factor over its whole
-    # prior (the bundle loop's rule: physics.loop.model.declared.TORQUE)
-    torque = [("torque_factor", *TORQUE["torque_factor"])] if td.torque_unknown else []
+    # refitted with every candidate and every fold; an unknown torque's or speed's factor over
+    # its whole prior (physics.loop.model.declared.TORQUE, SPEED)
+    torque = ([("torque_factor", *TORQUE["torque_factor"])] if td.torque_unknown else []) + (
+        [("speed_factor", *SPEED["speed_factor"])] if td.speed_unknown else [])
     refit = [*gain, _noise_bounds(td), *torque]
     ranges = {n: b for n, *b in cal_free + torque}
 
@@ -599,17 +605,19 @@ def run_feature_table(table: FeatureTable | pd.DataFrame, base: Scenario,
 
 
 def _assumed(table: FeatureTable, base: Scenario, before: dict, after: dict) -> dict:
-    """What the table's sidecars left unknown and what stood in: an unknown torque (the
-    configured one times the factor calibrated before and after the chosen effect, its prior),
-    gear data stated unknown (the configured pair's values)."""
+    """What the table's sidecars left unknown and what stood in: an unknown torque or speed
+    (the configured one times the factor calibrated before and after the chosen effect, its
+    prior), gear data stated unknown (the configured pair's values)."""
     out = {}
-    t0 = base.operating.torque_Nm
-    if table.torque_unknown:
-        lo, hi, _ = TORQUE["torque_factor"]
-        out["torque_Nm"] = {"records": "all rows", "configured": t0, "prior": [lo * t0, hi * t0],
-                            "calibrated": t0 * before["torque_factor"],
-                            "after": t0 * after["torque_factor"], "worn_teeth_at": t0}
-    gear = [k for k in table.unknown if k != "torque_Nm"]
+    for key, (name, (lo, hi, _)), unknown in (
+            ("torque_Nm", *TORQUE.items(), table.torque_unknown),
+            ("n1_rpm", *SPEED.items(), table.speed_unknown)):
+        if unknown:
+            v0 = getattr(base.operating, key)
+            out[key] = {"records": "all rows", "configured": v0, "prior": [lo * v0, hi * v0],
+                        "calibrated": v0 * before[name], "after": v0 * after[name],
+                        "worn_teeth_at": v0}
+    gear = [k for k in table.unknown if k not in ("torque_Nm", "n1_rpm")]
     if gear:
         out["gear"] = {k: getattr(base.gear, k) for k in gear}
     return out

@@ -1,8 +1,8 @@
 """Vibration signals (thesis 4.2): the Table 13 features, the gear condition indicators of the
 time-synchronous average (FM0, FM4, NA4, M6A, M8A, energy ratio, sideband level; the function
-``physics.signals.indicators.indicators``), order analysis and the declared measurement chain
-(DTE, housing acceleration, noise). Imports ``physics.params`` and
-``physics.dynamics``."""
+``physics.signals.indicators.indicators``), order analysis, the pinion speed of a record
+without a tachometer (``physics.signals.shaft_speed``) and the declared measurement chain
+(DTE, housing acceleration, noise). Imports ``physics.params`` and ``physics.dynamics``."""
 
 from __future__ import annotations
 
@@ -17,6 +17,7 @@ _SOURCES = {
     "physics.signals.measurement": (
         "housing_acceleration", "sensed", "declared_chain", "transmissibility", "support_path",
         "housing_mount", "transfer_path", "add_noise"),
+    "physics.signals.shaft_speed": ("pinion_speed", "SpeedEstimate"),
     "physics.signals.order_analysis": (
         "line_amplitudes", "power_spectrum", "white_noise_std", "synchronous_average",
         "line_frequencies", "band_edges", "signature_names", "signatures", "signature_segments",

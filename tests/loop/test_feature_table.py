@@ -21,7 +21,14 @@ from physics.gear.geometry import mesh_geometry
 from physics.loop.config import LoopSettings
 from physics.loop.measured.bundle import read_measurements
 from physics.loop.measured.worn_states import check_table_depths, tip_thickness_mm
-from physics.loop.model.declared import TORQUE, at_bounds, physical_nuisance, with_torque
+from physics.loop.model.declared import (
+    SPEED,
+    TORQUE,
+    at_bounds,
+    physical_nuisance,
+    with_speed,
+    with_torque,
+)
 from physics.loop.table_loop import PATH_ONLY, folds, parse_columns, run_feature_table
 from physics.params import OutOfScope, Scenario, scenario_from_config
 from physics.reference import RIG_RECORDS
@@ -52,16 +59,20 @@ def run_app(tmp: Path, data: Path, *extra: str) -> subprocess.CompletedProcess:
                           capture_output=True, text=True, timeout=3600)
 
 
-def test_the_sidecars_set_the_pair_and_operating_point_and_may_leave_the_torque_unknown(
+def test_the_sidecars_set_the_pair_and_operating_point_and_may_leave_torque_and_speed_unknown(
         tmp_path):
     path = write_table(tmp_path, rig_stages().head(3), "n1_rpm: 900\ntorque_Nm: unknown\n")
     table, scn = read_measurements(path, scenario_from_config({}))
     assert (scn.gear.module_mm, scn.gear.z1, scn.gear.z2) == (3, 18, 35)
-    assert scn.operating.n1_rpm == 900 and table.torque_unknown
+    assert scn.operating.n1_rpm == 900 and table.torque_unknown and not table.speed_unknown
     assert scn.operating.torque_Nm == Scenario().operating.torque_Nm  # the prior's centre
     (tmp_path / "operating.yaml").write_text("n1_rpm: unknown\n")
-    with pytest.raises(ValueError, match=r"operating.yaml: n1_rpm = 'unknown': only torque_Nm "
-                                         r"may be unknown"):
+    table, scn = read_measurements(path, scenario_from_config({}))
+    assert table.speed_unknown and not table.torque_unknown
+    assert scn.operating.n1_rpm == Scenario().operating.n1_rpm
+    (tmp_path / "operating.yaml").write_text("bulk_temperature_K: unknown\n")
+    with pytest.raises(ValueError, match=r"operating.yaml: bulk_temperature_K = 'unknown': only "
+                                         r"torque_Nm and n1_rpm may be unknown"):
         read_measurements(path, scenario_from_config({}))
     (tmp_path / "operating.yaml").write_text("torque: 5\n")
     with pytest.raises(ValueError, match=r"operating.yaml: unknown key\(s\) \['torque'\]"):
@@ -134,6 +145,23 @@ def test_an_unknown_torque_scales_the_static_force_only(rig_models):
     assert with_torque(m, {}) is m
 
 
+def test_an_unknown_speed_scales_the_kinematics_alone(shallow_rig, rig_models):
+    """The new pair at 900 r/min run twice as fast is the new pair built at 1800 r/min: its
+    tables are given per mesh phase, its rates scale, its damping and load do not."""
+    from physics.loop.measured.worn_states import table_models
+    table, scn = shallow_rig
+    m = rig_models[0]
+    fast = table_models(dataclasses.replace(scn, operating=dataclasses.replace(
+        scn.operating, n1_rpm=1800.0)), table.wear_mm.to_numpy(float)[:1])[0]
+    scaled = with_speed(m, {"speed_factor": 2.0})
+    for name in ("omega1", "omega_mesh", "roll_speed", "omega2", "damping", "static_force",
+                 "mass"):
+        assert getattr(scaled, name) == pytest.approx(getattr(fast, name), rel=1e-12), name
+    for name in ("k_a", "k_b", "g_a", "g_b"):
+        np.testing.assert_allclose(getattr(scaled, name), getattr(fast, name), rtol=1e-12)
+    assert with_speed(m, {}) is m
+
+
 @pytest.fixture(scope="module")
 def shallow_rig():
     """Three stages of the rig's pair within 20 um (a few blocks of the contact-driven wear),
@@ -155,10 +183,14 @@ def rig_models(shallow_rig):
 def test_a_few_rig_stages_run_with_the_torque_calibrated_inside_every_range(tmp_path,
                                                                              shallow_rig):
     table, scn = shallow_rig
-    path = write_table(tmp_path, table, "torque_Nm: unknown\n")
+    path = write_table(tmp_path, table, "torque_Nm: unknown\nn1_rpm: unknown\n")
     data, _ = read_measurements(path, scn)
     report = run_feature_table(data, scn, LoopSettings(max_nfev=2, candidates=("transfer_path",),
                                                        segment_s=0.15)).to_dict()
+    speed = report["assumed"]["n1_rpm"]
+    assert speed["prior"] == pytest.approx([s * 900 for s in SPEED["speed_factor"][:2]])
+    assert speed["prior"][0] <= speed["calibrated"] <= speed["prior"][1]
+    assert speed["configured"] == 900 and speed["worn_teeth_at"] == 900
     assert set(report["feature_errors"]["before"]) == {"rms"}
     held = report["feature_errors"]["before"]["rms"]
     assert held == pytest.approx(report["error_before"])  # one feature: the whole error

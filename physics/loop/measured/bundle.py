@@ -127,6 +127,10 @@ class FeatureTable:
     def torque_unknown(self) -> bool:
         return "torque_Nm" in self.unknown
 
+    @property
+    def speed_unknown(self) -> bool:
+        return "n1_rpm" in self.unknown
+
 
 def _fail(path: Path, record: str | None, rule: str) -> ValueError:
     where = f"record {record!r}" if record is not None else "manifest.csv"
@@ -335,12 +339,14 @@ def _read_gear(path: Path, gear: GearPair, where: str) -> tuple[dict, tuple[str,
 
 def _read_operating(path: Path, operating: Operating, where: str) -> tuple[dict, tuple[str, ...]]:
     """The overrides of ``operating.yaml`` beside a feature table, checked by building the
-    operating point they give, and whether it states the torque unknown (calibrated then:
-    ``torque_factor`` of :data:`physics.loop.model.declared.TORQUE`, around the configured
-    torque); the speed and the bulk temperature must be stated or left out."""
+    operating point they give, and which of the torque and the speed it states unknown
+    (calibrated then: ``torque_factor`` of :data:`physics.loop.model.declared.TORQUE` and
+    ``speed_factor`` of :data:`~physics.loop.model.declared.SPEED`, around the configured
+    values); the bulk temperature must be stated or left out."""
     return _read_sidecar(path / "operating.yaml", operating, where, {
-        k: "only torque_Nm may be unknown (the loop calibrates it); state this one, or leave "
-           "the key out to use the configured value" for k in ("n1_rpm", "bulk_temperature_K")})
+        "bulk_temperature_K": "only torque_Nm and n1_rpm may be unknown (the loop calibrates "
+                              "them); state this one, or leave the key out to use the "
+                              "configured value"})
 
 
 def _read_sidecar(f: Path, current, where: str, stated: dict[str, str]

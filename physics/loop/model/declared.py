@@ -55,9 +55,14 @@ CHAIN = SUPPORT | MOUNT
 #: prior (a factor of 5 either way, explored over the whole range); the worn teeth stay those of
 #: the configured torque
 TORQUE = {"torque_factor": (0.2, 5.0, True)}
+#: the pinion speed of a feature table whose ``operating.yaml`` leaves it unknown: the
+#: configured speed (``operating.n1_rpm``) times ``speed_factor``, two octaves either way (the
+#: thesis's operating cases span 1000-3000 r/min, a factor 3; Table 11); the worn teeth stay
+#: those of the configured speed
+SPEED = {"speed_factor": (0.25, 4.0, True)}
 #: bounds of every nuisance parameter of the declared model (the calibrated ones' search range;
 #: the stated mounting's, the range its stated values must lie in)
-BOUNDS = NUISANCE | CHAIN | {n: b[:3] for n, b in MODEL_FORM.items()} | TORQUE
+BOUNDS = NUISANCE | CHAIN | {n: b[:3] for n, b in MODEL_FORM.items()} | TORQUE | SPEED
 #: the nuisance parameters the dynamics see (``m_h`` acts on the measurement chain); the model
 #: form's only with ``loop.model_form``
 SCENARIO_DYNAMIC = ("damping_ratio", "eccentricity1_um", "profile_error_um")
@@ -126,6 +131,19 @@ def with_torque(m: PairModel, nuisance: dict) -> PairModel:
     configured torque."""
     f = nuisance.get("torque_factor")
     return m if f is None else dataclasses.replace(m, static_force=m.static_force * f)
+
+
+def with_speed(m: PairModel, nuisance: dict) -> PairModel:
+    """``m`` run at its speed times an unknown speed's calibrated ``speed_factor``
+    (:data:`SPEED`; ``m`` itself where ``nuisance`` has none): every rate of the kinematics
+    (shafts, mesh, rolling, a torque ripple's order) scales with it, while the stiffness and
+    gap tables, given per mesh phase, and the worn teeth stay those of the configured speed."""
+    f = nuisance.get("speed_factor")
+    if f is None:
+        return m
+    return dataclasses.replace(m, omega1=m.omega1 * f, omega_mesh=m.omega_mesh * f,
+                               roll_speed=m.roll_speed * f, omega2=m.omega2 * f,
+                               omega_ripple=m.omega_ripple * f)
 
 
 def declared_nuisance(scn: Scenario) -> dict[str, float]:
