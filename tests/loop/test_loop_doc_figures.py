@@ -55,7 +55,27 @@ def test_table15_with_its_torque_unknown():
     assert quote in _page(), quote
 
 
-@pytest.mark.parametrize("run", ["table15_configured", "table15_unknown"])
+def test_table15_with_its_torque_and_speed_unknown():
+    r = _report("table15_operating_unknown")
+    assert r["chosen_effect"] is None and r["verdict"] == "none"
+    best = r["ranking"][0]
+    check = r["verdicts"][0]["checks"]["delta_bic"]
+    assert best["effect"] == "tooth_defect" and not check["holds"]
+    assert set(r["assumed"]) == {"torque_Nm", "n1_rpm"}
+    low, _ = r["assumed"]["torque_Nm"]["prior"]
+    torque = best["nuisance"]["torque_factor"] * r["assumed"]["torque_Nm"]["configured"]
+    speed = best["nuisance"]["speed_factor"] * r["assumed"]["n1_rpm"]["configured"]
+    assert torque == pytest.approx(low, rel=1e-3)  # at its bound
+    cut = 1 - best["heldout_error"] / r["error_before"]
+    quote = (f"a tooth defect cuts it by {cut:.0%} ({r['error_before']:.3f} -> "
+             f"{best['heldout_error']:.3f}) at {speed:.0f} r/min, the torque at its {low:.0f} "
+             f"N m bound, its BIC by {-check['value']:.1f} of the {-check['bound']:.0f} "
+             "required").replace("%", " %")
+    assert quote in _page(), quote
+
+
+@pytest.mark.parametrize("run", ["table15_configured", "table15_unknown",
+                                 "table15_operating_unknown"])
 def test_each_stored_run_is_a_feature_table_run(run):
     r = _report(run)
     assert r["mode"] == "feature_table" and r["wear_mm"] == [0.0, 0.005, 0.01, 0.015]

@@ -50,7 +50,7 @@ QUANTITIES = ("dte_m", "accel_m_s2")
 #: optional columns that set a record's lubricant or roughness
 OPTIONAL_NUMERIC = ("eta0_Pa_s", "sigma_um")
 _NAME = re.compile(r"^[A-Za-z0-9_-]+$")
-#: what a manifest's torque_Nm cell or a gear.yaml value may say where it is not known
+#: what a manifest's n1_rpm or torque_Nm cell or a sidecar's value may say where it is not known
 UNKNOWN = ("", "unknown", "null", "none", "nan", "na")
 #: relative spread within which the speeds read off records of one stated torque are one
 #: operating point (their median): the loop's highest lines (0.45 fs) then
@@ -305,11 +305,11 @@ def _read_manifest(path: Path) -> pd.DataFrame:
             shown = repr(float(v)) if np.isfinite(v) else repr(s)
             if may_be_empty is None:
                 if not (np.isfinite(v) and v > 0):
-                    then = ("read off the record's spectrum" if col == "n1_rpm" else
-                            "calibrated")
+                    then = ("read off the record's spectrum: docs/own-data.md"
+                            if col == "n1_rpm" else "calibrated: docs/loop.md")
                     raise _fail(path, rec, f"{col} = {shown} must be a positive number, or "
                                            f"empty or 'unknown' where it is not known (then "
-                                           f"{then}: docs/loop.md)")
+                                           f"{then})")
             elif may_be_empty:
                 if not (np.isfinite(v) and v >= 0):
                     raise _fail(path, rec, f"{col} = {shown} must be empty or a number >= 0")
