@@ -25,6 +25,7 @@ from physics.loop.model.declared import (
     CHAIN,
     MODEL_FORM,
     NUISANCE,
+    SPEED,
     TORQUE,
     declared_model_form,
     declared_nuisance,
@@ -109,9 +110,9 @@ def test_a_mixed_bundle_is_accepted_and_grouped(mixed):
 def test_one_calibration_shares_the_physical_parameters(mixed):
     rec, nuisance = mixed
     # a rigid support (the default) declares no support mode to calibrate; every torque is
-    # stated, so none is calibrated
+    # stated, so none is calibrated; a bundle's speeds are stated or read, never calibrated
     assert set(nuisance) == set(NUISANCE) | set(MODEL_FORM) == (set(BOUNDS) - set(CHAIN)
-                                                               - set(TORQUE))
+                                                               - set(TORQUE) - set(SPEED))
     assert all(isinstance(v, float) for v in nuisance.values())  # one value each, all groups
     every = np.arange(len(rec.models))
     acc = rec.bundle.manifest.quantity.to_numpy() == "accel_m_s2"
