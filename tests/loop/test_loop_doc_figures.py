@@ -41,13 +41,19 @@ def test_table15_at_the_configured_torque():
         assert quote in page, quote
 
 
-def test_table15_with_its_torque_unknown():
-    r = _report("table15_unknown")
+def _tooth_defect_not_adopted(run: str) -> tuple[dict, dict, dict, float]:
+    """A stored run whose best candidate, a tooth defect, missed the BIC condition: the
+    report, that candidate, its BIC check and the share of the held-out error it cut."""
+    r = _report(run)
     assert r["chosen_effect"] is None and r["verdict"] == "none"
     best = r["ranking"][0]
     check = r["verdicts"][0]["checks"]["delta_bic"]
     assert best["effect"] == "tooth_defect" and not check["holds"]
-    cut = 1 - best["heldout_error"] / r["error_before"]
+    return r, best, check, 1 - best["heldout_error"] / r["error_before"]
+
+
+def test_table15_with_its_torque_unknown():
+    r, best, check, cut = _tooth_defect_not_adopted("table15_unknown")
     quote = (f"torque {r['assumed']['torque_Nm']['calibrated']:.0f} N m; a tooth defect cuts the "
              f"held-out error by {cut:.0%} ({r['error_before']:.3f} -> "
              f"{best['heldout_error']:.3f}), its BIC by {-check['value']:.0f} of the "
@@ -56,17 +62,12 @@ def test_table15_with_its_torque_unknown():
 
 
 def test_table15_with_its_torque_and_speed_unknown():
-    r = _report("table15_operating_unknown")
-    assert r["chosen_effect"] is None and r["verdict"] == "none"
-    best = r["ranking"][0]
-    check = r["verdicts"][0]["checks"]["delta_bic"]
-    assert best["effect"] == "tooth_defect" and not check["holds"]
+    r, best, check, cut = _tooth_defect_not_adopted("table15_operating_unknown")
     assert set(r["assumed"]) == {"torque_Nm", "n1_rpm"}
     low, _ = r["assumed"]["torque_Nm"]["prior"]
     torque = best["nuisance"]["torque_factor"] * r["assumed"]["torque_Nm"]["configured"]
     speed = best["nuisance"]["speed_factor"] * r["assumed"]["n1_rpm"]["configured"]
     assert torque == pytest.approx(low, rel=1e-3)  # at its bound
-    cut = 1 - best["heldout_error"] / r["error_before"]
     quote = (f"a tooth defect cuts it by {cut:.0%} ({r['error_before']:.3f} -> "
              f"{best['heldout_error']:.3f}) at {speed:.0f} r/min, the torque at its {low:.0f} "
              f"N m bound, its BIC by {-check['value']:.1f} of the {-check['bound']:.0f} "
