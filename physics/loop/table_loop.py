@@ -609,10 +609,10 @@ def _assumed(table: FeatureTable, base: Scenario, before: dict, after: dict) -> 
     (the configured one times the factor calibrated before and after the chosen effect, its
     prior), gear data stated unknown (the configured pair's values)."""
     out = {}
-    for key, (name, (lo, hi, _)), unknown in (
-            ("torque_Nm", *TORQUE.items(), table.torque_unknown),
-            ("n1_rpm", *SPEED.items(), table.speed_unknown)):
+    for key, name, unknown in (("torque_Nm", "torque_factor", table.torque_unknown),
+                               ("n1_rpm", "speed_factor", table.speed_unknown)):
         if unknown:
+            lo, hi, _ = (TORQUE | SPEED)[name]
             v0 = getattr(base.operating, key)
             out[key] = {"records": "all rows", "configured": v0, "prior": [lo * v0, hi * v0],
                         "calibrated": v0 * before[name], "after": v0 * after[name],

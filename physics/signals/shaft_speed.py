@@ -23,8 +23,8 @@ Wiley 2011, ch. 2). Given the pinion's tooth number the comb depends on ``f1`` a
    their frequencies (a bounded scalar search).
 5. **Judgement**: the comb must have at least :data:`MIN_LINES` lines among its harmonics, a
    mean height of :data:`MIN_COMB_DB` and a lead of :data:`MIN_MARGIN_DB` over the best speed
-   that is neither within :data:`SAME_COMB` of it nor of a multiple or a whole fraction of it;
-   otherwise the record's speed is not read (``None``) and the caller says so.
+   that is neither within :data:`SAME_COMB` of it nor of a multiple or a whole fraction of it
+   (:attr:`SpeedEstimate.clear`); otherwise the caller refuses to read the record's speed.
 
 A record's speed is taken constant over it, as the order analysis does.
 """
@@ -104,13 +104,12 @@ def _mesh_heights(f1: np.ndarray, z1: int, height: np.ndarray, df: float, f_band
     return h.sum(axis=1) / count, (h >= LINE_DB).sum(axis=1)
 
 
-def _mesh_power(x: np.ndarray, fs: float, f1: float, z1: int, f_top: float,
-                w: np.ndarray) -> float:
+def _mesh_power(windowed: np.ndarray, t: np.ndarray, f1: float, z1: int, f_top: float
+                ) -> float:
     """Summed power of the mesh harmonics of speed ``f1`` below ``f_top`` by the exact
-    Hann-windowed projection."""
+    projection of the Hann-windowed record ``windowed`` sampled at times ``t``."""
     f = np.arange(1, int(f_top // (z1 * f1)) + 1) * z1 * f1
-    t = np.arange(x.size) / fs
-    z = np.exp(-2j * np.pi * np.outer(f, t)) @ (x * w)
+    z = np.exp(-2j * np.pi * np.outer(f, t)) @ windowed
     return float(np.sum(np.abs(z) ** 2))
 
 
@@ -124,8 +123,8 @@ def pinion_speed(x: np.ndarray, fs: float, z1: int, f_low: float, f_high: float
 
     x = np.asarray(x, float) - float(np.mean(x))
     n = x.size
-    w = np.hanning(n)
-    spec = np.abs(np.fft.rfft(x * w, n=PAD * n)) ** 2
+    windowed = x * np.hanning(n)
+    spec = np.abs(np.fft.rfft(windowed, n=PAD * n)) ** 2
     df = fs / (PAD * n)
     height = _line_heights(10 * np.log10(spec + 1e-30 * spec.max()))
     f_band = 0.45 * fs
@@ -155,7 +154,8 @@ def pinion_speed(x: np.ndarray, fs: float, z1: int, f_low: float, f_high: float
     runner = int(np.argmax(np.where(far, score, -np.inf))) if far.any() else best
     reach = 2 * PAD * grid[best] * df / f_band  # the highest harmonic's main lobe
     lo, hi = max(f_low, grid[best] - reach), min(f_high, grid[best] + reach)
-    res = optimize.minimize_scalar(lambda f: -_mesh_power(x, fs, f, z1, f_band, w),
+    t = np.arange(n) / fs
+    res = optimize.minimize_scalar(lambda f: -_mesh_power(windowed, t, f, z1, f_band),
                                    bounds=(lo, hi), method="bounded",
                                    options={"xatol": reach * 1e-5})
     return SpeedEstimate(rpm=60.0 * float(res.x), comb_db=float(score[best]),
