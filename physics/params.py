@@ -12,6 +12,7 @@ the value, the allowed range and how to fix it, before any computation starts.
 
 from __future__ import annotations
 
+import functools
 import math
 import numbers
 from dataclasses import dataclass, field, fields
@@ -503,11 +504,19 @@ _CASE_FIELDS = {
 
 
 def operating_cases() -> dict[int, dict[str, float]]:
-    """The five operating cases of thesis Table 11, from ``conf/physics/cases.yaml``."""
+    """The five operating cases of thesis Table 11, from ``conf/physics/cases.yaml`` (a fresh
+    copy each call: the caller may change it)."""
+    return {k: dict(v) for k, v in _read_cases()}
+
+
+@functools.cache
+def _read_cases() -> tuple[tuple[int, tuple[tuple[str, float], ...]], ...]:
+    """``cases.yaml`` parsed once per process (a dataset's plan reads a case for each of its
+    gearboxes)."""
     import yaml
 
     text = config_file("cases.yaml").read_text()
-    return {int(k): dict(v) for k, v in yaml.safe_load(text).items()}
+    return tuple((int(k), tuple(dict(v).items())) for k, v in yaml.safe_load(text).items())
 
 
 def case_values(case: Any) -> dict[str, float]:

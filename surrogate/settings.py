@@ -164,9 +164,9 @@ def cases_of(case: str | int) -> list[int]:
 def check_run(cfg: Any) -> None:
     """Raise ``ValueError`` for a train config's settings that need no data, no model and no
     Lightning to judge: the run folder's task name, the seed, the thread count, the model's and
-    the trainer's settings, the operating case. ``train.py`` checks them before its slow
-    imports (such a refusal does not wait for them); :func:`surrogate.training.prepare`
-    starts with them."""
+    the trainer's settings, the operating case, a user's table that is not a table file.
+    ``train.py`` checks them before its slow imports (such a refusal does not wait for them);
+    :func:`surrogate.training.prepare` starts with them."""
     root = Path(str(cfg.paths.root_dir)) / "logs"
     check_inside(root / str(cfg.task_name), root, f"task_name = {cfg.task_name!r}")
     if isinstance(cfg.seed, bool) or not isinstance(cfg.seed, int) or cfg.seed < 0:
@@ -176,6 +176,16 @@ def check_run(cfg: Any) -> None:
     OmegaConf.to_object(cfg.model).check()
     OmegaConf.to_object(cfg.trainer).check()
     cases_of(cfg.data.case)
+    if cfg.data.get("table") is not None:
+        table_file(cfg.data.table)
+
+
+def table_file(value: object) -> Path:
+    """``value`` as the path of a user's table: an existing ``.csv`` or ``.parquet`` file."""
+    path = existing_file(value, "data.table", "give your .csv or .parquet table")
+    if path.suffix not in (".csv", ".parquet"):
+        raise ValueError(f"data.table = {str(path)!r} must be an existing .csv or .parquet file")
+    return path
 
 
 def model_file(value: object, key: str) -> Path:

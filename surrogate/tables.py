@@ -14,9 +14,10 @@ import numpy as np
 import pandas as pd
 
 from physics.dataset.generation import units as dataset_units
-from physics.files import check_unrepeated, existing_file, repeated
+from physics.files import check_unrepeated, repeated
 from surrogate.inputs import CONDITIONS
 from surrogate.schema import vector_parts
+from surrogate.settings import table_file
 
 #: the range (low, high) each unit allows a user's column: a value outside is a unit error or
 #: a broken reading. DTE features: 1 mm of transmission error is far beyond any running spur
@@ -172,9 +173,7 @@ def with_vector_units(units: dict[str, str], vectors) -> dict[str, str]:
 def read_user_table(path: str | Path, columns: dict[str, str]) -> pd.DataFrame:
     """A user's table as read from ``path`` (CSV or parquet), its columns renamed by
     ``columns`` (the table's name -> ours)."""
-    path = existing_file(path, "data.table", "give your .csv or .parquet table")
-    if path.suffix not in (".csv", ".parquet"):
-        raise ValueError(f"data.table = {str(path)!r} must be an existing .csv or .parquet file")
+    path = table_file(path)
     check_unrepeated(path, f"data.table = {path}")
     try:
         df = pd.read_parquet(path) if path.suffix == ".parquet" else pd.read_csv(path)

@@ -26,7 +26,7 @@ import functools
 import threading
 import time
 from collections.abc import Callable, Iterable, Iterator, Sequence
-from concurrent.futures import ThreadPoolExecutor, as_completed
+from concurrent.futures import ThreadPoolExecutor, as_completed, wait
 from typing import TypeVar
 
 import numba
@@ -97,8 +97,9 @@ def each(fn: Callable[[T], R], items: Sequence[T], desc: str, progress: bool = F
     each thread's kernel calls on one numba thread), in the items' order. An item not started
     by ``deadline`` raises :class:`TimeLimit`; an error (or an interrupt in the calling
     thread) cancels the items not started and waits for the running ones. A stop
-    (:class:`TimeLimit` or KeyboardInterrupt) carries the results of the items finished by
-    then as its ``finished`` (index, result) pairs: what was computed is not lost."""
+    (:class:`TimeLimit` or KeyboardInterrupt) carries the results of every item that finished,
+    those running at the stop included, as its ``finished`` (index, result) pairs: what was
+    computed is not lost."""
     workers = min(len(items), parallel_threads())
     bar = tqdm(total=len(items), desc=desc, disable=not progress)
     if workers <= 1:
@@ -130,6 +131,7 @@ def each(fn: Callable[[T], R], items: Sequence[T], desc: str, progress: bool = F
         except BaseException as err:
             for f in futures:
                 f.cancel()
+            wait(futures)  # the running ones end: what they computed is kept with the rest
             if isinstance(err, TimeLimit | KeyboardInterrupt):
                 err.finished = [(i, f.result()) for i, f in enumerate(futures)
                                 if f.done() and not f.cancelled() and f.exception() is None]

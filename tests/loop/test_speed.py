@@ -115,6 +115,24 @@ def test_each_stops_at_the_deadline_and_passes_an_error_on(monkeypatch):
     assert len(started) < 40  # the items not started were cancelled
 
 
+def test_a_stop_keeps_what_the_items_running_then_computed(monkeypatch):
+    """An interrupt raised by one item while another still runs: the running one ends and its
+    result is among the stop's ``finished``, beside those done before."""
+    monkeypatch.setattr(threads, "THREADS", 2)
+
+    def item(x: int) -> int:
+        if x == 1:
+            time.sleep(0.1)  # item 0 ends, item 2 starts and stops the run: item 1 still runs
+            return 1
+        if x == 2:
+            raise KeyboardInterrupt
+        return x
+
+    with pytest.raises(KeyboardInterrupt) as stop:
+        each(item, [0, 1, 2], "test")
+    assert stop.value.finished == [(0, 0), (1, 1)]
+
+
 @pytest.fixture(scope="module")
 def small_records(tmp_path_factory):
     scn = scenario_from_config({"case": 3})

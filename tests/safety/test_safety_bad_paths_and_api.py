@@ -318,7 +318,7 @@ def test_the_train_command_names_a_folder_given_as_init_from(model, tmp_path, co
                                          r"file; pass the wear_surrogate.pt of a training run"):
         prepare(train_cfg(tmp_path, f"init_from={model.parent}", table="in.csv"))
     os.mkfifo(tmp_path / "pipe.csv")
-    with pytest.raises(ValueError, match=r"^data: data.table = '.*pipe.csv' is not a regular "
+    with pytest.raises(ValueError, match=r"^data.table = '.*pipe.csv' is not a regular "
                                          r"file \(a FIFO"):
         prepare(train_cfg(tmp_path, table="pipe.csv"))
 

@@ -156,6 +156,8 @@ def imports_of_a_refusal(args: list[str], cwd: Path, says: str) -> set[str]:
     ("model.lr=-1", "model.lr = -1.0 must lie in (0, 1)"),
     ("trainer.max_epochs=0", "trainer.max_epochs = 0 must be >= 1"),
     ("seed=-1", "seed = -1 must be a whole number >= 0"),
+    ("data.table=missing.csv", "data.table = 'missing.csv' does not exist"),
+    ("data.table=.", "data.table = '.' is a folder, not a file"),
 ])
 def test_train_refuses_what_needs_no_data_before_importing_lightning(tmp_path, bad, says):
     """The settings judged without data or a model (surrogate.settings.check_run) are refused
