@@ -61,7 +61,7 @@ import numpy as np
 
 from physics.signals.features import _name
 from physics.signals.order_analysis import synchronous_average
-from physics.signals.shaft_speed import pinion_speed
+from physics.signals.shaft_speed import BAND, pinion_speed
 
 #: the indicators of :func:`indicators`, in its order
 INDICATORS = ("fm0", "fm4", "na4", "m6a", "m8a", "energy_ratio", "sideband_level")
@@ -456,7 +456,8 @@ def shaft_rate_from_spectrum(x: np.ndarray, fs: float, z: int, f_nominal: float,
     ------
     ValueError
         NaN samples, ``fs`` or ``f_nominal`` not positive, ``z`` not an integer >= 5,
-        ``rel_band`` outside (0, 1), a band reaching fs / 2, or a band holding fewer than three
+        ``rel_band`` outside (0, 1), a band reaching 0.45 fs (the band the harmonics are read
+        in, :data:`physics.signals.shaft_speed.BAND`), or a band holding fewer than three
         spectral bins (the record is too short).
     """
     x = _records(x)
@@ -467,10 +468,11 @@ def shaft_rate_from_spectrum(x: np.ndarray, fs: float, z: int, f_nominal: float,
         raise ValueError(f"rel_band = {rel_band!r} must lie in (0, 1): the search band is "
                          "z f_nominal (1 +- rel_band); 0.1 suits a speed known within 10 %")
     lo, hi = z * f_nominal * (1 - rel_band), z * f_nominal * (1 + rel_band)
-    if hi >= fs / 2:
-        raise ValueError(f"the search band of the mesh line reaches {hi:g} Hz, not below fs / 2 "
-                         f"= {fs / 2:g} Hz (z = {z}, f_nominal = {f_nominal:g} Hz); sample "
-                         "faster, narrow rel_band or check z and f_nominal")
+    if hi >= BAND * fs:
+        raise ValueError(f"the search band of the mesh line reaches {hi:g} Hz, not below "
+                         f"{BAND} fs = {BAND * fs:g} Hz, where the mesh harmonics are read (z = "
+                         f"{z}, f_nominal = {f_nominal:g} Hz); sample faster, narrow rel_band "
+                         "or check z and f_nominal")
     n = x.shape[-1]
     bins = int(np.floor(hi * n / fs) - np.ceil(lo * n / fs)) + 1
     if bins < 3:

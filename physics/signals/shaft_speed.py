@@ -36,6 +36,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+#: the band the mesh harmonics are read in, as a fraction of the sampling rate: below the
+#: anti-aliasing filters' transition (a recorder's is flat to about 0.45 fs)
+BAND = 0.45
 #: zero padding of the search spectrum (points per FFT bin of the record)
 PAD = 4
 #: width of the running median of the floor, in FFT bins of the record (each side)
@@ -124,13 +127,18 @@ def pinion_speed(x: np.ndarray, fs: float, z1: int, f_low: float, f_high: float
     by."""
     from scipy import optimize  # imported on first use
 
+    if not 0 < f_low < f_high or z1 * f_high >= BAND * fs:
+        raise ValueError(f"the pinion speed is sought from f_low = {f_low:g} to f_high = "
+                         f"{f_high:g} Hz; its mesh line z1 f1 (z1 = {z1}) must lie below "
+                         f"{BAND} fs = {BAND * fs:g} Hz, where the harmonics are read: "
+                         "give 0 < f_low < f_high, sample faster or check z1")
     x = np.asarray(x, float) - float(np.mean(x))
     n = x.size
     windowed = x * np.hanning(n)
     spec = np.abs(np.fft.rfft(windowed, n=PAD * n)) ** 2
     df = fs / (PAD * n)
     height = _line_heights(10 * np.log10(spec + 1e-30 * spec.max()))
-    f_band = 0.45 * fs
+    f_band = BAND * fs
     # a geometric grid: the highest mesh harmonic below f_band moves one padded bin a step
     grid = f_low * (1 + df / f_band) ** np.arange(
         int(math.log(f_high / f_low) / math.log1p(df / f_band)) + 2)

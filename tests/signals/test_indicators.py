@@ -278,5 +278,8 @@ def test_bad_options_are_refused():
         shaft_rate_from_spectrum(x, FS, Z, F1, rel_band=0)
     with pytest.raises(ValueError, match="longer record"):
         shaft_rate_from_spectrum(x[:64], FS, Z, F1)
-    with pytest.raises(ValueError, match="below fs / 2"):
+    with pytest.raises(ValueError, match=r"below 0\.45 fs"):
         shaft_rate_from_spectrum(x, FS, Z, 80.0)
+    # a mesh line between 0.45 and 0.5 fs: no harmonic in the band the comb is read in
+    with pytest.raises(ValueError, match="where the mesh harmonics are read"):
+        shaft_rate_from_spectrum(x, FS, Z, 0.47 * FS / Z, rel_band=0.02)

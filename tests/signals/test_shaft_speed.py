@@ -137,3 +137,13 @@ def test_the_docs_state_the_reader_s_rules_as_the_code_has_them():
             f"and a lead of {MIN_MARGIN_DB:g} dB") in text
     assert f"agree within {SAME_SPEED:.0e} are one operating point".replace("e-05", "e-5") in text
     assert "within 1e-6 at 30 dB SNR; at 10 dB a reading judged clear is within 1e-5" in text
+
+
+def test_a_search_whose_mesh_line_leaves_the_read_band_is_refused():
+    """The comb is read below 0.45 fs: a search band whose mesh line reaches it, or an empty
+    band, is refused before any work, naming the values."""
+    x = np.random.default_rng(0).standard_normal(4096)
+    with pytest.raises(ValueError, match=r"z1 = 20\) must lie below 0\.45 fs = 1843\.2 Hz"):
+        pinion_speed(x, 4096.0, 20, 5.0, 100.0)
+    with pytest.raises(ValueError, match="f_low = 10 to f_high = 5 Hz"):
+        pinion_speed(x, 4096.0, 20, 10.0, 5.0)
