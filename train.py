@@ -22,12 +22,17 @@ settings.register()
 def prepare(cfg: DictConfig):
     """The settings that need no data and no Lightning first (refused before the slow imports),
     then a fine-tune's network and the settings it would not honour (torch alone: about 2 s),
-    then the whole run's checks (:func:`surrogate.training.prepare`, whose import loads
-    Lightning: about 4 s more)."""
+    then the data's settings (the table or dataset read and the split planned, without
+    Lightning), then the whole run's checks (:func:`surrogate.training.prepare`, whose import
+    loads Lightning: about 4 s more)."""
     settings.check_run(cfg)
     with deferred():  # a signal during an import is raised after it
         from surrogate import fine_tune
-    fine_tune.check_honoured(cfg, fine_tune.network(cfg))
+    init = fine_tune.network(cfg)
+    fine_tune.check_honoured(cfg, init)
+    with deferred():
+        from surrogate import wear_data
+    wear_data.check_data(cfg.data if init is None else fine_tune.read_as(cfg.data, init))
     with deferred():
         from surrogate import training
     return training.prepare(cfg)

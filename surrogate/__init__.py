@@ -14,8 +14,9 @@ module :class:`WearDataModule`. The rest is reached through its module:
 - :mod:`surrogate.tables`: a user's own table: reading it, its units and its checks;
 - :mod:`surrogate.splits`: the splits by trajectory, by a table's groups or by groups named by
   value, and the validation half that calibrates the interval;
-- :mod:`surrogate.data`: the Lightning data module over the physics dataset (built where
-  missing) or a user's table;
+- :mod:`surrogate.wear_data`: a run's data without torch or Lightning, the physics dataset
+  (built where missing) or a user's table, checked when made; :mod:`surrogate.data`: it as
+  Lightning's data module;
 - :mod:`surrogate.network`: the deep ensemble of Gaussian MLPs in plain torch, and a trained
   network as inference loads it;
 - :mod:`surrogate.model`: that ensemble as one Lightning module, for training;

@@ -114,11 +114,11 @@ from physics.signals.order_analysis import mesh_harmonics
 from physics.testbeds import IndependentPair, simulate_record, wear_depths
 from surrogate import few_labels, settings
 from surrogate.baselines import fit_estimator, typical_wear
-from surrogate.data import load_dataset
 from surrogate.figures import error_summary, parity_of_set
 from surrogate.inference import Surrogate
 from surrogate.schema import FeatureSchema
 from surrogate.training import prepare, train
+from surrogate.wear_data import load_dataset
 
 log = logging.getLogger(__name__)
 

@@ -180,6 +180,18 @@ def check_run(cfg: Any) -> None:
         table_file(cfg.data.table)
 
 
+def instantiated(node: Any, what: str, **kwargs):
+    """``node`` instantiated by Hydra (``kwargs`` override its keys), a failure to make it a
+    ``ValueError`` naming ``what`` (``data: ...``): one line, without Hydra's wrapping."""
+    from hydra.errors import InstantiationException
+    from hydra.utils import instantiate
+
+    try:
+        return instantiate(node, **kwargs)
+    except InstantiationException as err:
+        raise ValueError(f"{what}: {err.__cause__ or err}") from None
+
+
 def table_file(value: object) -> Path:
     """``value`` as the path of a user's table: an existing ``.csv`` or ``.parquet`` file."""
     path = existing_file(value, "data.table", "give your .csv or .parquet table")

@@ -256,6 +256,22 @@ def user_table(path: str | Path, columns: dict[str, str], group: str | None,
 ESTIMATOR_COLUMNS = ("dte_peak_to_peak", "dte_kurtosis")
 
 
+def check_columns(df: pd.DataFrame, path: str | Path, needed: list[str], group: str | None,
+                  group_by: str | None = None) -> None:
+    """Refuse (ValueError, one line) a table that lacks its ``group`` or ``group_by`` column or
+    a ``needed`` one (after ``data.columns``), naming them: before their units are asked for."""
+    for option, col in (("data.group", group), ("data.group_by", group_by)):
+        if col is not None and col not in df.columns:
+            raise ValueError(f"{option} = {col!r} is not a column of {path}; it has {list(df)}")
+    if group is None:
+        raise ValueError(f"data.group = None must name the column of {path} that tells "
+                         f"the trajectories (gearboxes, test runs) apart; it has {list(df)}")
+    missing = [c for c in needed if c not in df.columns]
+    if missing:
+        raise ValueError(f"{path} lacks column(s) {missing}; map yours with data.columns "
+                         "(units as in the dataset: docs/dataset.md)")
+
+
 def user_rows(df: pd.DataFrame, path: str | Path, group: str | None, needed: list[str],
               target: str | None = None, units: dict[str, str] | None = None,
               group_by: str | None = None, line_parts: tuple[str, ...] = (),
@@ -270,16 +286,7 @@ def user_rows(df: pd.DataFrame, path: str | Path, group: str | None, needed: lis
     :func:`check_user_table` first (``line_parts`` as it takes them); the rows of each
     trajectory are read in the table's order."""
     path = Path(path)
-    for option, col in (("data.group", group), ("data.group_by", group_by)):
-        if col is not None and col not in df.columns:
-            raise ValueError(f"{option} = {col!r} is not a column of {path}; it has {list(df)}")
-    if group is None:
-        raise ValueError(f"data.group = None must name the column of {path} that tells "
-                         f"the trajectories (gearboxes, test runs) apart; it has {list(df)}")
-    missing = [c for c in needed if c not in df.columns]
-    if missing:
-        raise ValueError(f"{path} lacks column(s) {missing}; map yours with data.columns "
-                         "(units as in the dataset: docs/dataset.md)")
+    check_columns(df, path, needed, group, group_by)
     if df.empty:
         raise ValueError(f"data.table = {path} has no rows")
     if target is None:

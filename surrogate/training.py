@@ -17,7 +17,6 @@ import lightning as L
 import numpy as np
 import pandas as pd
 import torch
-from hydra.errors import InstantiationException
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
@@ -75,13 +74,6 @@ class TrainJob:
     init: Surrogate | None = None  # the network to fine-tune (``init_from``)
 
 
-def _instantiate(node: DictConfig, what: str, **kwargs):
-    try:
-        return instantiate(node, **kwargs)
-    except InstantiationException as err:
-        raise ValueError(f"{what}: {err.__cause__ or err}") from None
-
-
 def prepare(cfg: DictConfig) -> TrainJob:
     """Check the whole run before any work: case, model settings, trainer, callbacks, loggers
     and the data module (whose dataset, if missing, is planned and checked but not built)."""
@@ -90,7 +82,8 @@ def prepare(cfg: DictConfig) -> TrainJob:
     trainer = make_trainer(cfg)
     init = fine_tune.network(cfg)
     fine_tune.check_honoured(cfg, init)
-    data = _instantiate(cfg.data if init is None else fine_tune.read_as(cfg.data, init), "data")
+    data = settings.instantiated(cfg.data if init is None else fine_tune.read_as(cfg.data, init),
+                                 "data")
     if init is None and cfg.model.get("trainable", "all") != "all":
         raise ValueError(f"model.trainable = {cfg.model.trainable!r} trains the output layers of "
                          "a pre-trained network and needs init_from=<run>/wear_surrogate.pt; "
@@ -155,10 +148,12 @@ class InterruptBetweenBatches(L.Callback):
 def make_trainer(cfg: DictConfig) -> L.Trainer:
     """The Lightning trainer of ``cfg`` with its callbacks and loggers (into
     ``cfg.paths.output_dir``)."""
-    callbacks = [_instantiate(c, "callbacks") for c in (cfg.get("callbacks") or {}).values()]
+    callbacks = [settings.instantiated(c, "callbacks")
+                 for c in (cfg.get("callbacks") or {}).values()]
     callbacks.append(InterruptBetweenBatches())
-    loggers = [_instantiate(c, "logger") for c in (cfg.get("logger") or {}).values()]
-    return _instantiate(cfg.trainer, "trainer", callbacks=callbacks, logger=loggers or False)
+    loggers = [settings.instantiated(c, "logger") for c in (cfg.get("logger") or {}).values()]
+    return settings.instantiated(cfg.trainer, "trainer", callbacks=callbacks,
+                                 logger=loggers or False)
 
 
 def train(cfg: DictConfig) -> float:
@@ -456,7 +451,7 @@ def kept(job: TrainJob) -> str:
     dm = job.data
     if dm.table is None and not Path(dm.dataset).is_file():
         from physics.dataset.generation import chunks_kept
-        from surrogate.data import dataset_job
+        from surrogate.wear_data import dataset_job
 
         return (f"no training was done; of the dataset {dm.dataset}, "
                 f"{chunks_kept(dataset_job(dm.dataset, dm.generate, dm.jobs))}")

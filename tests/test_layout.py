@@ -199,21 +199,39 @@ def test_the_loops_orchestrator_is_imported_only_by_its_app():
     assert users <= {"physics.loop.__main__"}, users
 
 
+def _at_start(roots: list[str]) -> dict[str, set[str]]:
+    """What each project module that ``roots`` reach at module level (transitively) imports at
+    module level."""
+    known, out, todo = modules(), {}, list(roots)
+    while todo:
+        name = todo.pop()
+        if name in out:
+            continue
+        found = out[name] = imports(known[name], at_import=True)
+        parents = {".".join(i.split(".")[:k]) for i in found for k in range(1, i.count(".") + 1)}
+        todo += [i for i in found | parents if i in known]
+    return out
+
+
+def _importing(roots: list[str], packages: tuple[str, ...]) -> dict[str, set[str]]:
+    """The modules ``roots`` reach that import one of ``packages`` at module level."""
+    return {m: bad for m, found in _at_start(roots).items()
+            if (bad := {i for i in found if i.split(".")[0] in packages})}
+
+
 def test_prediction_starts_without_lightning():
     """``surrogate.predict`` and ``Surrogate.load`` import torch, not Lightning (two seconds of
     every prediction's start): nothing they import at module level reaches it."""
-    known = modules()
-    seen, todo = set(), ["surrogate.predict", "surrogate.inference"]
-    while todo:
-        name = todo.pop()
-        if name in seen:
-            continue
-        seen.add(name)
-        found = imports(known[name], at_import=True)
-        assert not {i for i in found if i.split(".")[0] in ("lightning", "pytorch_lightning")}, (
-            f"{name} imports Lightning")
-        parents = {".".join(i.split(".")[:k]) for i in found for k in range(1, i.count(".") + 1)}
-        todo += [i for i in found | parents if i in known]
+    reached = _importing(["surrogate.predict", "surrogate.inference"],
+                         ("lightning", "pytorch_lightning"))
+    assert not reached, f"these import Lightning: {reached}"
+
+
+def test_a_runs_data_is_checked_without_torch():
+    """``surrogate.wear_data`` (the data a run reads, checked when made: ``train.py`` makes it
+    before Lightning's import) reaches neither torch nor Lightning at module level."""
+    reached = _importing(["surrogate.wear_data"], ("torch", "lightning", "pytorch_lightning"))
+    assert not reached, f"these import torch or Lightning: {reached}"
 
 
 #: the longest a page of docs/ and the README may be (a reference, not a notebook)

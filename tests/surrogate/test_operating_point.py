@@ -126,7 +126,7 @@ def test_an_operating_column_that_is_not_a_number_is_said_unchecked(tmp_path, ca
     assert operating_columns(frame, {}, []) == ["n1_rpm"]
     rig = pd.read_csv(RIG_RECORDS).assign(speed="15 rps")
     rig.to_csv(tmp_path / "rig.csv", index=False)
-    with caplog.at_level(logging.WARNING, logger="surrogate.data"):
+    with caplog.at_level(logging.WARNING, logger="surrogate.wear_data"):
         job = prepare(rig_cfg(tmp_path))
     assert job.data.operating == []
     assert any("['speed']" in r.getMessage() and "not a number in every row" in r.getMessage()

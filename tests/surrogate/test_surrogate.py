@@ -29,7 +29,6 @@ from physics.params import Dynamics, Scenario, WearSolver
 from physics.signals.order_analysis import LINE_ORDERS
 from surrogate import predict, settings
 from surrogate.conformal import attainable, exchangeable_quantile
-from surrogate.data import BUILD_CHUNKS, load_dataset, replicates_per_case, stale_dataset
 from surrogate.inference import (
     ScaledEnsemble,
     Surrogate,
@@ -45,6 +44,7 @@ from surrogate.predict import predict_file
 from surrogate.schema import FeatureSchema, baseline_changes, vector_magnitudes
 from surrogate.splits import split_trajectories, validation_count
 from surrogate.training import prepare, train
+from surrogate.wear_data import BUILD_CHUNKS, load_dataset, replicates_per_case, stale_dataset
 
 ROOT = Path(__file__).resolve().parents[2]
 TINY_BASE = Scenario(solver=WearSolver(n_points=51),
@@ -189,7 +189,7 @@ def test_a_built_dataset_holds_enough_gearboxes_and_a_sixth_validates(tmp_path):
 def test_fewer_gearboxes_than_the_floor_are_said_not_built_silently(tmp_path, caplog):
     """``data.gearboxes`` below the 128 per case a built dataset simulates: the run says how
     many it builds instead; the default (256) and an explicit count per case say nothing."""
-    with caplog.at_level("WARNING", logger="surrogate.data"):
+    with caplog.at_level("WARNING", logger="surrogate.wear_data"):
         dm = instantiate(train_cfg(tmp_path, tmp_path / "x.parquet", "case=3",
                                    "data.gearboxes=4").data)
     assert dm.generate["replicates"] == 128
@@ -197,7 +197,7 @@ def test_fewer_gearboxes_than_the_floor_are_said_not_built_silently(tmp_path, ca
     assert line.startswith("data.gearboxes = 4: a dataset built here simulates at least 128 "
                            "gearboxes per trained case"), line
     caplog.clear()
-    with caplog.at_level("WARNING", logger="surrogate.data"):
+    with caplog.at_level("WARNING", logger="surrogate.wear_data"):
         instantiate(train_cfg(tmp_path, tmp_path / "x.parquet", "case=3").data)
         instantiate(train_cfg(tmp_path, tmp_path / "x.parquet", "case=3", "data.gearboxes=4",
                               "+data.generate.replicates=8", "data.test_replicates=1",
@@ -216,7 +216,7 @@ def test_fewer_gearboxes_than_the_floor_are_said_not_built_silently(tmp_path, ca
 def test_a_dataset_built_with_other_settings_is_named_not_silently_used(dataset, caplog):
     """A dataset file from other settings (an older default, another case list) is read as it
     is, with a warning that names what differs and how to rebuild."""
-    with caplog.at_level("WARNING", logger="surrogate.data"):
+    with caplog.at_level("WARNING", logger="surrogate.wear_data"):
         load_dataset(dataset, {"cases": [3, 4], "replicates": 9})
     text = caplog.text
     assert "data.replicates: 4 -> 9" in text and "delete it" in text
