@@ -141,6 +141,7 @@ def load_dataset(path: str | Path, spec: dict | None = None, jobs: int = 2) -> p
                     "build the one this run describes", path, diff)
     return pd.read_parquet(path)
 
+
 class WearData:
     """Features -> wear (the mean depth read against each gearbox's first record, or the root
     wear read absolutely), from the dataset of the given cases or a user's table: checked when
