@@ -12,7 +12,7 @@ _SOURCES = {
         "PairModel", "Response", "EXACT_PHASES", "build_model", "simulate", "simulate_two_dof",
         "force_per_position", "blank_inertia", "kernel_parameters", "time_step", "output_samples",
         "anti_aliasing_filter", "anti_aliased"),
-    "physics.dynamics.teeth": ("per_tooth_model", "with_tooth_positions"),
+    "physics.dynamics.teeth": ("per_tooth_model", "sequence_model", "with_tooth_positions"),
     "physics.dynamics.model_form": (
         "FACTORS", "with_model_form", "revolution_tables", "with_modulation"),
     "physics.dynamics.evolution": (

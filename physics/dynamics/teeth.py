@@ -14,8 +14,11 @@ single pitch deviations of ISO 1328-1, drawn per gear by
 :func:`physics.gear.accuracy.tooth_positions_um`): a tooth ahead meets its mate earlier and
 carries more of the load, the pattern that repeats once per pinion revolution.
 
-The gear's teeth are alike here (a gear tooth's own wear would need the hunting period,
-``lcm(z1, z2)`` mesh periods).
+A state worn tooth by tooth (:func:`physics.tribology.contact_wear.simulate_contact_wear`)
+becomes such a model by :func:`sequence_model`: one table set per mesh of its meshing sequence
+(:mod:`physics.gear.mesh_sequence`), the z1 meshes of a pinion revolution where the gear's teeth
+are carried alike, the hunting period ``lcm(z1, z2)`` where every tooth of both wheels is its
+own; in mesh ``m`` pair A is the pair of mesh ``m``.
 """
 
 from __future__ import annotations
@@ -26,9 +29,12 @@ from typing import Any
 
 import numpy as np
 
-from physics.dynamics.model import PairModel
+from physics.dynamics.model import EXACT_PHASES, PairModel, build_model
 from physics.gear.accuracy import DIAMETER_BANDS, MODULE_BANDS, cumulative_pitch_tolerance_um
+from physics.gear.mesh_sequence import hunting_period, mesh_sequence
+from physics.gear.stiffness import MeshStiffness
 from physics.gear.tooth_contact import NO_CONTACT
+from physics.params import Scenario
 
 #: how far a tooth may stand off its place, in cumulative pitch tolerances ``F_p`` of the
 #: coarsest ISO 1328-1:1995 grade (12): a tooth's position deviation from its theoretical place
@@ -84,9 +90,11 @@ def per_tooth_model(teeth: Sequence[PairModel]) -> PairModel:
     _finite_tables(teeth)
     z1 = len(teeth)
     first = teeth[0]
-    z = round(first.omega_mesh / first.omega1)
-    if z1 != z:
-        raise ValueError(f"{z1} tooth models for a pinion of {z} teeth; give one per pinion tooth")
+    z, z2 = first.geometry.gear.z1, first.geometry.gear.z2
+    if z1 not in (z, hunting_period(z, z2)):
+        raise ValueError(f"{z1} tooth models for a {z}/{z2} pair; give one per pinion tooth "
+                         f"({z}) or one per mesh of the hunting period "
+                         f"({hunting_period(z, z2)}, sequence_model)")
     if any(m.periods != 1 or len(m.k_a) != len(first.k_a) for m in teeth):
         raise ValueError("every tooth model needs one mesh period of the same phase grid")
 
@@ -104,6 +112,34 @@ def per_tooth_model(teeth: Sequence[PairModel]) -> PairModel:
         first, periods=z1, k_a=seq("k_a", 0), g_a=seq("g_a", 0), lam_a=seq("lam_a", 0),
         k_b=seq("k_b", -1), g_b=seq("g_b", -1), lam_b=seq("lam_b", -1),
         k_off=None if off is None else off["k_off"], g_off=None if off is None else off["g_off"])
+
+
+def sequence_model(scn: Scenario, ms: MeshStiffness, grid: np.ndarray, wear1: np.ndarray,
+                   wear2: np.ndarray, positions: tuple[np.ndarray, np.ndarray] | None = None,
+                   n_phase: int = EXACT_PHASES) -> PairModel:
+    """The model of ``scn`` over one repeat of the meshing sequence of teeth worn tooth by
+    tooth (module doc): ``wear1`` ``(n1, grid)`` and ``wear2`` ``(n2, grid)`` on ``grid`` [m],
+    a row per tooth in mesh order or one for teeth alike, as
+    :class:`physics.tribology.contact_wear.ContactWear` holds them; ``positions`` the teeth's
+    position deviations [m], ``(n1,)`` and ``(n2,)``, as there. Each mesh's tables are those of
+    a model of the whole pair worn as that mesh's two teeth are (:func:`build_model`), its gaps
+    closed by the two teeth's positions. Teeth alike on both wheels give the one-period model
+    tiled over a pinion revolution."""
+    wear1, wear2 = np.asarray(wear1, dtype=float), np.asarray(wear2, dtype=float)
+    if wear1.ndim != 2 or wear2.ndim != 2:
+        raise ValueError(f"wear1 of shape {wear1.shape} and wear2 of shape {wear2.shape}: give "
+                         "a row per tooth (or one row for teeth alike) on the grid")
+    seq = mesh_sequence(scn.gear.z1, scn.gear.z2, len(wear1), len(wear2))
+    pairs = list(zip(seq.pinion, seq.gear, strict=True))
+    models = [build_model(scn, ms, grid, wear1[i], wear2[j], n_phase=n_phase) for i, j in pairs]
+    if positions is not None:
+        models = with_tooth_positions(models, [positions[0][i] + positions[1][j]
+                                               for i, j in pairs])
+    z1 = scn.gear.z1
+    # a repeat shorter than a pinion revolution (teeth alike) is tiled to one, or to the
+    # hunting period where only the gear's teeth are carried
+    span = z1 if z1 % len(models) == 0 else hunting_period(z1, scn.gear.z2)
+    return per_tooth_model(models * (span // len(models)))
 
 
 def with_tooth_positions(teeth: Sequence[PairModel], positions_m: Sequence[float]

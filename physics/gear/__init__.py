@@ -1,8 +1,8 @@
 """Gear geometry and elasticity (thesis 2.1-2.3, 3.1-3.2): line of action, kinematics, the
 rack-generated tooth, Hertz line contact, potential-energy mesh stiffness of worn teeth, its
 finite-element check, double-tooth load sharing, the tooth contact of flanks of any shape on and
-off the path, and the manufacturing tolerances of an accuracy grade. Imports numpy/scipy and
-``physics.params``."""
+off the path, the meshing sequence of the teeth, and the manufacturing tolerances of an accuracy
+grade. Imports numpy/scipy and ``physics.params``."""
 
 from __future__ import annotations
 
@@ -21,6 +21,7 @@ _SOURCES = {
     "physics.gear.kinematics": (
         "surface_velocities", "sliding_velocity", "entraining_velocity", "sliding_distances"),
     "physics.gear.load_sharing": ("PairStiffness", "pair_loads"),
+    "physics.gear.mesh_sequence": ("MeshSequence", "mesh_sequence", "hunting_period"),
     "physics.gear.stiffness": (
         "MeshStiffness", "SainsotRangeWarning", "ToothCompliances", "sainsot_coefficients",
         "iso6336_single_pair_stiffness", "mesh_stiffness"),

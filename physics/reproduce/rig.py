@@ -173,8 +173,8 @@ def worn_states(scn: Scenario, depths_mm: np.ndarray
     top = float(np.max(depths_mm))
     if top <= 0:
         return None, [(None, None)] * len(depths_mm)
-    run = simulate_contact_wear(scn, top * 1e-3)
-    return run.s, [run.at_depth(d * 1e-3)[:2] for d in depths_mm]
+    run = simulate_contact_wear(scn, top * 1e-3)  # every tooth alike: one row per wheel
+    return run.s, [(p[0], g[0]) for p, g, _ in (run.at_depth(d * 1e-3) for d in depths_mm)]
 
 
 def worn_models(scn: Scenario, contact: str, s: np.ndarray | None,

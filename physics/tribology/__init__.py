@@ -15,7 +15,8 @@ _SOURCES = {
         "THESIS_WEAR_COEFF", "calibrate_wear_coeff", "root_wear", "total_load_coefficient"),
     "physics.tribology.contact_state": ("ContactState", "solve_contact_state"),
     "physics.tribology.contact_wear": (
-        "ContactWear", "simulate_contact_wear", "wear_per_cycle", "whole_flank_grid"),
+        "ContactWear", "simulate_contact_wear", "tooth_wear_per_cycle", "wear_per_cycle",
+        "whole_flank_grid"),
     "physics.tribology.lubrication": (
         "viscosity", "density", "roelands_exponents", "dimensionless_groups", "min_film_thickness",
         "asperity_load_ratio_pct"),

@@ -21,6 +21,18 @@ involute points that touch (``R_i`` from their roll coordinates, ``v_i = omega_i
 is the scenario's (:func:`physics.tribology.wear.wear_coefficient`: dry, or the mixed law from
 the contact state at that load).
 
+Each tooth its own flank: a state carries one flank per tooth of a wheel, in mesh order, or
+one flank for teeth alike (the uniform state, the special case, to the last digit). The pairs
+pass the mesh in the meshing sequence (:mod:`physics.gear.mesh_sequence`; the hunting period
+``lcm(z1, z2)`` meshes when both wheels carry every tooth), each with the rigid gaps and the
+compliance of its own two teeth and, where a tooth stands off its theoretical place (a single
+pitch deviation, :func:`physics.gear.accuracy.tooth_positions_um`), its gaps closed by that much;
+the load at each position is shared among the pairs then in mesh, and each contact wears the two
+teeth it joins. A tooth ahead carries more, wears faster, and so wears its lead away: Archard
+wear levels the teeth (``tests/tribology/test_tooth_wear.py``). A gear whose teeth are carried
+alike while the pinion's differ is their mean: exact where ``gcd(z1, z2) = 1`` (every gear tooth
+meets every pinion tooth in turn), an approximation otherwise.
+
 What it leaves out, said where it matters: the pressure across the band of a worn contact (a
 Hertz band of the involutes' radii; the wear per pass does not depend on its shape, its peak
 does: no shakedown check here), the dynamic load (quasi-static mesh force), and wear of the
@@ -36,8 +48,10 @@ import numpy as np
 from scipy import ndimage
 
 from physics.gear import contact, kinematics
+from physics.gear.mesh_sequence import mesh_sequence
 from physics.gear.stiffness import MeshStiffness, mesh_stiffness
 from physics.gear.tooth_contact import (
+    NO_CONTACT,
     PairGaps,
     clamped,
     flank_coordinate,
@@ -60,24 +74,29 @@ RELATIVE_STEP = 0.02
 
 @dataclass(frozen=True)
 class ContactWear:
-    """Wear of both flanks on the roll grid ``s`` (the whole involute of each flank)."""
+    """Wear of both flanks on the roll grid ``s`` (the whole involute of each flank), one row
+    per carried tooth (:class:`physics.gear.mesh_sequence.MeshSequence`: every tooth, or one
+    row for teeth alike)."""
 
     s: np.ndarray  # [m]
-    pinion: np.ndarray  # wear depth [m]
-    gear: np.ndarray
+    pinion: np.ndarray  # wear depth (pinion teeth carried, grid) [m]
+    gear: np.ndarray  # (gear teeth carried, grid) [m]
     cycles: float
     active: np.ndarray  # bool: the grid's points on the theoretical path (the active profiles)
-    #: every block's end (and the start): cycles ``(k,)``, pinion and gear wear ``(k, n)`` [m]
+    #: every block's end (and the start): cycles ``(k,)``, pinion and gear wear ``(k, teeth,
+    #: grid)`` [m]
     history: tuple[np.ndarray, np.ndarray, np.ndarray]
 
     def deepest(self) -> np.ndarray:
-        """Deepest wear of either active profile at each block end [m]."""
+        """Deepest wear of any tooth's active profile, either wheel, at each block end [m]."""
         _, p, g = self.history
-        return np.maximum(p[:, self.active].max(axis=1), g[:, self.active].max(axis=1))
+        return np.maximum(p[:, :, self.active].max(axis=(1, 2)),
+                          g[:, :, self.active].max(axis=(1, 2)))
 
     def at_depth(self, depth: float) -> tuple[np.ndarray, np.ndarray, float]:
-        """Pinion and gear wear [m] and cycles when the deepest point of either active profile
-        first reached ``depth`` [m] (linear between block ends: each block wears linearly)."""
+        """Pinion and gear wear [m] (teeth, grid) and cycles when the deepest point of any active
+        profile first reached ``depth`` [m] (linear between block ends: each block wears
+        linearly)."""
         cycles, p, g = self.history
         deepest = self.deepest()
         if not 0 <= depth <= deepest[-1]:
@@ -113,18 +132,46 @@ def _deposit(grid: np.ndarray, centre: np.ndarray, width: np.ndarray, depth: np.
     return np.maximum(np.diff(volume), 0.0) / step  # (rounding leaves -1e-26 where none)
 
 
-def wear_per_cycle(scn: Scenario, ms: MeshStiffness, grid: np.ndarray, wear1: np.ndarray,
-                   wear2: np.ndarray, force: float) -> tuple[np.ndarray, np.ndarray]:
-    """Pinion and gear wear per pinion cycle [m] on ``grid`` for the flanks worn by ``wear1,
-    wear2`` under the normal mesh force ``force`` [N] (module doc)."""
+def tooth_wear_per_cycle(scn: Scenario, ms: MeshStiffness, grid: np.ndarray, wear1: np.ndarray,
+                         wear2: np.ndarray, force: float,
+                         positions: tuple[np.ndarray, np.ndarray] | None = None
+                         ) -> tuple[np.ndarray, np.ndarray]:
+    """Wear per pinion cycle [m] of each carried tooth, ``(n1, grid)`` and ``(n2, grid)``, for
+    teeth worn by ``wear1`` ``(n1, grid)`` and ``wear2`` ``(n2, grid)`` (each wheel one row per
+    tooth, in mesh order, or one row for teeth alike) under the normal mesh force ``force``
+    [N] (module doc), along the meshing sequence
+    (:func:`physics.gear.mesh_sequence.mesh_sequence`).
+
+    Each pair of the sequence passes the mesh with its own rigid gaps and compliance; at each
+    position the load is shared among the pairs then in mesh (the one before its entry, the one
+    last entered, the two ahead), each with its own teeth; each contact wears the two teeth it
+    joins. ``positions``: each carried tooth's position deviation along the line of action [m]
+    (ahead of its place towards the mating flank: positive), ``(n1,)`` and ``(n2,)``; a tooth
+    ahead meets its mate by that much earlier, so every gap of its pairs is that much smaller
+    (:func:`physics.gear.accuracy.tooth_positions_um` draws them)."""
     geom, g, op = ms.geometry, scn.gear, scn.operating
-    # every pair's pass through the mesh, in order of roll
-    slots = pair_slots(geom, geom.mesh_period(POSITIONS)[0]).T.ravel()
-    gap, u1, u2 = PairGaps(geom, ms.forms, grid, wear1, wear2).contacts(slots)
-    k = ms.pair_function(grid, wear1, wear2)(clamped(geom, slots))
-    cols = (4, POSITIONS)
-    _, load = share_load(gap.reshape(cols).T, k.reshape(cols).T, force)
-    load = load.T.ravel()
+    seq = mesh_sequence(g.z1, g.z2, len(wear1), len(wear2))
+    n, slot = len(seq), np.arange(4)
+    # a pair's pass through the mesh, in order of roll: the four slots of pair_slots in turn
+    passage = pair_slots(geom, geom.mesh_period(POSITIONS)[0]).T.ravel()
+    gap, u1, u2, k = (np.empty((n, passage.size)) for _ in range(4))
+    for m, (i, j) in enumerate(zip(seq.pinion, seq.gear, strict=True)):
+        gap[m], u1[m], u2[m] = PairGaps(geom, ms.forms, grid, wear1[i], wear2[j]).contacts(passage)
+        k[m] = ms.pair_function(grid, wear1[i], wear2[j])(clamped(geom, passage))
+        if positions is not None:
+            ahead = positions[0][i] + positions[1][j]
+            gap[m] = np.where(gap[m] < NO_CONTACT, gap[m] - ahead, gap[m])
+    # in mesh k, slot q holds the pair of mesh k + 1 - q (pair_slots: the one about to enter
+    # first); its load there is the pair's at slot q of its passage
+    into_mesh = (np.arange(n)[:, None] + 1 - slot) % n  # (mesh, slot) -> pair
+    cells = (n, 4, POSITIONS)
+
+    def by_mesh(x: np.ndarray) -> np.ndarray:  # (pair, passage) -> (mesh x position, slot)
+        return x.reshape(cells)[into_mesh, slot].transpose(0, 2, 1).reshape(-1, 4)
+
+    _, shared = share_load(by_mesh(gap), by_mesh(k), force)
+    from_mesh = (np.arange(n)[:, None] - 1 + slot) % n  # (pair, slot) -> mesh
+    load = shared.reshape(n, POSITIONS, 4).transpose(0, 2, 1)[from_mesh, slot].reshape(n, -1)
     on = load > 0
     tan_w = math.tan(geom.alpha_w)
     R1 = np.maximum(geom.rb1 * tan_w + u1, 1e-6)
@@ -148,30 +195,54 @@ def wear_per_cycle(scn: Scenario, ms: MeshStiffness, grid: np.ndarray, wear1: np
     band = 2 * contact.hertz_half_width(np.where(on, w, 0.0), R, e_star)
     low1, low2 = (float(flank_coordinate(form, geom, wheel)[form.involute_from])
                   for form, wheel in zip(ms.forms, (1, 2), strict=True))
-    out = []
-    for u, R, rb, fillet in ((u1, R1, geom.rb1, u1 < low1), (u2, R2, geom.rb2, u2 > low2)):
-        # arc per unit of the flank coordinate: R / r_b on the involute (dl = R du / r_b), 1 on
-        # the fillet (its coordinate is its arc)
-        scale = np.where(fillet, 1.0, R / rb)
-        moved = np.abs(np.gradient(u)) * scale  # arc the contact crosses per position
-        arc = np.maximum(moved, band)
-        width = arc / scale
-        out.append(_deposit(grid, u[on], width[on], volume[on] / arc[on]))
     # ripples shorter than the band are levelled (the elastic band bears on them as one, which
     # the rigid gap does not see): a Gaussian of the static band's half-width at the pitch
     R1_p, R2_p = geom.curvature_radii(np.array([0.0]))
     b_p = contact.hertz_half_width(force / g.face_width, contact.equivalent_radius(R1_p, R2_p),
                                    e_star)[0]
     sigma = b_p * geom.rb1 / R1_p[0] / (grid[1] - grid[0])
-    return (ndimage.gaussian_filter1d(out[0], sigma, mode="nearest"),
-            ndimage.gaussian_filter1d(out[1], sigma, mode="nearest") * g.z1 / g.z2)
+    out = []
+    for u, R, rb, fillet, teeth, carried, (num, den) in (
+            (u1, R1, geom.rb1, u1 < low1, seq.pinion, len(wear1), seq.per_pinion_cycle()[0]),
+            (u2, R2, geom.rb2, u2 > low2, seq.gear, len(wear2), seq.per_pinion_cycle()[1])):
+        # arc per unit of the flank coordinate: R / r_b on the involute (dl = R du / r_b), 1 on
+        # the fillet (its coordinate is its arc)
+        scale = np.where(fillet, 1.0, R / rb)
+        moved = np.abs(np.gradient(u, axis=1)) * scale  # arc the contact crosses per position
+        arc = np.maximum(moved, band)
+        width = arc / scale
+        rate = np.empty((carried, grid.size))
+        for tooth in range(carried):
+            mine = on & (teeth == tooth)[:, None]  # the contacts of this tooth's pairs
+            rate[tooth] = _deposit(grid, u[mine], width[mine], volume[mine] / arc[mine])
+        out.append(ndimage.gaussian_filter1d(rate, sigma, axis=1, mode="nearest") * num / den)
+    return out[0], out[1]
+
+
+def wear_per_cycle(scn: Scenario, ms: MeshStiffness, grid: np.ndarray, wear1: np.ndarray,
+                   wear2: np.ndarray, force: float) -> tuple[np.ndarray, np.ndarray]:
+    """Pinion and gear wear per pinion cycle [m] on ``grid`` for the flanks worn by ``wear1,
+    wear2`` under the normal mesh force ``force`` [N], every tooth alike
+    (:func:`tooth_wear_per_cycle` with one tooth per wheel)."""
+    r1, r2 = tooth_wear_per_cycle(scn, ms, grid, np.asarray(wear1)[None], np.asarray(wear2)[None],
+                                  force)
+    return r1[0], r2[0]
 
 
 def simulate_contact_wear(scn: Scenario, depth: float, cycles: float = math.inf,
-                          stiffness: MeshStiffness | None = None) -> ContactWear:
-    """Wear both flanks from new until the deepest point of either active profile reaches
-    ``depth`` [m] (or ``cycles`` pinion cycles), in blocks that wear no point by more than
-    ``solver.update_um`` or by ``RELATIVE_STEP`` of the deepest wear so far (module doc)."""
+                          stiffness: MeshStiffness | None = None,
+                          start: tuple[np.ndarray, np.ndarray] | None = None,
+                          positions: tuple[np.ndarray, np.ndarray] | None = None
+                          ) -> ContactWear:
+    """Wear both flanks until the deepest point of any tooth's active profile reaches ``depth``
+    [m] (or ``cycles`` pinion cycles), in blocks that wear no point by more than
+    ``solver.update_um`` or by ``RELATIVE_STEP`` of the deepest wear so far (module doc).
+
+    Every tooth alike from new by default. ``start``: the wear to start from, pinion and gear,
+    on :func:`whole_flank_grid` [m], each ``(grid,)`` for teeth alike or ``(z, grid)`` with a
+    row per tooth in mesh order (a tooth worn ahead of the rest, damage induced on one);
+    ``positions``: each tooth's position deviation [m] (:func:`tooth_wear_per_cycle`), ``(z1,)``
+    and ``(z2,)``, which makes every tooth its own. A wheel given neither stays one row."""
     if not (math.isfinite(depth) and depth > 0):
         raise ValueError(f"depth = {depth!r} must be a finite depth > 0 (m)")
     if not cycles > 0:
@@ -179,14 +250,14 @@ def simulate_contact_wear(scn: Scenario, depth: float, cycles: float = math.inf,
     scn = check_scope(scn)
     ms = stiffness or mesh_stiffness(scn.gear, scn.material)
     grid = whole_flank_grid(ms)
+    w1, w2, positions = _tooth_state(scn, grid, start, positions)
     force = quasi_static_force(scn, ms.geometry)
     step = scn.solver.update_um * 1e-6
     active = (grid >= ms.geometry.s_start) & (grid <= ms.geometry.s_end)
-    w1, w2 = np.zeros_like(grid), np.zeros_like(grid)
     done = 0.0
     ends, hist1, hist2 = [0.0], [w1], [w2]
-    while done < cycles and max(w1[active].max(), w2[active].max()) < depth:
-        r1, r2 = wear_per_cycle(scn, ms, grid, w1, w2, force)
+    while done < cycles and max(w1[:, active].max(), w2[:, active].max()) < depth:
+        r1, r2 = tooth_wear_per_cycle(scn, ms, grid, w1, w2, force, positions)
         peak = max(r1.max(), r2.max())
         if peak <= 0:
             break
@@ -198,3 +269,56 @@ def simulate_contact_wear(scn: Scenario, depth: float, cycles: float = math.inf,
         hist2.append(w2)
     return ContactWear(grid, w1, w2, done, active,
                        (np.array(ends), np.array(hist1), np.array(hist2)))
+
+
+def _tooth_state(scn: Scenario, grid: np.ndarray, start, positions
+                 ) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray] | None]:
+    """The starting wear ``(n1, grid)``, ``(n2, grid)`` and the positions of
+    :func:`simulate_contact_wear`, checked: ``ValueError`` naming the argument, its shape or
+    value, the rule and the fix, before any work."""
+    z = (scn.gear.z1, scn.gear.z2)
+    names = ("pinion", "gear")
+    rows = [1, 1]
+    if positions is not None:
+        if len(positions) != 2:
+            raise ValueError(f"positions has {len(positions)} parts; give (pinion, gear), "
+                             f"one deviation [m] per tooth of each ({z[0]}, {z[1]}) or None "
+                             "for a wheel whose teeth stand in their places")
+        checked = []
+        for w, p in enumerate(positions):
+            if p is not None:
+                p = np.asarray(p, dtype=float)
+                if p.shape != (z[w],) or not np.all(np.isfinite(p)):
+                    raise ValueError(f"positions of the {names[w]} of shape {p.shape}: give "
+                                     f"{z[w]} finite deviations [m], one per tooth in mesh "
+                                     "order, or None")
+                rows[w] = z[w]
+            checked.append(p)
+        positions = tuple(np.zeros(rows[w]) if p is None else p for w, p in enumerate(checked))
+    if start is not None and len(start) != 2:
+        raise ValueError(f"start has {len(start)} parts; give (pinion, gear) wear [m] on "
+                         "whole_flank_grid")
+    wear = []
+    for w in range(2):
+        try:
+            h = np.zeros(grid.size) if start is None else np.asarray(start[w], dtype=float)
+        except (TypeError, ValueError) as e:
+            raise ValueError(f"start wear of the {names[w]} is no array of depths "
+                             f"({type(start[w]).__name__}); give depths >= 0 [m] on "
+                             "whole_flank_grid") from e
+        if h.shape == (z[w], grid.size):
+            rows[w] = z[w]
+        elif h.shape == grid.shape:
+            h = np.broadcast_to(h, (rows[w], grid.size))
+        if h.shape != (rows[w], grid.size):
+            raise ValueError(f"start wear of the {names[w]} of shape {h.shape}: give "
+                             f"{grid.size} depths on whole_flank_grid for teeth alike, or "
+                             f"({z[w]}, {grid.size}), a row per tooth in mesh order")
+        if not np.all(np.isfinite(h)) or np.any(h < 0):
+            raise ValueError(f"start wear of the {names[w]} holds a depth that is negative or "
+                             "not finite; give depths >= 0 [m]")
+        wear.append(np.array(h, dtype=float))
+    if positions is not None:  # a wheel given its own teeth by its start wear alone
+        positions = tuple(p if p.size == r else np.zeros(r)
+                          for p, r in zip(positions, rows, strict=True))
+    return wear[0], wear[1], positions
