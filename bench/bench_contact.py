@@ -8,6 +8,9 @@ Prints wall times (best of several runs) for
 - one contact-driven wear rate of the public rig's pair (module 3, 18/35, 100 N m), and a
   whole life from new to 1 mm of wear (target: at most 5 minutes on two cores), with its
   blocks;
+- the same rate with each pinion tooth its own flank (18 pairs a pinion revolution) and with
+  every tooth of both wheels its own (the hunting period, 630 pairs: scaled from the 35 of
+  the gear's teeth each its own), each against the one-flank rate of the same run;
 - the dynamics of that pair worn 0.4 mm with the exact contact (off-path pairs in the kernel)
   beside the path contact, 36 states of 0.5 s at once, and their ratio.
 """
@@ -25,7 +28,12 @@ from physics.dynamics.model import EXACT_PHASES, build_model, simulate
 from physics.gear.stiffness import mesh_stiffness
 from physics.gear.tooth_contact import NO_CONTACT, PairGaps, pair_slots
 from physics.reproduce.rig import rig_scenario
-from physics.tribology.contact_wear import simulate_contact_wear, wear_per_cycle, whole_flank_grid
+from physics.tribology.contact_wear import (
+    simulate_contact_wear,
+    tooth_wear_per_cycle,
+    wear_per_cycle,
+    whole_flank_grid,
+)
 from physics.tribology.wear import quasi_static_force
 
 
@@ -72,6 +80,17 @@ def main() -> None:
     force = quasi_static_force(scn, geom)
     zero = np.zeros_like(grid)
     t_rate = best_of(lambda: wear_per_cycle(scn, ms, grid, zero, zero, force), 3)
+    z1, z2 = scn.gear.z1, scn.gear.z2
+    pinion = np.tile(zero, (z1, 1))
+    t_pinion = best_of(lambda: tooth_wear_per_cycle(scn, ms, grid, pinion, zero[None], force), 1)
+    # a rate's cost grows with its pairs: the hunting period's 630 from the 35 pairs of the
+    # pinion's teeth alike and the gear's each its own
+    gear = np.tile(zero, (z2, 1))
+    t_gear = best_of(lambda: tooth_wear_per_cycle(scn, ms, grid, zero[None], gear, force), 1)
+    t_hunting = t_gear * math.lcm(z1, z2) / z2
+    print(f"tooth by tooth: {t_pinion:.2f} s a rate with each pinion tooth its own "
+          f"({t_pinion / t_rate:.0f} times the one flank's); every tooth of both wheels "
+          f"({math.lcm(z1, z2)} pairs) about {t_hunting:.0f} s ({t_hunting / t_rate:.0f} times)")
     start = time.perf_counter()
     run = simulate_contact_wear(scn, 1e-3)
     t_life = time.perf_counter() - start

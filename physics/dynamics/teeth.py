@@ -31,7 +31,7 @@ import numpy as np
 
 from physics.dynamics.model import EXACT_PHASES, PairModel, build_model
 from physics.gear.accuracy import DIAMETER_BANDS, MODULE_BANDS, cumulative_pitch_tolerance_um
-from physics.gear.mesh_sequence import hunting_period, mesh_sequence
+from physics.gear.mesh_sequence import hunting_period, meshing_sequence
 from physics.gear.stiffness import MeshStiffness
 from physics.gear.tooth_contact import NO_CONTACT
 from physics.params import Scenario
@@ -129,7 +129,7 @@ def sequence_model(scn: Scenario, ms: MeshStiffness, grid: np.ndarray, wear1: np
     if wear1.ndim != 2 or wear2.ndim != 2:
         raise ValueError(f"wear1 of shape {wear1.shape} and wear2 of shape {wear2.shape}: give "
                          "a row per tooth (or one row for teeth alike) on the grid")
-    seq = mesh_sequence(scn.gear.z1, scn.gear.z2, len(wear1), len(wear2))
+    seq = meshing_sequence(scn.gear.z1, scn.gear.z2, len(wear1), len(wear2))
     pairs = list(zip(seq.pinion, seq.gear, strict=True))
     models = [build_model(scn, ms, grid, wear1[i], wear2[j], n_phase=n_phase) for i, j in pairs]
     if positions is not None:

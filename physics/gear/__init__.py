@@ -21,7 +21,7 @@ _SOURCES = {
     "physics.gear.kinematics": (
         "surface_velocities", "sliding_velocity", "entraining_velocity", "sliding_distances"),
     "physics.gear.load_sharing": ("PairStiffness", "pair_loads"),
-    "physics.gear.mesh_sequence": ("MeshSequence", "mesh_sequence", "hunting_period"),
+    "physics.gear.mesh_sequence": ("MeshSequence", "meshing_sequence", "hunting_period"),
     "physics.gear.stiffness": (
         "MeshStiffness", "SainsotRangeWarning", "ToothCompliances", "sainsot_coefficients",
         "iso6336_single_pair_stiffness", "mesh_stiffness"),

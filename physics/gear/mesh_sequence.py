@@ -11,7 +11,7 @@ common factor the teeth fall into ``gcd`` families that never touch one another,
 difference between teeth persists.
 
 A state may also hold *one* tooth for a wheel whose teeth are alike: its one flank stands for
-all of them. :func:`mesh_sequence` covers both: with ``n1`` and ``n2`` teeth carried (each 1 or
+all of them. :func:`meshing_sequence` covers both: with ``n1`` and ``n2`` teeth carried (each 1 or
 the wheel's count) the pattern repeats after ``lcm(n1, n2)`` meshes.
 """
 
@@ -59,15 +59,15 @@ class MeshSequence:
         return (self.n1, n), (self.z1 * self.n2, n * self.z2)
 
 
-def mesh_sequence(z1: int, z2: int, n1: int | None = None, n2: int | None = None
+def meshing_sequence(z1: int, z2: int, n1: int | None = None, n2: int | None = None
                   ) -> MeshSequence:
     """The meshing sequence of a ``z1``/``z2`` pair carrying ``n1`` pinion and ``n2`` gear
     teeth (each 1 or the wheel's count; by default every tooth: the hunting period).
 
-    >>> seq = mesh_sequence(18, 27)
+    >>> seq = meshing_sequence(18, 27)
     >>> len(seq), sorted(set(seq.gear[seq.pinion == 0].tolist()))
     (54, [0, 9, 18])
-    >>> len(mesh_sequence(18, 27, n2=1)), len(mesh_sequence(18, 27, 1, 1))
+    >>> len(meshing_sequence(18, 27, n2=1)), len(meshing_sequence(18, 27, 1, 1))
     (18, 1)
     """
     z1, z2 = _teeth("z1", z1), _teeth("z2", z2)

@@ -1,6 +1,7 @@
 """Reproduction of the thesis tables 2-14 (``python -m physics.reproduce``): tables
 (``physics.reproduce.thesis``) and figures (``physics.reproduce.plots``); the model beside a real
-rig's vibration over wear (``python -m physics.reproduce.rig``). Imports every physics
+rig's vibration over wear (``python -m physics.reproduce.rig``); wear tooth by tooth
+(``python -m physics.reproduce.teeth``). Imports every physics
 subpackage above it; nothing imports the app."""
 
 from __future__ import annotations

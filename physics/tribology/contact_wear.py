@@ -48,7 +48,7 @@ import numpy as np
 from scipy import ndimage
 
 from physics.gear import contact, kinematics
-from physics.gear.mesh_sequence import mesh_sequence
+from physics.gear.mesh_sequence import meshing_sequence
 from physics.gear.stiffness import MeshStiffness, mesh_stiffness
 from physics.gear.tooth_contact import (
     NO_CONTACT,
@@ -140,7 +140,7 @@ def tooth_wear_per_cycle(scn: Scenario, ms: MeshStiffness, grid: np.ndarray, wea
     teeth worn by ``wear1`` ``(n1, grid)`` and ``wear2`` ``(n2, grid)`` (each wheel one row per
     tooth, in mesh order, or one row for teeth alike) under the normal mesh force ``force``
     [N] (module doc), along the meshing sequence
-    (:func:`physics.gear.mesh_sequence.mesh_sequence`).
+    (:func:`physics.gear.mesh_sequence.meshing_sequence`).
 
     Each pair of the sequence passes the mesh with its own rigid gaps and compliance; at each
     position the load is shared among the pairs then in mesh (the one before its entry, the one
@@ -150,7 +150,7 @@ def tooth_wear_per_cycle(scn: Scenario, ms: MeshStiffness, grid: np.ndarray, wea
     ahead meets its mate by that much earlier, so every gap of its pairs is that much smaller
     (:func:`physics.gear.accuracy.tooth_positions_um` draws them)."""
     geom, g, op = ms.geometry, scn.gear, scn.operating
-    seq = mesh_sequence(g.z1, g.z2, len(wear1), len(wear2))
+    seq = meshing_sequence(g.z1, g.z2, len(wear1), len(wear2))
     n, slot = len(seq), np.arange(4)
     # a pair's pass through the mesh, in order of roll: the four slots of pair_slots in turn
     passage = pair_slots(geom, geom.mesh_period(POSITIONS)[0]).T.ravel()

@@ -1,5 +1,6 @@
 """Each pinion tooth its own flank (physics.dynamics.teeth): a uniform set of teeth is the
-one-period model, one worn tooth repeats once per revolution, and Table 15 by the model."""
+one-period model, one worn tooth repeats once per revolution, a state worn tooth by tooth is the
+model of its meshing sequence, and Table 15 by the model."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ import pytest
 
 from physics import reference
 from physics.dynamics.model import build_model, simulate
-from physics.dynamics.teeth import per_tooth_model, with_tooth_positions
+from physics.dynamics.teeth import per_tooth_model, sequence_model, with_tooth_positions
 from physics.gear.accuracy import tooth_positions_um
 from physics.gear.stiffness import mesh_stiffness
 from physics.params import Scenario
@@ -70,8 +71,46 @@ def test_one_worn_tooth_repeats_once_per_revolution(worn_state):
 def test_a_tooth_count_that_is_not_the_pinions_is_refused():
     scn = _scn("path")
     m = build_model(scn, mesh_stiffness(scn.gear, scn.material))
-    with pytest.raises(ValueError, match="17 tooth models for a pinion of 18 teeth"):
+    with pytest.raises(ValueError, match=r"17 tooth models for a 18/27 pair; give one per "
+                                         r"pinion tooth \(18\) or one per mesh of the hunting "
+                                         r"period \(54"):
         per_tooth_model([m] * 17)
+
+
+def test_a_state_worn_tooth_by_tooth_becomes_the_model_of_its_meshing_sequence(worn_state):
+    """sequence_model: teeth alike on both wheels are the one-period model tiled; every tooth
+    of both wheels carried alike spans the hunting period (54 meshes) and moves the same; one
+    pinion tooth's own wear is pair A's tables in the meshes it enters, and each tooth's
+    position closes its pairs' gaps as with_tooth_positions does."""
+    scn = _scn("path")
+    ms = mesh_stiffness(scn.gear, scn.material)
+    s, w1 = worn_state
+    w2 = np.zeros_like(w1)
+    z1, z2 = scn.gear.z1, scn.gear.z2
+    one = build_model(scn, ms, s, w1, w2)
+    tiled = per_tooth_model([one] * z1)
+    uniform = sequence_model(scn, ms, s, w1[None], w2[None], n_phase=len(one.k_a))
+    for name in ("k_a", "k_b", "g_a", "g_b"):
+        np.testing.assert_array_equal(getattr(uniform, name), getattr(tiled, name))
+    hunting = sequence_model(scn, ms, s, np.tile(w1, (z1, 1)), np.tile(w2, (z2, 1)),
+                             n_phase=len(one.k_a))
+    assert hunting.periods == 54
+    a, b = simulate([tiled], scn.dynamics), simulate([hunting], scn.dynamics)
+    np.testing.assert_allclose(b.force, a.force, rtol=1e-9, atol=1e-9 * one.static_force)
+    rows = np.zeros((z1, s.size))
+    rows[4] = w1
+    own = sequence_model(scn, ms, s, rows, w2[None], n_phase=len(one.k_a))
+    n = len(one.k_a)
+    np.testing.assert_array_equal(own.g_a[4 * n:5 * n], one.g_a)
+    assert np.all(own.g_a[:4 * n] == 0) and np.all(own.g_a[5 * n:] == 0)
+    pos = 1e-6 * np.arange(z1)
+    placed = sequence_model(scn, ms, s, rows, w2[None], (pos, np.zeros(1)), n_phase=n)
+    new = build_model(scn, ms, n_phase=n)
+    expected = per_tooth_model(with_tooth_positions([one if i == 4 else new for i in range(z1)],
+                                                    pos))
+    np.testing.assert_array_equal(placed.g_a, expected.g_a)
+    with pytest.raises(ValueError, match="give a row per tooth"):
+        sequence_model(scn, ms, s, w1, w2)
 
 
 def test_table15_by_the_model(worn_state):

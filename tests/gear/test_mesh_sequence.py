@@ -10,14 +10,14 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from physics.gear.mesh_sequence import hunting_period, mesh_sequence
+from physics.gear.mesh_sequence import hunting_period, meshing_sequence
 
 teeth = st.integers(5, 60)
 
 
 @given(z1=teeth, z2=teeth)
 def test_every_pair_that_can_meet_meets_once_a_hunting_period(z1, z2):
-    seq = mesh_sequence(z1, z2)
+    seq = meshing_sequence(z1, z2)
     assert len(seq) == hunting_period(z1, z2) == z1 * z2 // math.gcd(z1, z2)
     pairs = set(zip(seq.pinion.tolist(), seq.gear.tolist(), strict=True))
     assert len(pairs) == len(seq)  # each pair once
@@ -36,7 +36,7 @@ def test_wear_over_a_repeat_becomes_each_real_teeths_wear_per_pinion_cycle(z1, z
     by ``d`` and each real gear tooth by ``d z1 / z2`` per pinion cycle (a gear tooth meshes
     ``z1 / z2`` times per pinion revolution), whatever teeth the state carries."""
     n1, n2 = (1 if n == "one" else z for n, z in ((n1, z1), (n2, z2)))
-    seq = mesh_sequence(z1, z2, n1, n2)
+    seq = meshing_sequence(z1, z2, n1, n2)
     (a, b), (c, d) = seq.per_pinion_cycle()
     summed1 = np.bincount(seq.pinion, minlength=n1)  # d = 1 on every mesh
     summed2 = np.bincount(seq.gear, minlength=n2)
@@ -45,9 +45,9 @@ def test_wear_over_a_repeat_becomes_each_real_teeths_wear_per_pinion_cycle(z1, z
 
 
 def test_teeth_alike_carry_one_flank():
-    assert len(mesh_sequence(18, 27, 18, 1)) == 18
-    assert len(mesh_sequence(18, 27, 1, 27)) == 27
-    seq = mesh_sequence(18, 27, 1, 1)
+    assert len(meshing_sequence(18, 27, 18, 1)) == 18
+    assert len(meshing_sequence(18, 27, 1, 27)) == 27
+    seq = meshing_sequence(18, 27, 1, 1)
     assert len(seq) == 1 and seq.per_pinion_cycle() == ((1, 1), (18, 27))
 
 
@@ -60,4 +60,4 @@ def test_teeth_alike_carry_one_flank():
 ])
 def test_bad_sequences_are_refused(args, message):
     with pytest.raises(ValueError, match=message):
-        mesh_sequence(*args)
+        meshing_sequence(*args)
