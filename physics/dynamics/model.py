@@ -108,7 +108,7 @@ class PairModel:
     g_b: np.ndarray  # wear gap of pair B [m]
     inertias: tuple[float, float]  # J1, J2 [kg m^2]
     # --- hooks of the effect library (physics.effects); the defaults are the declared model ---
-    periods: int = 1  # mesh periods the tables span (z1: one pinion revolution, tooth by tooth)
+    periods: int = 1  # mesh periods the tables span (z1: a pinion revolution; lcm(z1, z2))
     lam_a: np.ndarray | None = None  # factor on pair A's force in the equation of motion
     lam_b: np.ndarray | None = None  # (sliding friction); None: 1
     gear_error: float = 0.0  # amplitude of the gear's run-out error on the line of action [m]

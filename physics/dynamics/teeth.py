@@ -1,4 +1,4 @@
-"""Each pinion tooth its own flank, over one pinion revolution (the mesh sequence).
+"""Each tooth its own flank, over a pinion revolution or the hunting period (the mesh sequence).
 
 A model built for one wear state (:func:`physics.dynamics.model.build_model`) holds one mesh
 period: every tooth pair alike. Here the tables span the ``z1`` mesh periods of a pinion
@@ -16,9 +16,9 @@ carries more of the load, the pattern that repeats once per pinion revolution.
 
 A state worn tooth by tooth (:func:`physics.tribology.contact_wear.simulate_contact_wear`)
 becomes such a model by :func:`sequence_model`: one table set per mesh of its meshing sequence
-(:mod:`physics.gear.mesh_sequence`), the z1 meshes of a pinion revolution where the gear's teeth
-are carried alike, the hunting period ``lcm(z1, z2)`` where every tooth of both wheels is its
-own; in mesh ``m`` pair A is the pair of mesh ``m``.
+(:mod:`physics.gear.mesh_sequence`), over the z1 meshes of a pinion revolution where the gear's
+teeth are carried alike, over the hunting period ``lcm(z1, z2)`` where the gear's teeth are
+each their own; in period ``p`` the models are then those of meshes ``p``, ``p - 1``, ...
 """
 
 from __future__ import annotations
@@ -30,19 +30,11 @@ from typing import Any
 import numpy as np
 
 from physics.dynamics.model import EXACT_PHASES, PairModel, build_model
-from physics.gear.accuracy import DIAMETER_BANDS, MODULE_BANDS, cumulative_pitch_tolerance_um
+from physics.gear.accuracy import POSITION_BOUND_FP, position_bound_m
 from physics.gear.mesh_sequence import hunting_period, meshing_sequence
 from physics.gear.stiffness import MeshStiffness
 from physics.gear.tooth_contact import NO_CONTACT
 from physics.params import Scenario
-
-#: how far a tooth may stand off its place, in cumulative pitch tolerances ``F_p`` of the
-#: coarsest ISO 1328-1:1995 grade (12): a tooth's position deviation from its theoretical place
-#: is a cumulative pitch deviation, which that grade bounds by ``F_p`` (spread of the teeth),
-#: and a common offset of all teeth (a tooth thickness) is of the same size at the most. For the
-#: thesis pinion (m 2 mm, d 36 mm) the bound is 2 x 162 um = 0.32 mm; a value in um or mm given
-#: as metres lies far beyond it.
-POSITION_BOUND_FP = 2.0
 
 
 def _shown(value: Any) -> str:
@@ -54,8 +46,8 @@ def _shown(value: Any) -> str:
 def _tooth_models(teeth: Any, name: str = "teeth") -> list[PairModel]:
     """``teeth`` as a list when it is a non-empty sequence of :class:`PairModel`; ``TypeError``
     naming the argument, the offending value and what is allowed otherwise."""
-    fix = ("give a list of one-period PairModel, one per pinion tooth "
-           "(physics.dynamics.model.build_model)")
+    fix = ("give a list of one-period PairModel, one per pinion tooth or per mesh of the "
+           "hunting period (physics.dynamics.model.build_model)")
     if isinstance(teeth, str | bytes | PairModel) or not isinstance(teeth, Sequence):
         raise TypeError(f"{name} = {_shown(teeth)} ({type(teeth).__name__}) must be a sequence "
                         f"of PairModel; {fix}")
@@ -80,9 +72,10 @@ def _finite_tables(teeth: list[PairModel]) -> None:
 
 
 def per_tooth_model(teeth: Sequence[PairModel]) -> PairModel:
-    """The revolution model whose pinion tooth ``i`` is ``teeth[i]``'s (one-period models of the
-    same pair and operating point, one per pinion tooth, in mesh order; module doc). Damping,
-    inertias, errors and the other scalars are the first tooth's.
+    """The model whose mesh ``i`` is ``teeth[i]``'s: one-period models of the same pair and
+    operating point in mesh order, one per pinion tooth (a pinion revolution) or one per mesh
+    of the hunting period ``lcm(z1, z2)`` (module doc). Damping, inertias, errors and the other
+    scalars are the first's.
 
     ``teeth`` that is no sequence of :class:`PairModel` is refused (``TypeError``), as are
     tables with NaN or infinite values (``ValueError``)."""
@@ -130,6 +123,16 @@ def sequence_model(scn: Scenario, ms: MeshStiffness, grid: np.ndarray, wear1: np
         raise ValueError(f"wear1 of shape {wear1.shape} and wear2 of shape {wear2.shape}: give "
                          "a row per tooth (or one row for teeth alike) on the grid")
     seq = meshing_sequence(scn.gear.z1, scn.gear.z2, len(wear1), len(wear2))
+    if positions is not None:
+        if len(positions) != 2:
+            raise ValueError(f"positions has {len(positions)} parts; give (pinion, gear), one "
+                             "deviation [m] per row of wear1 and wear2, or None for a wheel")
+        positions = tuple(np.zeros(len(w)) if p is None else np.asarray(p, dtype=float)
+                          for p, w in zip(positions, (wear1, wear2), strict=True))
+        for name, p, w in zip(("pinion", "gear"), positions, (wear1, wear2), strict=True):
+            if p.shape != (len(w),):
+                raise ValueError(f"positions of the {name} of shape {p.shape}: give one per "
+                                 f"row of its wear ({len(w)})")
     pairs = list(zip(seq.pinion, seq.gear, strict=True))
     models = [build_model(scn, ms, grid, wear1[i], wear2[j], n_phase=n_phase) for i, j in pairs]
     if positions is not None:
@@ -160,7 +163,7 @@ def with_tooth_positions(teeth: Sequence[PairModel], positions_m: Sequence[float
     positions = _positions_m(positions_m, teeth)
     if len(positions) != len(teeth):
         raise ValueError(f"{len(positions)} tooth positions for {len(teeth)} tooth models; "
-                         "give one per pinion tooth")
+                         "give one per tooth model")
 
     def moved(g: np.ndarray | None, d: float) -> np.ndarray | None:
         return None if g is None else np.where(g < NO_CONTACT, g - d, g)
@@ -175,7 +178,7 @@ def _positions_m(positions_m: Any, teeth: list[PairModel]) -> np.ndarray:
     numbers [m] within the bound of :data:`POSITION_BOUND_FP`; otherwise ``TypeError`` (no
     sequence of numbers) or ``ValueError``, naming the argument, the value, the rule and the
     fix."""
-    what = "must be a 1-D sequence of finite numbers [m], one per pinion tooth"
+    what = "must be a 1-D sequence of finite numbers [m], one per tooth model"
     fix = "give one position per tooth model in metres"
     if positions_m is None or isinstance(positions_m, str | bytes | dict | set):
         raise TypeError(f"positions_m = {_shown(positions_m)} "
@@ -199,11 +202,7 @@ def _positions_m(positions_m: Any, teeth: list[PairModel]) -> np.ndarray:
         raise ValueError(f"positions_m[{bad[0]}] = {float(x[bad[0]])!r}: positions_m {what}; "
                          f"{fix}")
     g = teeth[0].geometry.gear
-    # ISO 1328-1:1995 F_p of grade 12 (its coarsest) for the pinion, its module and reference
-    # diameter brought into the standard's size bands (the formula's own range)
-    m = min(max(g.module_mm, MODULE_BANDS[0]), MODULE_BANDS[-1])
-    d = min(max(g.module_mm * g.z1, DIAMETER_BANDS[0]), DIAMETER_BANDS[-1])
-    limit = POSITION_BOUND_FP * cumulative_pitch_tolerance_um(12, m, d, rounded=False) * 1e-6
+    limit = position_bound_m(g.module_mm, g.module_mm * g.z1)
     worst = int(np.argmax(np.abs(x)))
     if abs(x[worst]) > limit:
         raise ValueError(

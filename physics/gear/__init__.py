@@ -13,7 +13,8 @@ _SOURCES = {
     "physics.gear.accuracy": (
         "runout_tolerance_um", "profile_form_tolerance_um", "cumulative_pitch_tolerance_um",
         "minimum_backlash_um", "maximum_backlash_um", "tooth_thickness_tolerance_um",
-        "it_tolerance_um", "single_pitch_tolerance_um", "tooth_positions_um"),
+        "it_tolerance_um", "single_pitch_tolerance_um", "tooth_positions_um", "position_bound_m",
+        "POSITION_BOUND_FP"),
     "physics.gear.contact": (
         "reduced_modulus", "equivalent_radius", "hertz_half_width", "hertz_max_pressure",
         "hertz_mean_pressure"),

@@ -220,6 +220,24 @@ def tooth_positions_um(z: int, grade: int, module_mm: float, d_mm: float,
     return x - x.mean()
 
 
+#: how far a tooth may stand off its place, in cumulative pitch tolerances ``F_p`` of the
+#: coarsest ISO 1328-1:1995 grade (12): a tooth's position deviation from its theoretical place
+#: is a cumulative pitch deviation, which that grade bounds by ``F_p`` (spread of the teeth),
+#: and a common offset of all teeth (a tooth thickness) is of the same size at the most. For the
+#: thesis pinion (m 2 mm, d 36 mm) the bound is 2 x 162 um = 0.32 mm; a value in um or mm given
+#: as metres lies far beyond it.
+POSITION_BOUND_FP = 2.0
+
+
+def position_bound_m(module_mm: float, d_mm: float) -> float:
+    """The largest position deviation a tooth of a wheel of ``module_mm`` and reference diameter
+    ``d_mm`` may have, :data:`POSITION_BOUND_FP` times ISO 1328-1's ``F_p`` of grade 12, the
+    module and diameter brought into the standard's size bands (the formula's own range) [m]."""
+    m = min(max(module_mm, MODULE_BANDS[0]), MODULE_BANDS[-1])
+    d = min(max(d_mm, DIAMETER_BANDS[0]), DIAMETER_BANDS[-1])
+    return POSITION_BOUND_FP * cumulative_pitch_tolerance_um(12, m, d, rounded=False) * 1e-6
+
+
 def it_tolerance_um(it_grade: int, size_mm: float) -> float:
     """The standard tolerance IT6-IT10 of a nominal size up to 500 mm [um] (ISO 286-1)."""
     it_grade = _whole("it_grade", it_grade, min(IT_FACTOR), max(IT_FACTOR),

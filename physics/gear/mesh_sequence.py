@@ -74,9 +74,10 @@ def meshing_sequence(z1: int, z2: int, n1: int | None = None, n2: int | None = N
     n1 = z1 if n1 is None else n1
     n2 = z2 if n2 is None else n2
     for name, n, z in (("n1", n1, z1), ("n2", n2, z2)):
-        if n not in (1, z):
+        if isinstance(n, bool) or not isinstance(n, int | np.integer) or n not in (1, z):
             raise ValueError(f"{name} = {n!r}: a state carries one flank per tooth ({z}) or one "
                              f"for teeth alike (1); give {z} or 1")
+    n1, n2 = int(n1), int(n2)
     m = np.arange(math.lcm(n1, n2))
     return MeshSequence(z1, z2, n1, n2, m % n1, m % n2)
 

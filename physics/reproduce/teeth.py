@@ -19,7 +19,8 @@ model), read at the same depths. For each depth:
   (:func:`physics.signals.measurement.housing_acceleration`; RMS, peak-to-peak, kurtosis) and of
   its synchronous average (FM4, the sideband level: :mod:`physics.signals.indicators`) over the
   new pair's, the teeth at the same places (:func:`physics.dynamics.teeth.sequence_model`, exact
-  flank contact, whole revolutions), beside Table 15's measured rise where it has one.
+  flank contact, whole hunting periods: 9 revolutions), beside Table 15's measured rise where
+  it has one.
 
 The gear's teeth are carried alike (their mean: every gear tooth meets 2 of the 18 pinion
 teeth here, gcd 9, so an approximation), except in the one run per grade list marked
@@ -48,6 +49,7 @@ from physics.dynamics.model import simulate
 from physics.dynamics.teeth import sequence_model
 from physics.files import check_fresh, check_writable, pyplot, resolved, save_figure, write_csv
 from physics.gear.accuracy import tooth_positions_um
+from physics.gear.mesh_sequence import hunting_period
 from physics.gear.stiffness import mesh_stiffness
 from physics.params import Scenario
 from physics.reference import THESIS_TABLES
@@ -70,10 +72,15 @@ OUTPUT_FILES = ("tooth_wear.csv", "tooth_wear.png")
 
 
 def scenario() -> Scenario:
-    """The thesis pair at case 3, exact flank contact, records of whole revolutions."""
+    """The thesis pair at case 3, exact flank contact, records of whole hunting periods (the
+    sequence of both wheels' teeth repeats in them), as many pinion revolutions as come
+    nearest Table 15's :data:`physics.reproduce.localised.REVOLUTIONS`."""
     scn = Scenario()
+    g = scn.gear
+    period = hunting_period(g.z1, g.z2) // g.z1  # pinion revolutions
+    revolutions = max(1, round(REVOLUTIONS / period)) * period
     dyn = dataclasses.replace(scn.dynamics, flank_contact="exact",
-                              duration_s=REVOLUTIONS * 60.0 / scn.operating.n1_rpm)
+                              duration_s=revolutions * 60.0 / scn.operating.n1_rpm)
     return dataclasses.replace(scn, dynamics=dyn)
 
 

@@ -30,8 +30,9 @@ pitch deviation, :func:`physics.gear.accuracy.tooth_positions_um`), its gaps clo
 the load at each position is shared among the pairs then in mesh, and each contact wears the two
 teeth it joins. A tooth ahead carries more, wears faster, and so wears its lead away: Archard
 wear levels the teeth (``tests/tribology/test_tooth_wear.py``). A gear whose teeth are carried
-alike while the pinion's differ is their mean: exact where ``gcd(z1, z2) = 1`` (every gear tooth
-meets every pinion tooth in turn), an approximation otherwise.
+alike while the pinion's differ is their mean over the hunting period: exact where ``gcd(z1,
+z2) = 1`` and the gear's teeth start alike and stand in their places (every gear tooth meets
+every pinion tooth in turn), an approximation otherwise.
 
 What it leaves out, said where it matters: the pressure across the band of a worn contact (a
 Hertz band of the involutes' radii; the wear per pass does not depend on its shape, its peak
@@ -48,6 +49,7 @@ import numpy as np
 from scipy import ndimage
 
 from physics.gear import contact, kinematics
+from physics.gear.accuracy import POSITION_BOUND_FP, position_bound_m
 from physics.gear.mesh_sequence import meshing_sequence
 from physics.gear.stiffness import MeshStiffness, mesh_stiffness
 from physics.gear.tooth_contact import (
@@ -276,28 +278,39 @@ def _tooth_state(scn: Scenario, grid: np.ndarray, start, positions
     """The starting wear ``(n1, grid)``, ``(n2, grid)`` and the positions of
     :func:`simulate_contact_wear`, checked: ``ValueError`` naming the argument, its shape or
     value, the rule and the fix, before any work."""
-    z = (scn.gear.z1, scn.gear.z2)
+    g = scn.gear
+    z = (g.z1, g.z2)
     names = ("pinion", "gear")
     rows = [1, 1]
+    for what, given in (("positions", positions), ("start", start)):
+        if given is not None and (not isinstance(given, tuple | list) or len(given) != 2):
+            got = (f"{len(given)} parts" if isinstance(given, tuple | list)
+                   else f"a {type(given).__name__}")
+            raise ValueError(f"{what} has {got}; give a pair (pinion, gear), each None or an "
+                             "array")
     if positions is not None:
-        if len(positions) != 2:
-            raise ValueError(f"positions has {len(positions)} parts; give (pinion, gear), "
-                             f"one deviation [m] per tooth of each ({z[0]}, {z[1]}) or None "
-                             "for a wheel whose teeth stand in their places")
         checked = []
         for w, p in enumerate(positions):
             if p is not None:
-                p = np.asarray(p, dtype=float)
+                try:
+                    p = np.asarray(p, dtype=float)
+                except (TypeError, ValueError) as e:
+                    raise ValueError(f"positions of the {names[w]} are no numbers; give "
+                                     f"{z[w]} deviations [m], one per tooth in mesh order, or "
+                                     "None") from e
                 if p.shape != (z[w],) or not np.all(np.isfinite(p)):
                     raise ValueError(f"positions of the {names[w]} of shape {p.shape}: give "
                                      f"{z[w]} finite deviations [m], one per tooth in mesh "
                                      "order, or None")
+                limit = position_bound_m(g.module_mm, g.module_mm * z[w])
+                if np.max(np.abs(p)) > limit:
+                    raise ValueError(f"positions of the {names[w]} reach "
+                                     f"{np.max(np.abs(p)):g} m, beyond the {limit:.3g} m of "
+                                     f"{POSITION_BOUND_FP:g} F_p of ISO 1328-1's coarsest "
+                                     "grade; give them in metres (1e-6 x tooth_positions_um)")
                 rows[w] = z[w]
             checked.append(p)
         positions = tuple(np.zeros(rows[w]) if p is None else p for w, p in enumerate(checked))
-    if start is not None and len(start) != 2:
-        raise ValueError(f"start has {len(start)} parts; give (pinion, gear) wear [m] on "
-                         "whole_flank_grid")
     wear = []
     for w in range(2):
         try:

@@ -109,8 +109,13 @@ def test_a_state_worn_tooth_by_tooth_becomes_the_model_of_its_meshing_sequence(w
     expected = per_tooth_model(with_tooth_positions([one if i == 4 else new for i in range(z1)],
                                                     pos))
     np.testing.assert_array_equal(placed.g_a, expected.g_a)
+    np.testing.assert_array_equal(
+        sequence_model(scn, ms, s, rows, w2[None], (pos, None), n_phase=n).g_a, placed.g_a)
     with pytest.raises(ValueError, match="give a row per tooth"):
         sequence_model(scn, ms, s, w1, w2)
+    with pytest.raises(ValueError, match=r"positions of the gear of shape \(27,\): give one per "
+                                         r"row of its wear \(1\)"):
+        sequence_model(scn, ms, s, rows, w2[None], (pos, np.zeros(z2)), n_phase=n)
 
 
 def test_table15_by_the_model(worn_state):

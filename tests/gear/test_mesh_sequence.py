@@ -57,6 +57,7 @@ def test_teeth_alike_carry_one_flank():
     ((0, 27), "z1 = 0 must be a whole number"),
     ((18, 27.5), "z2 = 27.5 must be a whole number"),
     ((True, 27), "z1 = True"),
+    ((18, 27, 18.0), "n1 = 18.0"),
 ])
 def test_bad_sequences_are_refused(args, message):
     with pytest.raises(ValueError, match=message):

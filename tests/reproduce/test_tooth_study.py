@@ -78,3 +78,8 @@ def test_the_docs_quote_the_stored_run():
     pinion = rms.loc["pinion"]
     assert (f"{pinion.cycles_ratio.min():.2f}-{pinion.cycles_ratio.max():.2f} of the cycles"
             in quoted)
+    lag = stored.wear_um.max() - pinion.least_tooth_um
+    assert f"lags by {lag.min():.1f}-{lag.max():.1f} um" in quoted
+    assert (lag < pinion.position_range_um).all()  # "within the pinion positions' range"
+    both = rms.loc[("both", 7)]
+    assert stored.wear_um.max() - both.least_tooth_um > both.position_range_um  # "beyond it"

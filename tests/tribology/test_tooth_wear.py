@@ -69,6 +69,25 @@ def test_the_sequence_is_cyclic_and_a_common_offset_moves_no_load(pair):
                                atol=1e-9 * one1.max())
 
 
+def test_a_tooth_worn_at_its_root_hands_its_load_to_the_tooth_ahead_of_it(pair):
+    """The order of the sequence: pinion tooth 1 worn at its root (the first double-contact
+    zone, where it has just entered) sheds load to the pair then ahead of it in roll, tooth 0,
+    at that tooth's tip (the second double-contact zone); tooth 2, which enters after tooth 1,
+    meets it there tip to root unworn and wears as the rest."""
+    scn, ms, grid, _, _, force = pair
+    g = ms.geometry
+    z1 = scn.gear.z1
+    wear = np.zeros((z1, grid.size))
+    root = (grid >= g.s_start) & (grid < g.single_zone[0])
+    wear[1, root] = 3e-6
+    r1, _ = cw.tooth_wear_per_cycle(scn, ms, grid, wear, np.zeros((1, grid.size)), force)
+    tip = (grid > g.single_zone[1]) & (grid <= g.s_end)
+    at_tip = r1[:, tip].sum(axis=1)
+    assert at_tip[0] > 1.05 * at_tip[3]
+    assert at_tip[2] == pytest.approx(at_tip[3], rel=1e-3)
+    assert r1[1, root].sum() < 0.95 * r1[3, root].sum()  # the worn root itself is relieved
+
+
 def test_a_tooth_ahead_wears_its_lead_away(pair):
     """A pinion tooth 2 um ahead of its place meets its mates early in the double-contact
     zones, carries more and wears faster than the rest: its lead over them, position less
@@ -107,7 +126,9 @@ def test_a_tooth_worn_ahead_of_the_rest_is_caught_up(pair):
     ({"positions": (np.full(18, np.nan), None)}, "finite deviations"),
     ({"positions": (np.zeros(18),)}, "positions has 1 parts"),
     ({"start": (np.zeros(7), np.zeros(7))}, r"start wear of the pinion of shape \(7,\)"),
-    ({"start": "grid"}, "start has 4 parts"),
+    ({"start": "grid"}, "start has a str; give a pair"),
+    ({"positions": (["a"] * 18, None)}, "positions of the pinion are no numbers"),
+    ({"positions": (np.full(18, 2e-6 * 1e6), None)}, "reach 2 m, beyond the 0.000324 m"),
     ({"start": (["a"], None)}, "start wear of the pinion is no array of depths"),
 ])
 def test_bad_tooth_states_are_refused(pair, kwargs, message):
