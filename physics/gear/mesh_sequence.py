@@ -5,8 +5,9 @@ enter contact, counted from a pair ``(0, 0)``) brings pinion tooth ``m mod z1`` 
 ``m mod z2``: each mesh advances both wheels by one pitch. The pattern repeats after the
 hunting period ``lcm(z1, z2)`` meshes, in which every pinion tooth meets ``z2 / gcd(z1, z2)``
 gear teeth and every gear tooth ``z1 / gcd(z1, z2)`` pinion teeth, each pair once: pinion
-tooth ``i`` meets gear tooth ``j`` only where ``i = j mod gcd(z1, z2)`` (the hunting-tooth
-rule of gear design; e.g. Dudley, *Handbook of Practical Gear Design*, 1984, 2.7). With a
+tooth ``i`` meets gear tooth ``j`` only where ``i = j mod gcd(z1, z2)`` (why gear designers
+choose "hunting" tooth numbers with no common factor; e.g. Dudley, *Handbook of Practical Gear
+Design*, 1984). With a
 common factor the teeth fall into ``gcd`` families that never touch one another, so a
 difference between teeth persists.
 
@@ -60,7 +61,7 @@ class MeshSequence:
 
 
 def meshing_sequence(z1: int, z2: int, n1: int | None = None, n2: int | None = None
-                  ) -> MeshSequence:
+                     ) -> MeshSequence:
     """The meshing sequence of a ``z1``/``z2`` pair carrying ``n1`` pinion and ``n2`` gear
     teeth (each 1 or the wheel's count; by default every tooth: the hunting period).
 

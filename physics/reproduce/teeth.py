@@ -17,10 +17,11 @@ model), read at the same depths. For each depth:
   have to wear away);
 - ``rise_own`` and ``rise_alike``: each feature of the rigid-housing acceleration
   (:func:`physics.signals.measurement.housing_acceleration`; RMS, peak-to-peak, kurtosis) and of
-  its synchronous average (FM4, the sideband level: :mod:`physics.signals.indicators`) over the
-  new pair's, the teeth at the same places (:func:`physics.dynamics.teeth.sequence_model`, exact
-  flank contact, whole hunting periods: 9 revolutions), beside Table 15's measured rise where
-  it has one.
+  the synchronous average of each shaft (FM4, the sideband level:
+  :mod:`physics.signals.indicators`; the gear's with ``_gear``, over the record's six gear
+  revolutions) over the new pair's, the teeth at the same places
+  (:func:`physics.dynamics.teeth.sequence_model`, exact flank contact, whole hunting periods:
+  9 pinion revolutions), beside Table 15's measured rise where it has one.
 
 The gear's teeth are carried alike (their mean: every gear tooth meets 2 of the 18 pinion
 teeth here, gcd 9, so an approximation), except in the one run per grade list marked
@@ -37,6 +38,7 @@ install_at_start(__name__)  # Ctrl-C and SIGTERM handled from here on, during th
 
 import argparse
 import dataclasses
+import math
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -51,7 +53,7 @@ from physics.files import check_fresh, check_writable, pyplot, resolved, save_fi
 from physics.gear.accuracy import tooth_positions_um
 from physics.gear.mesh_sequence import hunting_period
 from physics.gear.stiffness import mesh_stiffness
-from physics.params import Scenario
+from physics.params import Dynamics, Scenario
 from physics.reference import THESIS_TABLES
 from physics.reproduce.localised import DEPTHS_UM, REVOLUTIONS, measured_rises
 from physics.signals.features import features
@@ -64,8 +66,10 @@ GRADES = (5, 7, 9)
 SEEDS = (0, 1)
 #: the grade whose first seed is also run with every tooth of both wheels its own
 BOTH_WHEELS_GRADE = 7
-#: the features compared (Table 15's three, then two indicators of the synchronous average)
-FEATURES = ("rms", "peak_to_peak", "kurtosis", "fm4", "sideband_level")
+#: the features compared (Table 15's three, then two indicators of each shaft's synchronous
+#: average: the pinion's, and the gear's with ``_gear``)
+FEATURES = ("rms", "peak_to_peak", "kurtosis", "fm4", "sideband_level", "fm4_gear",
+            "sideband_level_gear")
 COLUMNS = ("grade", "seed", "wheels", "wear_um", "cycles_ratio", "least_tooth_um",
            "position_range_um", "feature", "rise_own", "rise_alike", "rise_measured")
 OUTPUT_FILES = ("tooth_wear.csv", "tooth_wear.png")
@@ -79,9 +83,17 @@ def scenario() -> Scenario:
     g = scn.gear
     period = hunting_period(g.z1, g.z2) // g.z1  # pinion revolutions
     revolutions = max(1, round(REVOLUTIONS / period)) * period
-    dyn = dataclasses.replace(scn.dynamics, flank_contact="exact",
-                              duration_s=revolutions * 60.0 / scn.operating.n1_rpm)
-    return dataclasses.replace(scn, dynamics=dyn)
+    return dataclasses.replace(scn, dynamics=whole_record(scn.dynamics, revolutions,
+                                                          scn.operating.n1_rpm))
+
+
+def whole_record(dyn: Dynamics, revolutions: int, n1_rpm: float) -> Dynamics:
+    """``dyn`` with exact flank contact and a record of at least ``revolutions`` whole pinion
+    revolutions at ``n1_rpm`` in whole samples (a fraction of a sample short, the synchronous
+    average would drop the last revolution)."""
+    fs = dyn.sample_rate_hz
+    samples = math.ceil(revolutions * 60.0 / n1_rpm * fs - 1e-9)
+    return dataclasses.replace(dyn, flank_contact="exact", duration_s=samples / fs)
 
 
 def positions(scn: Scenario, grade: int, seed: int, both: bool) -> tuple[np.ndarray, ...]:
@@ -120,8 +132,10 @@ def tooth_study(scn: Scenario, runs: list[tuple[int, int, bool]], measured: pd.D
             states.append((cycles / cycles_alike, _least_tooth(own, w1)))
         force = simulate(models, scn.dynamics, every_phase=False).force
         accel = housing_acceleration(force, scn.dynamics.housing_mass_kg)
-        values = features(accel) | indicators(accel, scn.dynamics.sample_rate_hz,
-                                              scn.operating.n1_rpm / 60.0, scn.gear.z1)
+        fs, f1, g = scn.dynamics.sample_rate_hz, scn.operating.n1_rpm / 60.0, scn.gear
+        values = features(accel) | indicators(accel, fs, f1, g.z1)
+        values |= {f"{name}_gear": v
+                   for name, v in indicators(accel, fs, f1 * g.z1 / g.z2, g.z2).items()}
         for k, depth in enumerate(DEPTHS_UM):
             for name in FEATURES:
                 v = np.asarray(values[name])

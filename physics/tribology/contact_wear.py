@@ -241,10 +241,11 @@ def simulate_contact_wear(scn: Scenario, depth: float, cycles: float = math.inf,
     ``solver.update_um`` or by ``RELATIVE_STEP`` of the deepest wear so far (module doc).
 
     Every tooth alike from new by default. ``start``: the wear to start from, pinion and gear,
-    on :func:`whole_flank_grid` [m], each ``(grid,)`` for teeth alike or ``(z, grid)`` with a
-    row per tooth in mesh order (a tooth worn ahead of the rest, damage induced on one);
-    ``positions``: each tooth's position deviation [m] (:func:`tooth_wear_per_cycle`), ``(z1,)``
-    and ``(z2,)``, which makes every tooth its own. A wheel given neither stays one row."""
+    on :func:`whole_flank_grid` [m], each None (new), ``(grid,)`` for teeth alike or ``(z,
+    grid)`` with a row per tooth in mesh order (a tooth worn ahead of the rest, damage induced
+    on one); ``positions``: each tooth's position deviation [m] (:func:`tooth_wear_per_cycle`),
+    ``(z1,)`` and ``(z2,)``, each or None, which makes every tooth of that wheel its own. A
+    wheel given neither stays one row."""
     if not (math.isfinite(depth) and depth > 0):
         raise ValueError(f"depth = {depth!r} must be a finite depth > 0 (m)")
     if not cycles > 0:
@@ -314,7 +315,8 @@ def _tooth_state(scn: Scenario, grid: np.ndarray, start, positions
     wear = []
     for w in range(2):
         try:
-            h = np.zeros(grid.size) if start is None else np.asarray(start[w], dtype=float)
+            h = (np.zeros(grid.size) if start is None or start[w] is None
+                 else np.asarray(start[w], dtype=float))
         except (TypeError, ValueError) as e:
             raise ValueError(f"start wear of the {names[w]} is no array of depths "
                              f"({type(start[w]).__name__}); give depths >= 0 [m] on "

@@ -22,10 +22,11 @@ def test_teeth_off_their_places_reach_a_depth_sooner(monkeypatch):
     does, while the least worn tooth lags; every feature stays finite and positive."""
     monkeypatch.setattr(teeth, "DEPTHS_UM", (2.0,))
     scn = teeth.scenario()
-    # the path contact's dynamics: the wear, which the assertions read, is the same
+    # the path contact's dynamics (the wear, which the assertions read, is the same) over one
+    # hunting period: two whole gear revolutions for the gear's synchronous average
+    dyn = dataclasses.replace(teeth.whole_record(scn.dynamics, 3, 2000.0), flank_contact="path")
     scn = dataclasses.replace(scn, solver=dataclasses.replace(scn.solver, update_um=1.0),
-                              dynamics=dataclasses.replace(scn.dynamics, flank_contact="path",
-                                                           duration_s=2 * 60 / 2000))
+                              dynamics=dyn)
     table = teeth.tooth_study(scn, [(9, 0, False)], None)
     assert list(table.columns) == list(teeth.COLUMNS)
     assert set(table.feature) == set(teeth.FEATURES)
@@ -83,3 +84,11 @@ def test_the_docs_quote_the_stored_run():
     assert (lag < pinion.position_range_um).all()  # "within the pinion positions' range"
     both = rms.loc[("both", 7)]
     assert stored.wear_um.max() - both.least_tooth_um > both.position_range_um  # "beyond it"
+    # "every feature falls (less tooth by tooth)" of Table 15's three, "the sideband level falls
+    # as wear levels the teeth, rises where they stay off (alike)"
+    means = deepest.groupby(["feature", *by]).mean(numeric_only=True)  # the seeds' means
+    table15 = means.loc[["rms", "peak_to_peak", "kurtosis"]]
+    assert (table15.rise_own < 1).all() and (table15.rise_alike < 1).all()
+    assert (rms.rise_own > rms.rise_alike).all()
+    sideband = means.loc["sideband_level"]
+    assert (sideband.rise_own < 1).all() and (sideband.rise_alike > 1).all()
