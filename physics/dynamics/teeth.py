@@ -133,11 +133,11 @@ def sequence_model(scn: Scenario, ms: MeshStiffness, grid: np.ndarray, wear1: np
             if p.shape != (len(w),):
                 raise ValueError(f"positions of the {name} of shape {p.shape}: give one per "
                                  f"row of its wear ({len(w)})")
-    pairs = list(zip(seq.pinion, seq.gear, strict=True))
-    models = [build_model(scn, ms, grid, wear1[i], wear2[j], n_phase=n_phase) for i, j in pairs]
+    pairs, index = seq.distinct_pairs(wear1, wear2)  # each distinct pair's tables once
+    built = [build_model(scn, ms, grid, wear1[i], wear2[j], n_phase=n_phase) for i, j in pairs]
+    models = [built[d] for d in index]
     if positions is not None:
-        models = with_tooth_positions(models, [positions[0][i] + positions[1][j]
-                                               for i, j in pairs])
+        models = with_tooth_positions(models, positions[0][seq.pinion] + positions[1][seq.gear])
     z1 = scn.gear.z1
     # a repeat shorter than a pinion revolution (teeth alike) is tiled to one, or to the
     # hunting period where only the gear's teeth are carried

@@ -59,6 +59,21 @@ class MeshSequence:
         n = len(self)
         return (self.n1, n), (self.z1 * self.n2, n * self.z2)
 
+    def distinct_pairs(self, wear1: np.ndarray, wear2: np.ndarray
+                       ) -> tuple[list[tuple[int, int]], np.ndarray]:
+        """The pairs of the repeat whose teeth differ, for teeth worn by ``wear1`` ``(n1, ...)``
+        and ``wear2`` ``(n2, ...)``: one ``(pinion row, gear row)`` of each distinct pair of
+        wear states, and for each mesh the index of its pair among them. Whatever depends on a
+        pair's two flanks alone (its gaps, its compliance, its tables) is then computed once a
+        distinct pair: teeth still alike (a start from new) share it."""
+        rows1 = np.unique(np.asarray(wear1).reshape(len(wear1), -1), axis=0,
+                          return_inverse=True)[1].ravel()
+        rows2 = np.unique(np.asarray(wear2).reshape(len(wear2), -1), axis=0,
+                          return_inverse=True)[1].ravel()
+        kinds = rows1[self.pinion] * (rows2.max() + 1) + rows2[self.gear]
+        _, first, index = np.unique(kinds, return_index=True, return_inverse=True)
+        return ([(int(self.pinion[m]), int(self.gear[m])) for m in first], index.ravel())
+
 
 def meshing_sequence(z1: int, z2: int, n1: int | None = None, n2: int | None = None
                      ) -> MeshSequence:

@@ -156,13 +156,15 @@ def tooth_wear_per_cycle(scn: Scenario, ms: MeshStiffness, grid: np.ndarray, wea
     n, slot = len(seq), np.arange(4)
     # a pair's pass through the mesh, in order of roll: the four slots of pair_slots in turn
     passage = pair_slots(geom, geom.mesh_period(POSITIONS)[0]).T.ravel()
-    gap, u1, u2, k = (np.empty((n, passage.size)) for _ in range(4))
-    for m, (i, j) in enumerate(zip(seq.pinion, seq.gear, strict=True)):
-        gap[m], u1[m], u2[m] = PairGaps(geom, ms.forms, grid, wear1[i], wear2[j]).contacts(passage)
-        k[m] = ms.pair_function(grid, wear1[i], wear2[j])(clamped(geom, passage))
-        if positions is not None:
-            ahead = positions[0][i] + positions[1][j]
-            gap[m] = np.where(gap[m] < NO_CONTACT, gap[m] - ahead, gap[m])
+    pairs, index = seq.distinct_pairs(wear1, wear2)  # each distinct pair's flanks once
+    gap, u1, u2, k = (np.empty((len(pairs), passage.size)) for _ in range(4))
+    for d, (i, j) in enumerate(pairs):
+        gap[d], u1[d], u2[d] = PairGaps(geom, ms.forms, grid, wear1[i], wear2[j]).contacts(passage)
+        k[d] = ms.pair_function(grid, wear1[i], wear2[j])(clamped(geom, passage))
+    gap, u1, u2, k = gap[index], u1[index], u2[index], k[index]
+    if positions is not None:
+        ahead = positions[0][seq.pinion] + positions[1][seq.gear]
+        gap = np.where(gap < NO_CONTACT, gap - ahead[:, None], gap)
     # in mesh k, slot q holds the pair of mesh k + 1 - q (pair_slots: the one about to enter
     # first); its load there is the pair's at slot q of its passage
     into_mesh = (np.arange(n)[:, None] + 1 - slot) % n  # (mesh, slot) -> pair
@@ -278,42 +280,20 @@ def _tooth_state(scn: Scenario, grid: np.ndarray, start, positions
                  ) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray] | None]:
     """The starting wear ``(n1, grid)``, ``(n2, grid)`` and the positions of
     :func:`simulate_contact_wear`, checked: ``ValueError`` naming the argument, its shape or
-    value, the rule and the fix, before any work."""
+    value, the rule and the fix, before any work. A wheel carries a row per tooth where its
+    positions or its start give one, else one row."""
     g = scn.gear
     z = (g.z1, g.z2)
     names = ("pinion", "gear")
-    rows = [1, 1]
     for what, given in (("positions", positions), ("start", start)):
         if given is not None and (not isinstance(given, tuple | list) or len(given) != 2):
             got = (f"{len(given)} parts" if isinstance(given, tuple | list)
                    else f"a {type(given).__name__}")
             raise ValueError(f"{what} has {got}; give a pair (pinion, gear), each None or an "
                              "array")
-    if positions is not None:
-        checked = []
-        for w, p in enumerate(positions):
-            if p is not None:
-                try:
-                    p = np.asarray(p, dtype=float)
-                except (TypeError, ValueError) as e:
-                    raise ValueError(f"positions of the {names[w]} are no numbers; give "
-                                     f"{z[w]} deviations [m], one per tooth in mesh order, or "
-                                     "None") from e
-                if p.shape != (z[w],) or not np.all(np.isfinite(p)):
-                    raise ValueError(f"positions of the {names[w]} of shape {p.shape}: give "
-                                     f"{z[w]} finite deviations [m], one per tooth in mesh "
-                                     "order, or None")
-                limit = position_bound_m(g.module_mm, g.module_mm * z[w])
-                if np.max(np.abs(p)) > limit:
-                    raise ValueError(f"positions of the {names[w]} reach "
-                                     f"{np.max(np.abs(p)):g} m, beyond the {limit:.3g} m of "
-                                     f"{POSITION_BOUND_FP:g} F_p of ISO 1328-1's coarsest "
-                                     "grade; give them in metres (1e-6 x tooth_positions_um)")
-                rows[w] = z[w]
-            checked.append(p)
-        positions = tuple(np.zeros(rows[w]) if p is None else p for w, p in enumerate(checked))
-    wear = []
+    wear, shift = [], []
     for w in range(2):
+        p = None if positions is None else positions[w]
         try:
             h = (np.zeros(grid.size) if start is None or start[w] is None
                  else np.asarray(start[w], dtype=float))
@@ -321,11 +301,26 @@ def _tooth_state(scn: Scenario, grid: np.ndarray, start, positions
             raise ValueError(f"start wear of the {names[w]} is no array of depths "
                              f"({type(start[w]).__name__}); give depths >= 0 [m] on "
                              "whole_flank_grid") from e
-        if h.shape == (z[w], grid.size):
-            rows[w] = z[w]
-        elif h.shape == grid.shape:
-            h = np.broadcast_to(h, (rows[w], grid.size))
-        if h.shape != (rows[w], grid.size):
+        try:
+            p = None if p is None else np.asarray(p, dtype=float)
+        except (TypeError, ValueError) as e:
+            raise ValueError(f"positions of the {names[w]} are no numbers; give {z[w]} "
+                             "deviations [m], one per tooth in mesh order, or None") from e
+        rows = z[w] if p is not None or h.shape == (z[w], grid.size) else 1
+        if p is not None:
+            if p.shape != (z[w],) or not np.all(np.isfinite(p)):
+                raise ValueError(f"positions of the {names[w]} of shape {p.shape}: give "
+                                 f"{z[w]} finite deviations [m], one per tooth in mesh "
+                                 "order, or None")
+            limit = position_bound_m(g.module_mm, g.module_mm * z[w])
+            if np.max(np.abs(p)) > limit:
+                raise ValueError(f"positions of the {names[w]} reach {np.max(np.abs(p)):g} m, "
+                                 f"beyond the {limit:.3g} m of {POSITION_BOUND_FP:g} F_p of "
+                                 "ISO 1328-1's coarsest grade; give them in metres (1e-6 x "
+                                 "tooth_positions_um)")
+        if h.shape == grid.shape:
+            h = np.broadcast_to(h, (rows, grid.size))
+        if h.shape != (rows, grid.size):
             raise ValueError(f"start wear of the {names[w]} of shape {h.shape}: give "
                              f"{grid.size} depths on whole_flank_grid for teeth alike, or "
                              f"({z[w]}, {grid.size}), a row per tooth in mesh order")
@@ -333,7 +328,5 @@ def _tooth_state(scn: Scenario, grid: np.ndarray, start, positions
             raise ValueError(f"start wear of the {names[w]} holds a depth that is negative or "
                              "not finite; give depths >= 0 [m]")
         wear.append(np.array(h, dtype=float))
-    if positions is not None:  # a wheel given its own teeth by its start wear alone
-        positions = tuple(p if p.size == r else np.zeros(r)
-                          for p, r in zip(positions, rows, strict=True))
-    return wear[0], wear[1], positions
+        shift.append(np.zeros(rows) if p is None else p)
+    return wear[0], wear[1], None if positions is None else (shift[0], shift[1])

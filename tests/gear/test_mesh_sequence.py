@@ -62,3 +62,18 @@ def test_teeth_alike_carry_one_flank():
 def test_bad_sequences_are_refused(args, message):
     with pytest.raises(ValueError, match=message):
         meshing_sequence(*args)
+
+
+def test_pairs_of_the_same_two_flanks_are_computed_once():
+    seq = meshing_sequence(18, 27)
+    alike = seq.distinct_pairs(np.zeros((18, 5)), np.zeros((27, 5)))
+    assert alike[0] == [(0, 0)] and np.all(alike[1] == 0)
+    one = np.zeros((18, 5))
+    one[4] = 1.0  # pinion tooth 4 worn: its 3 meshes differ from the rest's
+    pairs, index = seq.distinct_pairs(one, np.zeros((27, 5)))
+    assert len(pairs) == 2 and np.sum(index == index[4]) == 3
+    for m in range(len(seq)):  # each mesh's representative has the mesh's two flanks
+        i, j = pairs[index[m]]
+        assert np.array_equal(one[i], one[seq.pinion[m]]) and j in range(27)
+    own = seq.distinct_pairs(np.arange(18.0)[:, None], np.arange(27.0)[:, None])
+    assert len(own[0]) == len(seq) == 54
