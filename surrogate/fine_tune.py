@@ -5,10 +5,14 @@ import (``train.py``) and again by :func:`surrogate.training.prepare` (the Pytho
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from omegaconf import DictConfig, OmegaConf
 
 from surrogate import settings
-from surrogate.inference import Surrogate
+
+if TYPE_CHECKING:
+    from surrogate.inference import Surrogate
 
 
 def network(cfg: DictConfig) -> Surrogate | None:
@@ -16,6 +20,8 @@ def network(cfg: DictConfig) -> Surrogate | None:
     another kind of model."""
     if not cfg.get("init_from"):
         return None
+    from surrogate.inference import Surrogate  # torch: only for a fine-tune
+
     init = Surrogate.load(cfg.init_from, key="init_from")
     if init.model is None:
         raise ValueError(f"init_from = {cfg.init_from} holds a {init.kind} model, not a "

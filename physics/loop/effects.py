@@ -58,7 +58,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from physics.dynamics.model import PairModel
-from physics.dynamics.model_form import revolution_tables
+from physics.dynamics.teeth import per_tooth_model
 from physics.signals.measurement import transfer_path
 
 
@@ -155,12 +155,13 @@ def _tip_relief(m: PairModel, v: dict) -> PairModel:
 
 
 def _tooth_defect(m: PairModel, v: dict) -> PairModel:
+    """Pinion tooth 0 pitted (its own flank: the pit's gap and lost face on its tables), the
+    other teeth as ``m``, over a pinion revolution in mesh order
+    (:func:`physics.dynamics.teeth.per_tooth_model`)."""
     if m.periods != 1:
         raise ValueError("tooth_defect needs a model with one-period tables")
     g = m.geometry
     n = len(m.k_a)
-    rev = revolution_tables(m)
-    tiles = {k: getattr(rev, k) for k in ("k_a", "k_b", "g_a", "g_b")}
     tau = g.base_pitch * np.arange(n) / n
     s_a, s_b = g.s_start + tau, g.s_start + tau + g.base_pitch
     half = 0.5 * v["length_mm"] * 1e-3
@@ -169,15 +170,12 @@ def _tooth_defect(m: PairModel, v: dict) -> PairModel:
         u = np.clip((s - v["centre_mm"] * 1e-3) / half, -1, 1)
         return np.cos(0.5 * np.pi * u) ** 2
 
-    # period j: pair A is pinion tooth j, pair B tooth j - 1; the defect is on tooth 0
-    a0, b1 = slice(0, n), slice(n, 2 * n)
     depth, share = v["depth_um"] * 1e-6, v["face_share"]
-    tiles["g_a"][a0] += depth * bump(s_a)
-    tiles["k_a"][a0] *= 1 - share * bump(s_a)
-    on_b = m.k_b > 0
-    tiles["g_b"][b1] += np.where(on_b, depth * bump(s_b), 0.0)
-    tiles["k_b"][b1] *= 1 - share * np.where(on_b, bump(s_b), 0.0)
-    return rev
+    pit_b = np.where(m.k_b > 0, bump(s_b), 0.0)  # pair B only where it is in mesh
+    pitted = dataclasses.replace(m, g_a=m.g_a + depth * bump(s_a),
+                                 k_a=m.k_a * (1 - share * bump(s_a)),
+                                 g_b=m.g_b + depth * pit_b, k_b=m.k_b * (1 - share * pit_b))
+    return per_tooth_model([pitted] + [m] * (g.gear.z1 - 1))
 
 
 def _backlash_growth(m: PairModel, v: dict) -> PairModel:

@@ -378,6 +378,25 @@ def test_tooth_defect_sits_where_its_centre_says_and_spans_its_length(healthy, c
     assert lost.max() == pytest.approx(values["face_share"], rel=1e-2)
 
 
+def test_the_pit_is_on_one_tooth_of_the_mesh_sequence(healthy):
+    """The pitted tooth is pinion tooth 0 of the mesh sequence (physics.dynamics.teeth): pair A
+    of the first mesh period and pair B of the second, where it has moved on; every other
+    period's tables are the healthy tooth's, and a pit of no depth on no face is no pit."""
+    from physics.dynamics.model_form import revolution_tables
+
+    n, rev, g = len(healthy.k_a), revolution_tables(healthy), healthy.geometry
+    across = {"centre_mm": (g.s_start + g.base_pitch) * 1e3}  # on both pairs' stretches
+    pit = effect("tooth_defect").model(healthy, EFFECTS["tooth_defect"].defaults() | across)
+    for name, period in (("k_a", 0), ("g_a", 0), ("k_b", 1), ("g_b", 1)):
+        moved = np.flatnonzero(np.any((getattr(pit, name) != getattr(rev, name)).reshape(-1, n),
+                                      axis=1))
+        assert moved.tolist() == [period], name
+    none = EFFECTS["tooth_defect"].defaults() | {"depth_um": 0.0, "face_share": 0.0}
+    nothing = effect("tooth_defect").model(healthy, none)
+    for name in ("k_a", "k_b", "g_a", "g_b"):
+        np.testing.assert_array_equal(getattr(nothing, name), getattr(rev, name))
+
+
 def test_transfer_path_peaks_at_its_mode():
     fn, zeta = 3000.0, 0.05
     t = np.arange(int(FS)) / FS

@@ -169,17 +169,18 @@ def test_train_refuses_what_needs_no_data_before_importing_lightning(tmp_path, b
     assert not any(tmp_path.iterdir())
 
 
-def test_train_refuses_a_tables_settings_before_importing_lightning(tmp_path):
+def test_train_refuses_a_tables_settings_before_importing_torch(tmp_path):
     """A user table's settings are judged by the run's data (surrogate.wear_data) before
-    train.py imports Lightning: a group column it lacks, an input it lacks (named as absent,
-    not asked for a unit), each in one line, exit 2, the table alone left."""
+    train.py imports torch (a run that fine-tunes none needs no network to check them): a
+    group column it lacks, an input it lacks (named as absent, not asked for a unit), each in
+    one line, exit 2, the table alone left."""
     (tmp_path / "t.csv").write_text("a,wear_mm,rig\n1,0,1\n2,0.1,1\n")
     for bad, says in ((["data.group=nope"], "data.group = 'nope' is not a column of t.csv"),
                       (["data.group=rig", "data.inputs=[b]", "data.target=wear_mm"],
                        "t.csv lacks column(s) ['b']")):
         imported = imports_of_a_refusal([str(ROOT / "train.py"), "data.table=t.csv", *bad,
                                          "hydra.run.dir=run"], tmp_path, says)
-        assert "lightning" not in imported
+        assert "torch" not in imported and "lightning" not in imported
     assert [p.name for p in tmp_path.iterdir()] == ["t.csv"]
 
 
