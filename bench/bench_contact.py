@@ -8,9 +8,10 @@ Prints wall times (best of several runs) for
 - one contact-driven wear rate of the public rig's pair (module 3, 18/35, 100 N m), and a
   whole life from new to 1 mm of wear (target: at most 5 minutes on two cores), with its
   blocks;
-- the same rate with each pinion tooth its own flank (18 pairs a pinion revolution) and with
-  every tooth of both wheels its own (the hunting period, 630 pairs: scaled from the 35 of
-  the gear's teeth each its own), each against the one-flank rate of the same run;
+- the same rate, worn, with each pinion tooth its own flank (18 distinct pairs a pinion
+  revolution) and with every tooth of both wheels its own (the hunting period, 630 pairs:
+  scaled from the 35 of the gear's teeth each its own), each against the one worn flank's
+  rate of the same run;
 - the dynamics of that pair worn 0.4 mm with the exact contact (off-path pairs in the kernel)
   beside the path contact, 36 states of 0.5 s at once, and their ratio.
 """
@@ -81,16 +82,21 @@ def main() -> None:
     zero = np.zeros_like(grid)
     t_rate = best_of(lambda: wear_per_cycle(scn, ms, grid, zero, zero, force), 3)
     z1, z2 = scn.gear.z1, scn.gear.z2
-    pinion = np.tile(zero, (z1, 1))
-    t_pinion = best_of(lambda: tooth_wear_per_cycle(scn, ms, grid, pinion, zero[None], force), 1)
-    # a rate's cost grows with its pairs: the hunting period's 630 from the 35 pairs of the
-    # pinion's teeth alike and the gear's each its own
-    gear = np.tile(zero, (z2, 1))
-    t_gear = best_of(lambda: tooth_wear_per_cycle(scn, ms, grid, zero[None], gear, force), 1)
+    # teeth that differ (each its own depth of the worn profile above: teeth alike would be
+    # solved once, MeshSequence.distinct_pairs), against the one flank worn so
+    t_worn = best_of(lambda: wear_per_cycle(scn, ms, grid, wear, 0.3 * wear, force), 3)
+    pinion = wear[None] * np.linspace(0.5, 1.5, z1)[:, None]
+    t_pinion = best_of(lambda: tooth_wear_per_cycle(scn, ms, grid, pinion, 0.3 * wear[None],
+                                                    force), 1)
+    # a rate's cost grows with its distinct pairs: the hunting period's 630 from the 35 pairs
+    # of the pinion's teeth alike and the gear's each its own
+    gear = 0.3 * wear[None] * np.linspace(0.5, 1.5, z2)[:, None]
+    t_gear = best_of(lambda: tooth_wear_per_cycle(scn, ms, grid, wear[None], gear, force), 1)
     t_hunting = t_gear * math.lcm(z1, z2) / z2
-    print(f"tooth by tooth: {t_pinion:.2f} s a rate with each pinion tooth its own "
-          f"({t_pinion / t_rate:.0f} times the one flank's); every tooth of both wheels "
-          f"({math.lcm(z1, z2)} pairs) about {t_hunting:.0f} s ({t_hunting / t_rate:.0f} times)")
+    print(f"tooth by tooth, worn teeth that differ: {t_pinion:.2f} s a rate with each pinion "
+          f"tooth its own ({t_pinion / t_worn:.0f} times the one worn flank's "
+          f"{t_worn * 1e3:.0f} ms); every tooth of both wheels ({math.lcm(z1, z2)} pairs) "
+          f"about {t_hunting:.0f} s ({t_hunting / t_worn:.0f} times)")
     start = time.perf_counter()
     run = simulate_contact_wear(scn, 1e-3)
     t_life = time.perf_counter() - start

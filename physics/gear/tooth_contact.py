@@ -168,27 +168,39 @@ class PairGaps:
 def _least_gap(r_pt, a_pt, phi_pt, phi_fl, offset, r_fl, a_fl, rb):
     """Least gap over the points (``r_pt``, ``a_pt``: radius and angle in their tooth frame,
     turned by ``phi_pt``, wheel centre at ``offset`` along x from the flank's) to the flank
-    (``r_fl``, ``a_fl``, turned by ``phi_fl``), in the flank wheel's rotation times ``rb``,
-    for each position, with the point's index and the flank's fractional index where it
-    comes closest; ``NO_CONTACT`` where no point lies within the flank's radii. Both tooth
-    frames are mirrored (angle from the centre line = polar angle - pi/2 - phi)."""
-    n, m = phi_pt.size, r_pt.size
+    (``r_fl``, ``a_fl``, radii increasing, turned by ``phi_fl``), in the flank wheel's rotation
+    times ``rb``, for each position, with the point's index and the flank's fractional index
+    where it comes closest; ``NO_CONTACT`` where no point lies within the flank's radii. Both
+    tooth frames are mirrored (angle from the centre line = polar angle - pi/2 - phi).
+
+    Each point is turned by the position's rotation matrix (one cosine and sine per position
+    and per point, not per pair: within 1e-16 m of turning each by its own angle), and the
+    flank cell holding its radius is walked from the previous point's (the points follow the
+    profile, so it moves by a cell or two), the cell ``np.searchsorted`` would give."""
+    n, m, nf = phi_pt.size, r_pt.size, r_fl.size
     out = np.full(n, NO_CONTACT)
     where_pt = np.zeros(n, dtype=np.int64)
     where_fl = np.zeros(n)
     lo, hi = r_fl[0], r_fl[-1]
+    x0, y0 = np.empty(m), np.empty(m)  # the points in their frame, unturned
+    for j in range(m):
+        x0[j] = r_pt[j] * math.cos(0.5 * math.pi + a_pt[j])
+        y0[j] = r_pt[j] * math.sin(0.5 * math.pi + a_pt[j])
     for i in numba.prange(n):
         best = NO_CONTACT
+        c, sn = math.cos(phi_pt[i]), math.sin(phi_pt[i])
+        k = 0
         for j in range(m):
-            psi = 0.5 * math.pi + a_pt[j] + phi_pt[i]
-            x = offset + r_pt[j] * math.cos(psi)
-            y = r_pt[j] * math.sin(psi)
-            rho = math.hypot(x, y)
-            if rho < lo or rho > hi:
+            x = offset + x0[j] * c - y0[j] * sn
+            y = x0[j] * sn + y0[j] * c
+            rho2 = x * x + y * y
+            if rho2 < lo * lo or rho2 > hi * hi:
                 continue
-            k = np.searchsorted(r_fl, rho) - 1
-            if k < 0:
-                k = 0
+            rho = math.sqrt(rho2)
+            while k > 0 and r_fl[k] >= rho:  # the last cell starting below rho, or the first
+                k -= 1
+            while k + 1 < nf and r_fl[k + 1] < rho:
+                k += 1
             t = (rho - r_fl[k]) / (r_fl[k + 1] - r_fl[k])
             flank = a_fl[k] + t * (a_fl[k + 1] - a_fl[k])
             d = math.atan2(y, x) - 0.5 * math.pi - phi_fl[i] - flank

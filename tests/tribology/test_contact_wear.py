@@ -51,6 +51,26 @@ def test_deposits_keep_their_volume(centre, width, depth):
     assert out.sum() * (grid[1] - grid[0]) == pytest.approx(c.size * width * depth, rel=1e-9)
 
 
+@given(centre=st.lists(st.floats(-6e-3, 6e-3), min_size=1, max_size=8),
+       width=st.lists(st.floats(1e-7, 4e-3), min_size=8, max_size=8),
+       depth=st.lists(st.floats(0.0, 1e-5), min_size=8, max_size=8))
+@settings(max_examples=60, deadline=None)
+def test_a_deposit_fills_each_cell_by_its_overlap_with_it(centre, width, depth):
+    """Each cell holds the deposits' depths weighted by the share of the cell each covers
+    (a deposit partly or wholly beyond the grid's ends loses what lies beyond): against the
+    overlap of every deposit with every cell, by broadcasting."""
+    grid = np.linspace(-5e-3, 5e-3, 201)
+    c = np.asarray(centre)
+    w, d = np.asarray(width)[:c.size], np.asarray(depth)[:c.size]
+    step = grid[1] - grid[0]
+    left, right = grid - 0.5 * step, grid + 0.5 * step
+    overlap = np.clip(np.minimum(right[:, None], (c + 0.5 * w)[None])
+                      - np.maximum(left[:, None], (c - 0.5 * w)[None]), 0.0, None)
+    expected = overlap @ d / step
+    out = cw._deposit(grid, c, w, d)
+    np.testing.assert_allclose(out, expected, rtol=1e-9, atol=1e-12 * max(d.max(), 1e-30))
+
+
 def test_wear_converges_in_the_mesh_positions(monkeypatch):
     scn = _dry(update_um=3.0)
     runs = []
