@@ -29,7 +29,9 @@ here, each choice named:
 
 Each column is divided by its new-gear value (the rig's healthy stage mean). The summary gives,
 per contact and torque, Spearman's rank correlation over the stages and the rises at the stages
-nearest 0.4 and 0.9 mm, model beside rig.
+nearest 0.4 and 0.9 mm, model beside rig. The calibrated curve is worn again under
+perturbations that change nothing physical (:data:`PRECISION_OFFSETS_M`): how far its figures
+move is their numerical precision (:func:`precision`).
 
 The stage means also go out as the measured-data loop's feature table (:func:`loop_table`,
 folder ``rig_loop_table``): ``wear_mm`` and ``rms_g`` per stage, with the ``gear.yaml`` and
@@ -88,6 +90,10 @@ CALIBRATE_AT_MM = 0.2
 #: the stages each taken in turn as that one stage, to show what the choice does [mm]
 CALIBRATION_RANGE_MM = (0.15, 0.35)
 COLUMNS = ("stage", "wear_mm", "acc_rms_g", "stage_order")
+#: the calibrated curve worn again with every pinion tooth this far ahead of its place [m]: a
+#: common offset closes every gap alike and shares the load as before (no physical change),
+#: so what it moves is the wear evolution's sensitivity to round-off (``rig_precision.csv``)
+PRECISION_OFFSETS_M = (1e-15, 2e-15, 3e-15)
 
 
 #: a rise of the summary is read at a stage this close to its depth of ``RISE_AT_MM`` [mm]
@@ -95,7 +101,7 @@ COLUMNS = ("stage", "wear_mm", "acc_rms_g", "stage_order")
 RISE_TOLERANCE_MM = 0.025
 #: what the command writes into ``--out``
 OUTPUT_FILES = ("rig_comparison.csv", "rig_summary.csv", "rig_calibration.csv",
-                "rig_comparison.png",
+                "rig_precision.csv", "rig_comparison.png",
                 "rig_loop_table/rig_stage_means.csv", "rig_loop_table/gear.yaml",
                 "rig_loop_table/operating.yaml")
 
@@ -164,16 +170,19 @@ def rig_scenario(torque_Nm: float) -> Scenario:
         dynamics=dataclasses.replace(base.dynamics, duration_s=DURATION_S))
 
 
-def worn_states(scn: Scenario, depths_mm: np.ndarray
+def worn_states(scn: Scenario, depths_mm: np.ndarray, offset_m: float = 0.0
                 ) -> tuple[np.ndarray | None, list[tuple[np.ndarray, np.ndarray]]]:
     """The pair of ``scn`` worn from new by the contact its worn flanks make
     (:func:`physics.tribology.contact_wear.simulate_contact_wear`) to each depth [mm] of the
     deepest point of either active profile: the roll grid and the pinion and gear wear [m] of
-    each state (unworn flanks where no depth is above 0)."""
+    each state (unworn flanks where no depth is above 0); ``offset_m``: every pinion tooth
+    that far ahead of its place (:data:`PRECISION_OFFSETS_M`)."""
     top = float(np.max(depths_mm))
     if top <= 0:
         return None, [(None, None)] * len(depths_mm)
-    run = simulate_contact_wear(scn, top * 1e-3)  # every tooth alike: one row per wheel
+    # every tooth alike (one row a wheel; teeth set off alike stay alike, and are solved once)
+    ahead = None if offset_m == 0 else (np.full(scn.gear.z1, offset_m), None)
+    run = simulate_contact_wear(scn, top * 1e-3, positions=ahead)
     return run.s, [(p[0], g[0]) for p, g, _ in (run.at_depth(d * 1e-3) for d in depths_mm)]
 
 
@@ -188,11 +197,13 @@ def worn_models(scn: Scenario, contact: str, s: np.ndarray | None,
 
 
 def model_rms(torque_Nm: float, depths_mm: np.ndarray,
-              contacts: Sequence[str] = ("exact", "path")) -> dict[str, np.ndarray]:
+              contacts: Sequence[str] = ("exact", "path"), offset_m: float = 0.0
+              ) -> dict[str, np.ndarray]:
     """Housing-acceleration RMS of the rig's pair worn to each depth, over the new pair's, with
-    each of ``contacts`` (``exact``, ``path``: the keys)."""
+    each of ``contacts`` (``exact``, ``path``: the keys); ``offset_m`` as in
+    :func:`worn_states`."""
     scn = rig_scenario(torque_Nm)
-    s, states = worn_states(scn, depths_mm)
+    s, states = worn_states(scn, depths_mm, offset_m)
     out = {}
     for contact in contacts:
         spread = simulate(worn_models(scn, contact, s, states), scn.dynamics,
@@ -255,13 +266,29 @@ def calibrations(measured: pd.Series, depths: np.ndarray, curves: dict[float, np
     return pd.DataFrame(rows)
 
 
+def precision(measured: pd.Series, depths: np.ndarray, torque_Nm: float, curve: np.ndarray,
+              left_out: int, progress: bool = False) -> pd.DataFrame:
+    """The calibrated curve ``curve`` (the path contact at ``torque_Nm``) judged as
+    :func:`calibrations` judges it (the stage ``left_out`` left out), beside the same pair worn
+    again with each common offset of :data:`PRECISION_OFFSETS_M`: one row per offset (0 first),
+    ``offset_m`` and the judged figures. Physically the same curve each time, so their spread
+    is the figures' numerical precision."""
+    rows = [{"offset_m": 0.0, **_judged(measured, pd.Series(curve), depths, left_out)}]
+    for off in tqdm(PRECISION_OFFSETS_M, desc="precision", unit="run", disable=not progress):
+        again = model_rms(torque_Nm, depths, ("path",), off)["path"]
+        rows.append({"offset_m": off, **_judged(measured, pd.Series(again), depths, left_out)})
+    return pd.DataFrame(rows)
+
+
 def rig_comparison(table: pd.DataFrame, progress: bool = False
-                   ) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame]:
+                   ) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame, pd.DataFrame | None]:
     """One row per stage (``wear_mm``, ``rms_measured``, ``rms_model``, ``rms_calibrated`` and
     one column per torque and contact of the sweep), the sweep's summary per contact and torque
-    (rank correlation, rises at ``RISE_AT_MM``) and the one-stage calibrations of the path
+    (rank correlation, rises at ``RISE_AT_MM``), the one-stage calibrations of the path
     contact's load (:func:`calibrations`; the first row is the one at ``CALIBRATE_AT_MM``, the
-    others each stage of ``CALIBRATION_RANGE_MM``); ``progress``: a bar over the torques."""
+    others each stage of ``CALIBRATION_RANGE_MM``) and the first's :func:`precision` (None
+    where no stage lies at ``CALIBRATE_AT_MM``); ``progress``: bars over the torques and the
+    precision's runs."""
     means = stage_means(table)
     depths = means["wear_mm"].to_numpy(dtype=float)
     path = {}
@@ -286,9 +313,12 @@ def rig_comparison(table: pd.DataFrame, progress: bool = False
     others = [i for i in np.flatnonzero((depths >= low) & (depths <= high)) if i != chosen]
     calibrated = calibrations(means["rms_measured"], depths, grid,
                               ([] if chosen is None else [chosen]) + others)
+    spread = None
     if chosen is not None:
-        means["rms_calibrated"] = grid[calibrated["torque_Nm"].iloc[0]]
-    return means, pd.DataFrame(rows), calibrated
+        torque = calibrated["torque_Nm"].iloc[0]
+        means["rms_calibrated"] = grid[torque]
+        spread = precision(means["rms_measured"], depths, torque, grid[torque], chosen, progress)
+    return means, pd.DataFrame(rows), calibrated, spread
 
 
 def plot_rig_comparison(means: pd.DataFrame, path: Path,
@@ -331,7 +361,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                     "means, the rig's unknown load swept over 20-200 N m.",
         epilog="writes rig_comparison.csv (one row per stage), rig_summary.csv (one row per "
                "torque), rig_calibration.csv (the path contact's load calibrated on one stage, "
-               "then on each stage of 0.15-0.35 mm in turn), rig_comparison.png and the loop's "
+               "then on each stage of 0.15-0.35 mm in turn), rig_precision.csv (that calibrated "
+               "curve worn again under round-off perturbations), rig_comparison.png and the loop's "
                "feature table rig_loop_table/ "
                "(rig_stage_means.csv, gear.yaml, operating.yaml) into --out")
     ap.add_argument("--table", type=Path, default=default_table(),
@@ -364,10 +395,12 @@ def _run(table: pd.DataFrame, out: Path) -> int:
     unread = unread_rises(stage_means(table)["wear_mm"].to_numpy(dtype=float))
     if unread is not None:
         print(f"note: {unread}", file=sys.stderr)
-    stages, summary, calibrated = rig_comparison(table, progress=True)
+    stages, summary, calibrated, spread = rig_comparison(table, progress=True)
     write_csv(stages, out / "rig_comparison.csv")
     write_csv(summary, out / "rig_summary.csv")
     write_csv(calibrated, out / "rig_calibration.csv")
+    if spread is not None:
+        write_csv(spread, out / "rig_precision.csv")
     torque = calibrated["torque_Nm"].iloc[0] if "rms_calibrated" in stages else None
     plot_rig_comparison(stages, out / "rig_comparison.png", torque)
     loop_table(table, out / "rig_loop_table")

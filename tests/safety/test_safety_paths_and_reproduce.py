@@ -288,7 +288,7 @@ def test_rises_at_depths_no_stage_stands_for_are_left_empty_and_said(monkeypatch
     monkeypatch.setattr(rig, "model_rms", lambda torque, depths, contacts=(): ones)
     records = pd.read_csv(rig.default_table())
     two = records[records.stage_order <= 1]
-    _, summary, _ = rig.rig_comparison(two)
+    _, summary, _, _ = rig.rig_comparison(two)
     for at in rig.RISE_AT_MM:
         for col in ("rise_measured", "rise_model", "model_over_measured"):
             assert summary[f"{col}_{at:g}mm"].isna().all()
