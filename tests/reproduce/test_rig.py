@@ -113,7 +113,7 @@ def test_a_common_offset_of_the_teeth_changes_no_wear_but_round_off():
     _, moved = rig.worn_states(scn, depths, rig.PRECISION_OFFSETS_M[0])
     for (a1, a2), (b1, b2) in zip(states[1:], moved[1:], strict=True):
         np.testing.assert_allclose(b1, a1, rtol=0, atol=1e-12 * a1.max())
-        np.testing.assert_allclose(b2, a2, rtol=0, atol=1e-12 * a1.max())
+        np.testing.assert_allclose(b2, a2, rtol=0, atol=1e-12 * a2.max())
 
 
 def test_the_docs_precision_is_the_files():
