@@ -131,7 +131,13 @@ def test_the_docs_precision_is_the_files():
     quote = (f"rank correlations {span('rank_correlation')}, rises "
              f"{span('model_over_measured_0.4mm')} (0.4 mm) and "
              f"{span('model_over_measured_0.9mm')} (0.9 mm) times the rig's")
-    assert quote in " ".join(_section().split())
+    text = " ".join(_section().split())
+    assert quote in text
+    median = spread[["rank_correlation", "model_over_measured_0.4mm",
+                     "model_over_measured_0.9mm"]].median()
+    assert (f"medians over the four runs, {median.iloc[0]:.2f}, {median.iloc[1]:.2f} and "
+            f"{median.iloc[2]:.2f}") in text and len(spread) == 4
+    assert median.iloc[2] > 1.5 and "the 0.9 mm rise misses the factor 1.5" in text
 
 
 def test_the_command_refuses_a_missing_table(tmp_path, capsys):
