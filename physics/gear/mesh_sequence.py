@@ -66,10 +66,8 @@ class MeshSequence:
         wear states, and for each mesh the index of its pair among them. Whatever depends on a
         pair's two flanks alone (its gaps, its compliance, its tables) is then computed once a
         distinct pair: teeth still alike (a start from new) share it."""
-        rows1 = np.unique(np.asarray(wear1).reshape(len(wear1), -1), axis=0,
-                          return_inverse=True)[1].ravel()
-        rows2 = np.unique(np.asarray(wear2).reshape(len(wear2), -1), axis=0,
-                          return_inverse=True)[1].ravel()
+        rows1, rows2 = (np.unique(np.asarray(w).reshape(len(w), -1), axis=0,
+                                  return_inverse=True)[1].ravel() for w in (wear1, wear2))
         kinds = rows1[self.pinion] * (rows2.max() + 1) + rows2[self.gear]
         _, first, index = np.unique(kinds, return_index=True, return_inverse=True)
         return ([(int(self.pinion[m]), int(self.gear[m])) for m in first], index.ravel())

@@ -181,7 +181,7 @@ def _least_gap(r_pt, a_pt, phi_pt, phi_fl, offset, r_fl, a_fl, rb):
     out = np.full(n, NO_CONTACT)
     where_pt = np.zeros(n, dtype=np.int64)
     where_fl = np.zeros(n)
-    lo, hi = r_fl[0], r_fl[-1]
+    lo2, hi2 = r_fl[0] ** 2, r_fl[-1] ** 2
     x0, y0 = np.empty(m), np.empty(m)  # the points in their frame, unturned
     for j in range(m):
         x0[j] = r_pt[j] * math.cos(0.5 * math.pi + a_pt[j])
@@ -194,7 +194,7 @@ def _least_gap(r_pt, a_pt, phi_pt, phi_fl, offset, r_fl, a_fl, rb):
             x = offset + x0[j] * c - y0[j] * sn
             y = x0[j] * sn + y0[j] * c
             rho2 = x * x + y * y
-            if rho2 < lo * lo or rho2 > hi * hi:
+            if rho2 < lo2 or rho2 > hi2:
                 continue
             rho = math.sqrt(rho2)
             while k > 0 and r_fl[k] >= rho:  # the last cell starting below rho, or the first

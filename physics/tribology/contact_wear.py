@@ -137,10 +137,10 @@ def _deposit(grid: np.ndarray, centre: np.ndarray, width: np.ndarray, depth: np.
     last = np.clip(np.searchsorted(edges, hi, side="right") - 1, 0, cells - 1)
     one = first == last
     volume = np.bincount(first, depth * np.where(one, hi - lo, edges[first + 1] - lo), cells)
-    apart = ~one
-    volume += np.bincount(last[apart], depth[apart] * (hi - edges[last])[apart], cells)
-    between = (np.bincount(first[apart] + 1, depth[apart], cells + 1)
-               - np.bincount(last[apart], depth[apart], cells + 1))
+    apart = ~one  # deposits over two cells or more: their last cell's part, the cells between
+    start, end, d = first[apart], last[apart], depth[apart]
+    volume += np.bincount(end, d * (hi[apart] - edges[end]), cells)
+    between = np.bincount(start + 1, d, cells + 1) - np.bincount(end, d, cells + 1)
     volume += np.cumsum(between)[:cells] * np.diff(edges)
     return np.maximum(volume, 0.0) / step  # (rounding leaves -1e-26 where none)
 
