@@ -10,24 +10,19 @@ one-line message, no traceback and nothing left in the folder.
 
 from __future__ import annotations
 
-import importlib
 import os
 import subprocess
 import sys
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
-from hydra import compose, initialize_config_module
-from hydra.core.hydra_config import HydraConfig
-from omegaconf import DictConfig, open_dict, read_write
 
 from physics.loop.measured.bundle import write_bundle
+from tests.acceptance.refusal import APPS, ROOT, chain, refusal, tree
 
-ROOT = Path(__file__).resolve().parents[2]
 FS = 40960.0
 
 
@@ -94,42 +89,6 @@ def _reference_elsewhere(folder: Path) -> Path:
 def _torque(value) -> Callable[[Path], Path]:
     return lambda f: bundle(f, _set("torque_Nm", 2, value))
 
-
-@dataclass(frozen=True)
-class App:
-    argv: tuple[str, ...]  # how a user starts it
-    config: str  # its config module (``gearwear_conf.<config>``) and primary config
-    prepare: Callable[[], Callable[[DictConfig], object]]  # its first phase
-
-
-def _main_prepare(package: str) -> Callable[[], Callable]:
-    """The ``prepare`` of ``python -m <package>``, as ``runpy`` would find it (the import also
-    registers the app's config schema)."""
-    return lambda: importlib.import_module(f"{package}.__main__").prepare
-
-
-def _train_prepare() -> Callable:
-    from surrogate import settings
-    from surrogate.training import prepare
-
-    settings.register()  # as train.py does
-    return prepare
-
-
-def _predict_prepare() -> Callable:
-    from surrogate.predict import prepare
-
-    return prepare
-
-
-APPS = {
-    "reproduce": App(("-m", "physics.reproduce"), "reproduce",
-                     _main_prepare("physics.reproduce")),
-    "dataset": App(("-m", "physics.dataset"), "dataset", _main_prepare("physics.dataset")),
-    "loop": App(("-m", "physics.loop"), "loop", _main_prepare("physics.loop")),
-    "train": App((str(ROOT / "train.py"),), "train", _train_prepare),
-    "predict": App(("-m", "surrogate.predict"), "predict", _predict_prepare),
-}
 
 #: (app, overrides, input to make first or None, text the message must hold)
 CASES = [
@@ -198,19 +157,6 @@ EXIT_PATH = [("reproduce", ["cycles=abc"], None, "'abc'"),
               "record 'r02': operating.torque_Nm = 900000")]
 
 
-def _chain(err: BaseException) -> str:
-    """The text of an exception and of every exception it came from."""
-    parts = []
-    while err is not None:
-        parts.append(str(err))
-        err = err.__cause__ or err.__context__
-    return "\n".join(parts)
-
-
-def _tree(folder: Path) -> set[Path]:
-    return {p.relative_to(folder) for p in folder.rglob("*")}
-
-
 def _folders(tmp_path: Path, make) -> tuple[str | None, Path]:
     """The row's input, made in ``tmp_path/in``, and an empty working folder."""
     inputs, work = tmp_path / "in", tmp_path / "work"
@@ -220,40 +166,22 @@ def _folders(tmp_path: Path, make) -> tuple[str | None, Path]:
     return (str(made) if made is not None else None), work
 
 
-def composed(app: App, overrides: list[str], out: Path) -> DictConfig:
-    """The app's config as Hydra gives it to the app's main, with ``out`` as the run folder
-    (not made: ``prepare`` writes nothing)."""
-    with initialize_config_module(f"gearwear_conf.{app.config}", version_base="1.3"):
-        cfg = compose(app.config, overrides=overrides, return_hydra_config=True)
-    with read_write(cfg.hydra.runtime), open_dict(cfg.hydra.runtime):
-        cfg.hydra.runtime.output_dir = str(out)
-    HydraConfig.instance().set_config(cfg)
-    with read_write(cfg), open_dict(cfg):
-        del cfg["hydra"]
-    return cfg
-
-
 def _id(row) -> str:
     return f"{row[0]} " + " ".join(row[1])[:50]
 
 
 @pytest.mark.parametrize(("app", "overrides", "make", "message"), CASES,
                          ids=[_id(c) for c in CASES])
-def test_bad_input_is_refused_before_work(tmp_path, monkeypatch, config_store, app, overrides,
-                                          make, message):
+def test_bad_input_is_refused_before_work(tmp_path, config_store, app, overrides, make,
+                                          message):
     made, work = _folders(tmp_path, make)
-    monkeypatch.chdir(work)
-    overrides = [o.replace("{input}", made or "") for o in overrides]
-    spec = APPS[app]
-    prepare = spec.prepare()  # registers the app's config schema, as its process does
-    with pytest.raises(Exception) as refused:  # Hydra's refusal or the app's ValueError
-        prepare(composed(spec, overrides, work / "logs" / "run"))
-    text = _chain(refused.value)
+    err = refusal(app, [o.replace("{input}", made or "") for o in overrides], work)
+    text = chain(err)
     assert message in text, text
-    if not isinstance(refused.value, ValueError):  # then Hydra refused it while composing
-        assert "compos" in type(refused.value).__name__.lower() or "Validation" in type(
-            refused.value).__name__, repr(refused.value)
-    assert not _tree(work), f"left behind: {sorted(map(str, _tree(work)))}"
+    if not isinstance(err, ValueError):  # then Hydra refused it while composing
+        assert "compos" in type(err).__name__.lower() or "Validation" in type(
+            err).__name__, repr(err)
+    assert not tree(work), f"left behind: {sorted(map(str, tree(work)))}"
 
 
 @pytest.mark.parametrize(("app", "overrides", "make", "message"), EXIT_PATH,
@@ -272,7 +200,7 @@ def test_a_refused_command_ends_with_one_line_and_leaves_nothing(tmp_path, app, 
     if proc.returncode == 2:  # the app's refusal: one line
         lines = [line for line in proc.stderr.splitlines() if line.startswith("error: ")]
         assert len(lines) == 1 and message in lines[0], out
-    assert not _tree(work), f"left behind: {sorted(map(str, _tree(work)))}"
+    assert not tree(work), f"left behind: {sorted(map(str, tree(work)))}"
 
 
 def test_the_benchmark_refuses_a_bad_count(tmp_path, monkeypatch, capsys):
@@ -283,7 +211,7 @@ def test_the_benchmark_refuses_a_bad_count(tmp_path, monkeypatch, capsys):
         main(["--seeds", "0"])
     assert refused.value.code == 2
     assert "--seeds 0: give at least 1" in capsys.readouterr().err
-    assert not _tree(tmp_path)
+    assert not tree(tmp_path)
 
 
 @pytest.mark.parametrize("override, named", [
@@ -304,7 +232,7 @@ def test_the_benchmark_refuses_a_bad_override_before_work(tmp_path, monkeypatch,
     assert refused.value.code == 2
     err = capsys.readouterr().err
     assert f"--override {override}: " in err and named in err
-    assert not _tree(tmp_path)
+    assert not tree(tmp_path)
 
 
 @pytest.mark.parametrize("args, named", [(["--starts", "0"], "loop.starts = 0"),

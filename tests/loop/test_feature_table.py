@@ -32,6 +32,7 @@ from physics.loop.model.declared import (
 from physics.loop.table_loop import PATH_ONLY, folds, parse_columns, run_feature_table
 from physics.params import OutOfScope, Scenario, scenario_from_config
 from physics.reference import RIG_RECORDS
+from tests.acceptance.refusal import refusal, tree
 
 ROOT = Path(__file__).resolve().parents[2]
 RIG_GEAR = "module_mm: 3\nz1: 18\nz2: 35\n"
@@ -103,7 +104,8 @@ def test_the_tip_thickness_scales_with_the_module_and_lies_below_the_pitch_thick
     assert tip_thickness_mm(bigger) == pytest.approx(3 * tip, rel=1e-9)  # similar teeth
 
 
-def test_a_table_the_loop_cannot_follow_is_refused_in_seconds_naming_the_depth(tmp_path):
+def test_a_table_the_loop_cannot_follow_is_refused_in_seconds_naming_the_depth(tmp_path,
+                                                                               config_store):
     rig = scenario_from_config({"gear": {"module_mm": 3, "z1": 18, "z2": 35},
                                 "operating": {"n1_rpm": 900, "torque_Nm": 100}})
     tip = tip_thickness_mm(rig)
@@ -115,10 +117,12 @@ def test_a_table_the_loop_cannot_follow_is_refused_in_seconds_naming_the_depth(t
     assert time.perf_counter() - start < 10
     path = write_table(tmp_path, pd.DataFrame({"wear_mm": [0.0, 0.5, 1.2 * tip],
                                                "rms_g": [0.1, 0.2, 0.3]}), "n1_rpm: 900\n")
-    run = run_app(tmp_path, path, "tribology.regime=dry")
-    assert run.returncode == 2 and "Traceback" not in run.stderr
-    assert f"the loop follows the flanks to below {tip:.3g} mm" in run.stderr
-    assert not (tmp_path / "run" / "report.json").exists()
+    (tmp_path / "work").mkdir()  # the app refuses it as the table is checked, before work
+    start = time.perf_counter()
+    err = refusal("loop", [f"data={path}", "tribology.regime=dry"], tmp_path / "work")
+    assert time.perf_counter() - start < 10
+    assert f"the loop follows the flanks to below {tip:.3g} mm" in str(err)
+    assert not tree(tmp_path / "work")
 
 
 def test_the_nuisance_ranges_follow_the_pair_and_a_fit_at_a_bound_is_named():

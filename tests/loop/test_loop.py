@@ -65,6 +65,7 @@ from physics.signals.order_analysis import (
     white_noise_std,
 )
 from physics.testbeds import make_bundle
+from tests.acceptance.refusal import refusal, tree
 
 ROOT = Path(__file__).resolve().parents[2]
 FS = 40960.0
@@ -731,11 +732,11 @@ def test_loop_app_finds_an_undeclared_transfer_path(tmp_path, scn):
     assert "| wear estimate's skill" in (tmp_path / "run" / "report.md").read_text()
 
 
-def test_loop_app_refuses_bad_data_before_work(tmp_path):
-    run = run_app(tmp_path, tmp_path / "nowhere")
-    assert run.returncode != 0
-    assert "is neither a bundle folder nor a feature-table .csv" in run.stderr
-    assert not (tmp_path / "run" / "report.json").exists()
+def test_loop_app_refuses_bad_data_before_work(tmp_path, config_store):
+    (tmp_path / "work").mkdir()
+    err = refusal("loop", [f"data={tmp_path / 'nowhere'}"], tmp_path / "work")
+    assert "is neither a bundle folder nor a feature-table .csv" in str(err)
+    assert not tree(tmp_path / "work")
 
 
 @pytest.mark.slow

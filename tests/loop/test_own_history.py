@@ -143,7 +143,7 @@ def test_the_app_cuts_the_units_first_records_off_as_its_reference(tmp_path, mon
                                                                    config_store):
     """``python -m physics.loop data=B reference=first:2`` as the app prepares it: the first two
     records of the group are the reference, the rest the analysed bundle."""
-    from tests.acceptance.test_bad_input import APPS, composed
+    from tests.acceptance.refusal import APPS, composed
 
     scn = scenario_from_config({"case": 3})
     path, _ = make_bundle(tmp_path / "b", scn, None, seed=3, records=6, duration_s=0.5)

@@ -23,6 +23,7 @@ from physics.loop.search.attribution import candidates_for
 from physics.loop.threads import TimeLimit
 from physics.params import scenario_from_config
 from physics.testbeds import make_bundle
+from tests.acceptance.refusal import refusal, tree
 
 ROOT = Path(__file__).resolve().parents[2]
 #: a public gearbox's acceleration records: 12.9 kHz
@@ -97,16 +98,15 @@ def test_a_bundle_the_loop_cannot_use_is_refused_before_work(tmp_path):
         check_usable(b, scn, LoopSettings(segment_s=0.4))
 
 
-def test_the_app_refuses_in_one_line_without_traceback(tmp_path):
+def test_the_app_refuses_in_one_line(tmp_path, config_store):
+    """The app's checks refuse it before work (a refusal's exit path, one line on stderr and
+    exit code 2: tests/acceptance/test_bad_input.py)."""
     path = write_bundle(tmp_path / "b", manifest(), noise())
-    run = subprocess.run([sys.executable, "-m", "physics.loop", f"data={path}",
-                          "loop.segment_s=0.02", f"hydra.run.dir={tmp_path / 'run'}"],
-                         cwd=ROOT, capture_output=True, text=True, timeout=300)
-    assert run.returncode == 2
-    assert "Traceback" not in run.stderr
-    last = run.stderr.strip().splitlines()[-1]
-    assert last.startswith("error: bundle") and "loop.segment_s >= 0.03" in last
-    assert not (tmp_path / "run" / "report.json").exists()
+    (tmp_path / "work").mkdir()
+    err = refusal("loop", [f"data={path}", "loop.segment_s=0.02"], tmp_path / "work")
+    assert isinstance(err, ValueError) and "\n" not in str(err)
+    assert str(err).startswith("bundle") and "loop.segment_s >= 0.03" in str(err)
+    assert not tree(tmp_path / "work")
 
 
 @pytest.fixture(scope="module")

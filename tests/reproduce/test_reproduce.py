@@ -2,16 +2,13 @@
 
 from __future__ import annotations
 
-import subprocess
-import sys
-from pathlib import Path
-
 import numpy as np
 import pandas as pd
 import pytest
 
 from physics.reference import THESIS_TABLES
 from tests.acceptance.readme import REPRODUCE
+from tests.acceptance.refusal import refusal, tree
 
 REF = THESIS_TABLES
 FAST = ["solver.n_points=101", "stiffness.fem_refine=1", "stiffness.fem_refines=[1]",
@@ -75,7 +72,7 @@ def test_overrides_reach_the_physics(tmp_path, config_store):
     """Gear overrides on the command line reach the scenario the reproduction runs, and its
     geometry: the gear's tip radius m z2 / 2 + m of a module-3 pair."""
     from physics.gear.stiffness import mesh_stiffness
-    from tests.acceptance.test_bad_input import APPS, composed
+    from tests.acceptance.refusal import APPS, composed
 
     spec = APPS["reproduce"]
     prepare = spec.prepare()
@@ -89,15 +86,11 @@ def test_overrides_reach_the_physics(tmp_path, config_store):
     assert not (tmp_path / "out").exists()  # prepare writes nothing
 
 
-def test_bad_override_fails_before_writing(tmp_path):
-    proc = subprocess.run(
-        [sys.executable, "-m", "physics.reproduce", f"out_dir={tmp_path / 'x'}",
-         "operating.torque_Nm=-5", f"hydra.run.dir={tmp_path / 'hydra'}"],
-        cwd=Path(__file__).resolve().parents[2], capture_output=True, text=True,
-    )
-    assert proc.returncode != 0
-    assert "operating.torque_Nm = -5.0 must lie in" in proc.stderr
-    assert not (tmp_path / "x").exists()
+def test_bad_override_fails_before_writing(tmp_path, config_store):
+    err = refusal("reproduce", [f"out_dir={tmp_path / 'x'}", "operating.torque_Nm=-5"],
+                  tmp_path)
+    assert "operating.torque_Nm = -5.0 must lie in" in str(err)
+    assert not tree(tmp_path)
 
 
 def test_contact_state_has_the_solver_film_and_the_regression_beside_it(out):

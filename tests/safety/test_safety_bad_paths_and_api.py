@@ -35,7 +35,7 @@ from physics.files import WriteFailed, existing_file
 from surrogate.inference import Surrogate
 from surrogate.predict import execute, predict_file
 from surrogate.summarise import main as summarise_main
-from tests.acceptance.test_bad_input import APPS, composed
+from tests.acceptance.refusal import APPS, composed
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(Path(__file__).parent))

@@ -4,7 +4,6 @@ whose first row is not its baseline record (where its true wear is given)."""
 
 from __future__ import annotations
 
-import subprocess
 import sys
 from pathlib import Path
 
@@ -15,6 +14,7 @@ import pytest
 from surrogate.inference import Surrogate, check_gearboxes
 from surrogate.inputs import CONDITIONS, DEFAULT_INPUTS
 from surrogate.training import train
+from tests.acceptance.refusal import refusal
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(Path(__file__).parent))
@@ -67,15 +67,13 @@ def test_check_gearboxes_with_two_key_columns():
 
 
 def test_acceptance_predict_refuses_a_single_row_gearbox(model, tmp_path):
-    """The command line: exit 2, one line naming the gearbox."""
+    """The command refuses it before it writes, in one line naming the gearbox (a refusal's
+    exit path: tests/acceptance/test_bad_input.py)."""
     d = rows()
     d = d[(d.rig != "rig2") | (d.cycles == 0)].drop(columns="mean_wear_mm")
     d.to_csv(tmp_path / "in.csv", index=False)
-    run = subprocess.run([sys.executable, "-m", "surrogate.predict", f"ckpt={model}",
-                          f"input={tmp_path / 'in.csv'}", "gearbox=rig",
-                          f"output={tmp_path / 'w.csv'}", f"hydra.run.dir={tmp_path / 'h'}"],
-                         capture_output=True, text=True, timeout=300, cwd=ROOT)
-    assert run.returncode == 2, run.stderr[-2000:]
-    lines = [ln for ln in run.stderr.splitlines() if ln.strip()]
-    assert len(lines) == 1 and "gearbox {'rig': 'rig2'} has a single row" in lines[0]
+    err = refusal("predict", [f"ckpt={model}", f"input={tmp_path / 'in.csv'}", "gearbox=rig",
+                              f"output={tmp_path / 'w.csv'}"], tmp_path)
+    assert isinstance(err, ValueError) and "\n" not in str(err)
+    assert "gearbox {'rig': 'rig2'} has a single row" in str(err)
     assert not (tmp_path / "w.csv").exists()

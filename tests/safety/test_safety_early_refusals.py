@@ -11,10 +11,12 @@ import sys
 from pathlib import Path
 
 import pytest
+from omegaconf.errors import MissingMandatoryValue
 
 from physics.dataset.generation import plan_dataset, spec_from_config
 from physics.files import check_writable
 from physics.params import Scenario
+from tests.acceptance.refusal import refusal
 
 ROOT = Path(__file__).resolve().parents[2]
 SMALL = {"cases": [3], "wear_states": 3, "replicates": 2, "chunks": 1}
@@ -112,18 +114,24 @@ def test_an_existing_file_as_out_dir_is_refused_at_once(tmp_path):
         check_writable(tmp_path / "out", "out_dir")
 
 
-@pytest.mark.parametrize("app, key", [("surrogate.predict", "ckpt"), ("physics.loop", "data")])
-def test_a_setting_without_default_left_out_is_one_line_naming_it(tmp_path, app, key):
+def test_a_setting_without_default_left_out_is_one_line_naming_it(tmp_path):
     """The command typed without its one required setting: one line naming the setting and
-    how to give it (it was omegaconf's MissingMandatoryValue traceback), exit 2, no run
-    folder left."""
-    run = subprocess.run([sys.executable, "-m", app], capture_output=True, text=True,
-                         timeout=300, cwd=tmp_path)
+    how to give it (not omegaconf's MissingMandatoryValue traceback), exit 2, no run folder
+    left; the loop's ``data`` is refused as predict's ``ckpt`` is, by the runner all the apps
+    share (:func:`physics.command.run_command`)."""
+    run = subprocess.run([sys.executable, "-m", "surrogate.predict"], capture_output=True,
+                         text=True, timeout=300, cwd=tmp_path)
     assert run.returncode == 2, run.stderr[-2000:]
     assert "Traceback" not in run.stderr, run.stderr[-2000:]
     (line,) = [ln for ln in run.stderr.splitlines() if ln.startswith("error:")]
-    assert line.startswith(f"error: {key} is not given and has no default: give {key}=")
+    assert line.startswith("error: ckpt is not given and has no default: give ckpt=")
     assert not list(tmp_path.iterdir()), sorted(tmp_path.rglob("*"))
+
+
+def test_the_loops_data_left_out_is_its_missing_setting(tmp_path, config_store):
+    err = refusal("loop", [], tmp_path)
+    assert isinstance(err, MissingMandatoryValue) and err.full_key == "data"
+    assert not list(tmp_path.iterdir())
 
 
 def test_help_whose_reader_left_ends_without_a_traceback():

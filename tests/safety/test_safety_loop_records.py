@@ -26,6 +26,7 @@ from physics.loop.measured.usable import check_reference_folder, check_stated_on
 from physics.loop.measured.worn_states import tip_thickness_mm
 from physics.loop.table_loop import check_table
 from physics.params import Scenario
+from tests.acceptance.refusal import refusal, tree
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(Path(__file__).parent))
@@ -126,18 +127,20 @@ def test_a_record_above_the_analysed_size_is_refused_before_loading(tmp_path, mo
     ("wear_mm", [0, 0, 0, 5.0], "wear_mm = 5 reaches the 1.15 mm the thinner tooth is thick"),
     ("cycles", [0, 0, 0, 1e30], "cycles = 1e+30 lies beyond 1e+12 pinion load cycles"),
 ])
-def test_acceptance_impossible_wear_or_cycles_are_refused_before_work(tmp_path, column, cells,
-                                                                      shown):
-    """The user's probe: refused after 76-81 s of wear runs, exit 1, the record not named."""
+def test_acceptance_impossible_wear_or_cycles_are_refused_before_work(tmp_path, config_store,
+                                                                      column, cells, shown):
+    """A wear or cycle count no gear can have: the record named, by the app's checks, in
+    seconds and before any work (a refusal's exit path: tests/acceptance/test_bad_input.py)."""
     path = write_bundle(tmp_path / "b", manifest(**{column: cells}), signals())
     with pytest.raises(ValueError) as err:
         check_usable(read_bundle(path), Scenario(), LoopSettings())
     assert f"record 'r3': {shown}" in one_line(err)
-    run, seconds = app(tmp_path, f"data={path}")
-    assert run.returncode == 2 and seconds < 60, run.stderr[-2000:]
-    lines = run.stderr.strip().splitlines()
-    assert len(lines) == 1 and f"record 'r3': {shown}" in lines[0]
-    assert not (tmp_path / "run").exists()
+    (tmp_path / "work").mkdir()
+    start = time.monotonic()
+    err = refusal("loop", [f"data={path}"], tmp_path / "work")
+    assert isinstance(err, ValueError) and time.monotonic() - start < 30
+    assert f"record 'r3': {shown}" in str(err) and "\n" not in str(err)
+    assert not tree(tmp_path / "work")
 
 
 def test_the_tip_thickness_follows_the_bundles_gear(tmp_path):
@@ -281,12 +284,13 @@ def test_a_bundles_speed_on_the_command_line_is_refused(tmp_path):
 
 
 @pytest.mark.parametrize("key", ["data", "reference"])
-def test_an_empty_data_or_reference_is_not_the_working_folder(tmp_path, key):
+def test_an_empty_data_or_reference_is_not_the_working_folder(tmp_path, config_store, key):
     path = write_bundle(tmp_path / "b", manifest(), signals())
     args = [f"data={path}", "reference=''"] if key == "reference" else ["data=''"]
-    run, _ = app(tmp_path, *args)
-    assert run.returncode == 2
-    assert f"error: {key}= is empty (it was read as the working folder)" in run.stderr
+    (tmp_path / "work").mkdir()
+    err = refusal("loop", args, tmp_path / "work")
+    assert f"{key}= is empty (it was read as the working folder)" in str(err)
+    assert not tree(tmp_path / "work")
 
 
 def test_negative_cycles_in_a_table_are_refused(tmp_path):

@@ -42,7 +42,7 @@ from physics.reproduce.thesis import (
     interrupted_note,
     prepare,
 )
-from tests.acceptance.test_bad_input import APPS, composed
+from tests.acceptance.refusal import APPS, composed
 from tests.safety.test_safety_run_folders import start_refused
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -17,7 +17,7 @@ import pandas as pd
 import pytest
 
 from surrogate.predict import execute
-from tests.acceptance.test_bad_input import APPS, composed
+from tests.acceptance.refusal import APPS, composed
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(Path(__file__).parent))

@@ -4,28 +4,24 @@ before work, unless the user says overwrite."""
 
 from __future__ import annotations
 
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
 from physics.files import check_fresh
 from physics.reproduce.rig import main as rig_main
+from tests.acceptance.refusal import refusal
 
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def test_a_folder_with_a_table_of_the_users_is_refused_and_kept(tmp_path):
+def test_a_folder_with_a_table_of_the_users_is_refused_and_kept(tmp_path, config_store):
     out = tmp_path / "res"
     out.mkdir()
     (out / "table02_speed.csv").write_text("mine\n")
-    proc = subprocess.run([sys.executable, "-m", "physics.reproduce", f"out_dir={out}",
-                           f"hydra.run.dir={tmp_path / 'hydra'}"], capture_output=True,
-                          text=True, timeout=120, cwd=ROOT)
-    assert proc.returncode == 2, proc.stderr
-    assert proc.stderr.strip().splitlines()[-1] == (
-        f"error: out_dir = '{out}' already holds table02_speed.csv, which this run would "
+    err = refusal("reproduce", [f"out_dir={out}"], tmp_path)
+    assert str(err) == (
+        f"out_dir = '{out}' already holds table02_speed.csv, which this run would "
         "replace; choose a new folder, or overwrite=true to replace them")
     assert (out / "table02_speed.csv").read_text() == "mine\n"
     assert sorted(p.name for p in out.iterdir()) == ["table02_speed.csv"]

@@ -12,7 +12,6 @@ from __future__ import annotations
 import json
 import logging
 import re
-import subprocess
 import sys
 from pathlib import Path
 
@@ -28,6 +27,7 @@ from surrogate.candidates import Candidate
 from surrogate.inference import Surrogate
 from surrogate.predict import predict_file
 from surrogate.training import prepare, train
+from tests.acceptance.refusal import refusal
 
 ROOT = Path(__file__).resolve().parents[2]
 INPUTS = "data.inputs=[fme15,acc_rms]"
@@ -99,17 +99,16 @@ def test_acceptance_a_users_own_columns_are_inputs_and_the_checkpoint_records_th
 
 def test_acceptance_predict_requires_the_users_columns_and_passes_the_rest_through(by_speed,
                                                                                      tmp_path):
+    """The command refuses a table without a column the model reads, in one line naming it and
+    its unit, before it writes (a refusal's exit path: tests/acceptance/test_bad_input.py)."""
     rows = rig_table(seed=5).assign(note="bench B")
     rows.drop(columns="fme15").to_csv(tmp_path / "no_fme.csv", index=False)
-    run = subprocess.run([sys.executable, "-m", "surrogate.predict",
-                          f"ckpt={by_speed / 'wear_surrogate.pt'}",
-                          f"input={tmp_path / 'no_fme.csv'}", f"output={tmp_path / 'w.csv'}",
-                          f"hydra.run.dir={tmp_path / 'h'}"],
-                         capture_output=True, text=True, timeout=300, cwd=ROOT)
-    assert run.returncode == 2, run.stderr[-2000:]
-    lines = [ln for ln in run.stderr.splitlines() if ln.strip()]
-    assert len(lines) == 1 and "lacks column(s) ['fme15']" in lines[0], lines
-    assert "'fme15': 'm/s^2'" in lines[0] and not (tmp_path / "w.csv").exists()
+    err = refusal("predict", [f"ckpt={by_speed / 'wear_surrogate.pt'}",
+                              f"input={tmp_path / 'no_fme.csv'}", f"output={tmp_path / 'w.csv'}"],
+                  tmp_path)
+    assert isinstance(err, ValueError) and "\n" not in str(err)
+    assert "lacks column(s) ['fme15']" in str(err) and "'fme15': 'm/s^2'" in str(err)
+    assert not (tmp_path / "w.csv").exists()
     rows.to_csv(tmp_path / "in.csv", index=False)
     out = predict_file(by_speed / "wear_surrogate.pt", tmp_path / "in.csv", tmp_path / "w.csv")
     assert list(out.columns[:6]) == ["rig", "speed", "stage", "record", "wear_mm", "note"]
