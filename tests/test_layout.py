@@ -43,7 +43,8 @@ def modules() -> dict[str, Path]:
     return out
 
 
-def imports(path: Path, at_import: bool = False) -> set[str]:
+@cache  # each module's text is parsed once a run, whichever test asks
+def imports(path: Path, at_import: bool = False) -> frozenset[str]:
     """Modules ``path`` imports (absolute names; ``from a import b`` gives a.b if that is a
     module, else a). ``at_import``: only those importing it runs, its module-level imports,
     not those inside functions (deferred) or under ``if TYPE_CHECKING``."""
@@ -56,12 +57,13 @@ def imports(path: Path, at_import: bool = False) -> set[str]:
         elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
             subs = {f"{node.module}.{a.name}" for a in node.names}
             found |= (subs & set(known)) or {node.module}
-    return found
+    return frozenset(found)
 
 
-def graph() -> dict[str, set[str]]:
+@cache
+def graph() -> dict[str, frozenset[str]]:
     known = modules()
-    return {m: {i for i in imports(p) if i in known} for m, p in known.items()}
+    return {m: frozenset(i for i in imports(p) if i in known) for m, p in known.items()}
 
 
 def layer(module: str) -> int:

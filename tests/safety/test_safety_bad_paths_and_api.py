@@ -45,15 +45,9 @@ ENV = {k: v for k, v in os.environ.items() if not k.startswith("HYDRA_")}
 
 
 @pytest.fixture(scope="module")
-def model(tmp_path_factory) -> Path:
+def model(small_model) -> Path:
     """A small network trained for one epoch on a user table; the table beside it."""
-    from surrogate.training import train
-
-    tmp = tmp_path_factory.mktemp("model")
-    table().to_csv(tmp / "in.csv", index=False)
-    table().drop(columns="rig").to_csv(tmp / "features.csv", index=False)
-    train(train_cfg(tmp, "model.kind=network", table="in.csv", max_epochs=1))
-    return tmp / "run" / "wear_surrogate.pt"
+    return small_model("network")
 
 
 # --- a checkpoint that cannot scale its rows ----------------------------------------------------

@@ -71,18 +71,13 @@ def test_dataset_plan_refuses_an_unwritable_out_dir():
      "data.chunks=1"],
     ["-m", "surrogate.predict", "ckpt=ANY", "input=ANY", "output=/proc/gearwear/w.csv"],
 ])
-def test_acceptance_apps_refuse_an_unwritable_output_in_one_line(tmp_path, argv):
+def test_acceptance_apps_refuse_an_unwritable_output_in_one_line(tmp_path, small_model, argv):
     if "surrogate.predict" in argv:
         pytest.importorskip("onnxruntime")
-        # a model and a table are needed to reach the output check: taken from item 4's test
-        sys.path.insert(0, str(Path(__file__).parent))
-        from test_safety_user_tables import table
-
-        table().to_csv(tmp_path / "in.csv", index=False)
-        ckpt = _tiny_model(tmp_path)
-        table().drop(columns="rig").to_csv(tmp_path / "features.csv", index=False)
+        ckpt = small_model("auto")  # a model and a table reach the output check
         argv = [a.replace("ckpt=ANY", f"ckpt={ckpt}")
-                .replace("input=ANY", f"input={tmp_path / 'features.csv'}") for a in argv]
+                .replace("input=ANY", f"input={ckpt.parents[1] / 'features.csv'}")
+                for a in argv]
     run = subprocess.run([sys.executable, *argv, f"hydra.run.dir={tmp_path / 'h'}"],
                          capture_output=True, text=True, timeout=300, cwd=ROOT)
     assert run.returncode == 2, run.stderr[-2000:]
@@ -90,14 +85,6 @@ def test_acceptance_apps_refuse_an_unwritable_output_in_one_line(tmp_path, argv)
     assert len(lines) == 1 and "cannot write in /proc" in lines[0]
     assert "Traceback" not in run.stderr
 
-
-def _tiny_model(tmp: Path) -> Path:
-    from test_safety_user_tables import train_cfg
-
-    from surrogate.training import train
-
-    train(train_cfg(tmp, table="in.csv", max_epochs=1))
-    return tmp / "run" / "wear_surrogate.pt"
 
 
 def test_check_inside_refuses_a_folder_that_escapes_its_root(tmp_path):

@@ -37,23 +37,20 @@ TINY_TRAIN = ["+data.generate.replicates=4", "+data.generate.wear_states=3",
 
 
 @pytest.fixture(scope="module")
-def inputs(tmp_path_factory) -> Path:
-    """A bundle for the loop, a model and a feature table for predict."""
-    from test_safety_user_tables import table, train_cfg
-
+def inputs(tmp_path_factory, small_model) -> dict[str, Path]:
+    """A bundle for the loop; a model, the user table it was trained on and a feature table
+    for predict (``small_model``)."""
     from physics.params import Scenario
     from physics.testbeds import make_bundle
-    from surrogate.training import train
 
-    folder = tmp_path_factory.mktemp("inputs")
-    make_bundle(folder / "bundle", Scenario(), "friction", seed=1, records=6, duration_s=0.5)
-    table().to_csv(folder / "in.csv", index=False)
-    train(train_cfg(folder, table="in.csv", max_epochs=1))
-    table().drop(columns="rig").to_csv(folder / "features.csv", index=False)
-    return folder
+    bundle = tmp_path_factory.mktemp("inputs") / "bundle"
+    make_bundle(bundle, Scenario(), "friction", seed=1, records=6, duration_s=0.5)
+    ckpt = small_model("auto")
+    return {"bundle": bundle, "ckpt": ckpt, "table": ckpt.parents[1] / "in.csv",
+            "features": ckpt.parents[1] / "features.csv"}
 
 
-def argv(app: str, inputs: Path) -> tuple[list[str], float]:
+def argv(app: str, inputs: dict[str, Path]) -> tuple[list[str], float]:
     """The command of ``app`` and the latest moment (s) a signal is sent."""
     py = sys.executable
     if app == "dataset":
@@ -61,12 +58,11 @@ def argv(app: str, inputs: Path) -> tuple[list[str], float]:
     if app == "reproduce":
         return [py, "-m", "physics.reproduce", *FAST_REPRO, "out_dir=results"], 8.0
     if app == "loop":
-        return [py, "-m", "physics.loop", f"data={inputs / 'bundle'}", *SMALL_LOOP], 10.0
+        return [py, "-m", "physics.loop", f"data={inputs['bundle']}", *SMALL_LOOP], 10.0
     if app == "train":
         return [py, str(ROOT / "train.py"), *TINY_TRAIN], 8.0  # the fit starts at about 6 s
-    ckpt = next(inputs.rglob("wear_surrogate.pt"))
-    return [py, "-m", "surrogate.predict", f"ckpt={ckpt}",
-            f"input={inputs / 'features.csv'}", "output=wear.csv"], 6.0
+    return [py, "-m", "surrogate.predict", f"ckpt={inputs['ckpt']}",
+            f"input={inputs['features']}", "output=wear.csv"], 6.0
 
 
 def interrupt(cmd: list[str], cwd: Path, signum: int, delay: float,
@@ -92,7 +88,7 @@ def left(folder: Path) -> list[str]:
                   if p.name.endswith((".tmp", ".lock")) or ".staged" in p.name)
 
 
-def check_tries(app: str, inputs: Path, tmp_path: Path, tries: int) -> None:
+def check_tries(app: str, inputs: dict[str, Path], tmp_path: Path, tries: int) -> None:
     rng = random.Random()
     cmd, latest = argv(app, inputs)
     # the loop's candidates on two threads, as outside a test worker (one numba thread there)
@@ -138,7 +134,7 @@ def test_ctrl_c_and_sigterm_ten_times_in_a_row(app, inputs, tmp_path):
 def test_ctrl_c_during_training_names_the_checkpoints_and_exits_130(inputs, tmp_path):
     """Lightning catches KeyboardInterrupt in its fit loop ("graceful shutdown", exit 1): the
     app still ends with its one line and 130 (on a user table: no dataset to build first)."""
-    cmd = [sys.executable, str(ROOT / "train.py"), f"data.table={inputs / 'in.csv'}",
+    cmd = [sys.executable, str(ROOT / "train.py"), f"data.table={inputs['table']}",
            "data.group=rig", *TINY_TRAIN[4:], "hydra.run.dir=run"]
     proc = subprocess.Popen(cmd, cwd=tmp_path, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, start_new_session=True)

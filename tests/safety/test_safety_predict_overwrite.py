@@ -21,21 +21,16 @@ from tests.acceptance.refusal import APPS, composed
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(Path(__file__).parent))
-from test_safety_user_tables import table, train_cfg  # noqa: E402
+from test_safety_user_tables import table  # noqa: E402
 
 SAME = "is the input file itself"
 EXISTS = "already exists: a file this run did not write is replaced only when asked"
 
 
 @pytest.fixture(scope="module")
-def model(tmp_path_factory) -> Path:
+def model(small_model) -> Path:
     """A small model of the user-table kind (no gearbox baseline), trained for one epoch."""
-    from surrogate.training import train
-
-    tmp = tmp_path_factory.mktemp("model")
-    table().to_csv(tmp / "in.csv", index=False)
-    train(train_cfg(tmp, table="in.csv", max_epochs=1))
-    return tmp / "run" / "wear_surrogate.pt"
+    return small_model("auto")
 
 
 @pytest.fixture

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from surrogate.training import prepare, train
+from surrogate.training import prepare
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(Path(__file__).parent))
@@ -21,13 +21,10 @@ from test_safety_user_tables import table, train_cfg  # noqa: E402
 
 
 @pytest.fixture(scope="module")
-def network(tmp_path_factory) -> Path:
+def network(small_model) -> Path:
     """A small network trained for one epoch on a user table (every default input: both
     sensors' features and the operating point)."""
-    tmp = tmp_path_factory.mktemp("network")
-    table().to_csv(tmp / "in.csv", index=False)
-    train(train_cfg(tmp, "model.kind=network", table="in.csv", max_epochs=1))
-    return tmp / "run" / "wear_surrogate.pt"
+    return small_model("network")
 
 
 def refused(network: Path, tmp_path: Path, *overrides: str) -> str:
