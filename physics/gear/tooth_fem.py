@@ -22,6 +22,7 @@ a loop over ``refine``.
 
 from __future__ import annotations
 
+import logging
 import math
 from dataclasses import dataclass
 
@@ -42,6 +43,10 @@ from physics.gear.contact import equivalent_radius, hertz_half_width, reduced_mo
 from physics.gear.geometry import MeshGeometry
 from physics.gear.tooth import ToothForm, generate_tooth
 from physics.params import GearPair, Material
+
+# scikit-fem logs every assembly and solve at INFO: hundreds of lines in an app's console and
+# log for one reproduction; its warnings still show
+logging.getLogger("skfem").setLevel(logging.WARNING)
 
 
 @dataclass(frozen=True)
