@@ -86,7 +86,6 @@ def test_acceptance_apps_refuse_an_unwritable_output_in_one_line(tmp_path, small
     assert "Traceback" not in run.stderr
 
 
-
 def test_check_inside_refuses_a_folder_that_escapes_its_root(tmp_path):
     from physics.files import check_inside
 
