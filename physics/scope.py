@@ -14,6 +14,13 @@ periods to give features at all.
   rule of ``docs/own-data.md``), i.e. ``f_s >= 12 f_mesh``.
 - Record length (:func:`check_record`, for the apps that take features of the records): at
   least 10 mesh periods.
+- Tooth-root strength (:data:`ROOT_STRENGTH`, checked at every block of the contact-driven
+  wear, :func:`physics.gear.tooth_bending.check_root_strength`): ``Y_ST sigma_Flim``, the
+  stress correction of the standard reference test gear ``Y_ST = 2.0`` (ISO 6336-3:2006, 6.4)
+  times the nominal bending endurance of case-carburised steel of quality MQ ``sigma_Flim =
+  500 MPa`` (core hardness >= 30 HRC; ISO 6336-5:2016, 5.3), 1000 MPa; life, size and
+  roughness factors 1 (a long life of a small, ground tooth). A tooth thinned by wear until
+  its root stress passes it breaks by fatigue, and the run leaves the scope.
 - Worn flanks (:func:`shakedown_pressure`, checked at every profile update of the wear
   integration): a worn profile that concentrates the load until the largest Hertz pressure on
   the flank passes the elastic shakedown limit of rolling line contact deforms the surface
@@ -36,6 +43,8 @@ from physics.params import Scenario
 
 #: largest Hertz pressure of the model's scope [Pa] (see the module text)
 STATIC_CONTACT_LIMIT = 1.6 * 1500e6
+#: tooth-root fatigue strength ``Y_ST sigma_Flim`` [Pa] (see the module text)
+ROOT_STRENGTH = 2.0 * 500e6
 #: least sample rate per mesh frequency
 SAMPLES_PER_MESH = 12.0
 #: least mesh periods in a simulated record

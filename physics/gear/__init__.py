@@ -1,8 +1,9 @@
 """Gear geometry and elasticity (thesis 2.1-2.3, 3.1-3.2): line of action, kinematics, the
 rack-generated tooth, Hertz line contact, potential-energy mesh stiffness of worn teeth, its
 finite-element check, double-tooth load sharing, the tooth contact of flanks of any shape on and
-off the path, the meshing sequence of the teeth, and the manufacturing tolerances of an accuracy
-grade. Imports numpy/scipy and ``physics.params``."""
+off the path, the root bending stress of a tooth new or worn, the meshing sequence of the teeth,
+and the manufacturing tolerances of an accuracy grade. Imports numpy/scipy and
+``physics.params``."""
 
 from __future__ import annotations
 
@@ -27,6 +28,8 @@ _SOURCES = {
         "MeshStiffness", "SainsotRangeWarning", "ToothCompliances", "sainsot_coefficients",
         "iso6336_single_pair_stiffness", "mesh_stiffness"),
     "physics.gear.tooth": ("ToothForm", "generate_tooth", "checked_wear", "involute_angle"),
+    "physics.gear.tooth_bending": (
+        "RootStress", "root_stress", "single_contact_radius", "check_root_strength"),
     "physics.gear.tooth_contact": (
         "PairGaps", "WornFlank", "worn_flank", "flank_coordinate", "LoadedContact",
         "loaded_contact", "share_load", "pair_slots", "clamped", "NO_CONTACT"),

@@ -103,10 +103,10 @@ class _Cumulative:
     a0: np.ndarray  # int 1/A
 
 
-def _cumulative(form: ToothForm, cut: np.ndarray, width: float) -> _Cumulative:
-    """Cumulative section integrals of ``form`` with the drive half-width reduced by ``cut``."""
+def _worn_half_width(form: ToothForm, cut: np.ndarray) -> np.ndarray:
+    """The drive half-width of ``form`` at each profile height reduced by ``cut`` [m];
+    :class:`OutOfScope` where the wear reaches the tooth's centre line."""
     x_drive = form.x - cut
-    w = x_drive + form.x
     if np.any(x_drive <= 0):
         worst = int(np.argmin(x_drive))
         raise OutOfScope(
@@ -114,6 +114,13 @@ def _cumulative(form: ToothForm, cut: np.ndarray, width: float) -> _Cumulative:
             f"reaches the tooth centre line (half-thickness {form.x[worst] * 1e6:.1f} um there): "
             "the tooth would be worn through; the wear model is outside its scope"
         )
+    return x_drive
+
+
+def _cumulative(form: ToothForm, cut: np.ndarray, width: float) -> _Cumulative:
+    """Cumulative section integrals of ``form`` with the drive half-width reduced by ``cut``."""
+    x_drive = _worn_half_width(form, cut)
+    w = x_drive + form.x
     inv_i = 12.0 / (w**3 * width)
     u = form.y - form.y[0]
     integrands = np.stack([inv_i, u * inv_i, u * u * inv_i, cut * inv_i, u * cut * inv_i,
@@ -235,6 +242,17 @@ class MeshStiffness:
         depth = np.interp(flank_coordinate(form, self.geometry, wheel), s[order], wear[order],
                           left=0.0, right=0.0)
         return depth / form.nx
+
+    def drive_half_width(self, wheel: int, s_grid: np.ndarray | None = None,
+                         wear: np.ndarray | None = None) -> np.ndarray:
+        """Half-width [m] of the drive side of the pinion (1) or gear (2) tooth at each height
+        of its form (``forms[wheel - 1].y``), its drive flank worn along the normal by ``wear``
+        on ``s_grid`` (unworn without); :class:`OutOfScope` where the wear reaches the centre
+        line."""
+        form = self.forms[wheel - 1]
+        if wear is None:
+            return form.x.copy()
+        return _worn_half_width(form, self._cut(form, s_grid, wear, wheel))
 
     def tooth(self, wheel: int, radius: np.ndarray, cumulative: _Cumulative | None = None
               ) -> ToothCompliances:

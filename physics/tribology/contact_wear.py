@@ -34,10 +34,12 @@ alike while the pinion's differ is their mean over the hunting period: exact whe
 z2) = 1`` and the gear's teeth start alike and stand in their places (every gear tooth meets
 every pinion tooth in turn), an approximation otherwise.
 
-What it leaves out, said where it matters: the pressure across the band of a worn contact (a
-Hertz band of the involutes' radii; the wear per pass does not depend on its shape, its peak
-does: no shakedown check here), the dynamic load (quasi-static mesh force), and wear of the
-coast flanks.
+Where a tooth truly fails, the run ends and says where and when: a tooth worn to its centre
+line, or one thinned until its root stress under the quasi-static load passes the root fatigue
+strength (:mod:`physics.gear.tooth_bending`). What it leaves out, said where it matters: the
+pressure across the band of a worn contact (a Hertz band of the involutes' radii; the wear per
+pass does not depend on its shape, its peak does: no shakedown check here), the dynamic load
+(quasi-static mesh force), and wear of the coast flanks.
 """
 
 from __future__ import annotations
@@ -52,6 +54,7 @@ from physics.gear import contact, kinematics
 from physics.gear.accuracy import POSITION_BOUND_FP, position_bound_m
 from physics.gear.mesh_sequence import meshing_sequence
 from physics.gear.stiffness import MeshStiffness, mesh_stiffness
+from physics.gear.tooth_bending import check_root_strength
 from physics.gear.tooth_contact import (
     NO_CONTACT,
     PairGaps,
@@ -61,7 +64,7 @@ from physics.gear.tooth_contact import (
     share_load,
 )
 from physics.params import Scenario
-from physics.scope import check_scope
+from physics.scope import ROOT_STRENGTH, check_scope
 from physics.tribology.contact_state import solve_contact_state
 from physics.tribology.wear import film_deficiency, quasi_static_force, wear_coefficient
 
@@ -258,7 +261,11 @@ def simulate_contact_wear(scn: Scenario, depth: float, cycles: float = math.inf,
     grid)`` with a row per tooth in mesh order (a tooth worn ahead of the rest, damage induced
     on one); ``positions``: each tooth's position deviation [m] (:func:`tooth_wear_per_cycle`),
     ``(z1,)`` and ``(z2,)``, each or None, which makes every tooth of that wheel its own. A
-    wheel given neither stays one row."""
+    wheel given neither stays one row.
+
+    A tooth whose root stress at its highest point of single-tooth contact passes the root
+    fatigue strength (:func:`physics.gear.tooth_bending.check_root_strength`) ends the run with
+    :class:`physics.params.OutOfScope` naming the tooth, the section and the cycles."""
     if not (math.isfinite(depth) and depth > 0):
         raise ValueError(f"depth = {depth!r} must be a finite depth > 0 (m)")
     if not cycles > 0:
@@ -280,6 +287,7 @@ def simulate_contact_wear(scn: Scenario, depth: float, cycles: float = math.inf,
         allowed = max(step, RELATIVE_STEP * max(w1.max(), w2.max()))
         block = min(allowed / peak, cycles - done)
         w1, w2, done = w1 + r1 * block, w2 + r2 * block, done + block
+        check_root_strength(ms, grid, w1, w2, force, ROOT_STRENGTH, done)
         ends.append(done)
         hist1.append(w1)
         hist2.append(w2)
