@@ -131,12 +131,15 @@ def check_root_strength(ms: MeshStiffness, s_grid: np.ndarray, pinion: np.ndarra
     """Raise :class:`OutOfScope` when a tooth of either wheel, worn by its row of ``pinion``
     or ``gear`` ``(teeth, grid)`` [m] on ``s_grid``, carries a root stress under ``force`` at
     its highest point of single-tooth contact above ``limit`` [Pa], naming the tooth, where and
-    when: it would break by tooth-root fatigue."""
+    when: it would break by tooth-root fatigue; one worn to its centre line is named so."""
     for wheel, rows, name in ((1, pinion, "pinion"), (2, gear, "gear")):
         for tooth, wear in enumerate(rows):
-            r = root_stress(ms, wheel, force, s_grid=s_grid, wear=wear)
+            which = f"{name} tooth {tooth}" if len(rows) > 1 else f"every {name} tooth"
+            try:
+                r = root_stress(ms, wheel, force, s_grid=s_grid, wear=wear)
+            except OutOfScope as err:  # worn to its centre line: said with the tooth and when
+                raise OutOfScope(f"after {cycles:.3g} cycles {which}: {err}") from None
             if r.stress > limit:
-                which = f"{name} tooth {tooth}" if len(rows) > 1 else f"every {name} tooth"
                 raise OutOfScope(
                     f"after {cycles:.3g} cycles {which} (deepest wear {wear.max() * 1e6:.0f} "
                     f"um) carries a tooth-root stress of {r.stress / 1e6:.0f} MPa at radius "

@@ -1,7 +1,8 @@
 """Reproduction of the thesis tables 2-14 (``python -m physics.reproduce``): tables
 (``physics.reproduce.thesis``) and figures (``physics.reproduce.plots``); the model beside a real
 rig's vibration over wear (``python -m physics.reproduce.rig``); wear tooth by tooth
-(``python -m physics.reproduce.teeth``). Imports every physics
+(``python -m physics.reproduce.teeth``); both pairs from new to worn out and their teeth's root
+stress (``python -m physics.reproduce.worn_out``). Imports every physics
 subpackage above it; nothing imports the app."""
 
 from __future__ import annotations

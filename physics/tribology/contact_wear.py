@@ -63,7 +63,7 @@ from physics.gear.tooth_contact import (
     pair_slots,
     share_load,
 )
-from physics.params import Scenario
+from physics.params import OutOfScope, Scenario
 from physics.scope import ROOT_STRENGTH, check_scope
 from physics.tribology.contact_state import solve_contact_state
 from physics.tribology.wear import film_deficiency, quasi_static_force, wear_coefficient
@@ -265,7 +265,9 @@ def simulate_contact_wear(scn: Scenario, depth: float, cycles: float = math.inf,
 
     A tooth whose root stress at its highest point of single-tooth contact passes the root
     fatigue strength (:func:`physics.gear.tooth_bending.check_root_strength`) ends the run with
-    :class:`physics.params.OutOfScope` naming the tooth, the section and the cycles."""
+    :class:`physics.params.OutOfScope` naming the tooth, the section and the cycles; a contact
+    the wear law cannot take (a film parameter outside the mixed-EHL table) with the cycles and
+    the depth reached."""
     if not (math.isfinite(depth) and depth > 0):
         raise ValueError(f"depth = {depth!r} must be a finite depth > 0 (m)")
     if not cycles > 0:
@@ -280,7 +282,12 @@ def simulate_contact_wear(scn: Scenario, depth: float, cycles: float = math.inf,
     done = 0.0
     ends, hist1, hist2 = [0.0], [w1], [w2]
     while done < cycles and max(w1[:, active].max(), w2[:, active].max()) < depth:
-        r1, r2 = tooth_wear_per_cycle(scn, ms, grid, w1, w2, force, positions)
+        try:
+            r1, r2 = tooth_wear_per_cycle(scn, ms, grid, w1, w2, force, positions)
+        except OutOfScope as err:  # the worn flanks' contact: said with when and how deep
+            deepest = max(w1[:, active].max(), w2[:, active].max()) * 1e6
+            raise OutOfScope(f"after {done:.3g} cycles (deepest wear {deepest:.0f} um): "
+                             f"{err}") from None
         peak = max(r1.max(), r2.max())
         if peak <= 0:
             break
