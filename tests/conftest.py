@@ -113,6 +113,20 @@ def _group(item: pytest.Item) -> str:
     return f"readme: {key}"
 
 
+def pytest_sessionstart(session: pytest.Session) -> None:
+    """A parallel run's controller, before its workers start: the compiled kernels into
+    numba's cache where it lacks them (``tests/kernel_cache.py``), once for all workers."""
+    from tests import kernel_cache
+
+    config = session.config
+    if (config.getoption("numprocesses", None) and not hasattr(config, "workerinput")
+            and kernel_cache.stale()):
+        failed = kernel_cache.compile_all()
+        if failed:
+            session.config.issue_config_time_warning(pytest.PytestWarning(
+                f"the kernels were not compiled ahead: {failed[-2000:]}"), stacklevel=2)
+
+
 @pytest.hookimpl(tryfirst=True)  # before pytest-xdist reads the markers
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     """Keep what a shared fixture makes on one worker of a parallel run (pytest-xdist,
