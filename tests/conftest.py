@@ -123,7 +123,7 @@ def pytest_sessionstart(session: pytest.Session) -> None:
             and kernel_cache.stale()):
         failed = kernel_cache.compile_all()
         if failed:
-            session.config.issue_config_time_warning(pytest.PytestWarning(
+            config.issue_config_time_warning(pytest.PytestWarning(
                 f"the kernels were not compiled ahead: {failed[-2000:]}"), stacklevel=2)
 
 
